@@ -1,0 +1,1 @@
+fn main() { println!("{}", proving_ground::mujoco_probe()); }
