@@ -1,1 +1,35 @@
-fn main(){}
+//! FK + Jacobian of 6-dof designs (target in issue 3: <= 130 ns).
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use proving_ground::pipeline::{load_model, LoadOptions};
+use rand::SeedableRng;
+use std::hint::black_box;
+use std::path::Path;
+
+fn kinematics(c: &mut Criterion) {
+    for design in ["designs/ur5e.json", "designs/modular-elbow.json"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(design);
+        let model = load_model(&path, &LoadOptions::default()).expect("shipped design loads");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let configurations: Vec<Vec<f64>> = (0..64).map(|_| model.random_configuration(&mut rng)).collect();
+        let mut ws = model.workspace();
+        let name = model.name.clone();
+        let mut i = 0;
+        c.bench_function(&format!("fk+jacobian/{name}"), |b| {
+            b.iter(|| {
+                i = (i + 1) % configurations.len();
+                model.jacobian(black_box(&configurations[i]), &mut ws);
+                black_box(ws.jacobian[(0, 0)])
+            })
+        });
+        c.bench_function(&format!("fk/{name}"), |b| {
+            b.iter(|| {
+                i = (i + 1) % configurations.len();
+                black_box(model.tool_pose(black_box(&configurations[i])))
+            })
+        });
+    }
+}
+
+criterion_group!(benches, kinematics);
+criterion_main!(benches);

@@ -1,0 +1,154 @@
+//! The reference module catalog, the industrial presets and the economic constraints, from
+//! `shared/reference/robots.md` (the paper "A Design Co-Pilot for Task-Tailored Manipulators").
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Diameter of every link tube, joint module and no-link sphere (m).
+pub const LINK_DIAMETER_M: f64 = 0.12;
+/// Length of a joint module housing along its axis (m).
+pub const JOINT_MODULE_LENGTH_M: f64 = 0.12;
+/// Mass of one joint module (kg).
+pub const JOINT_MODULE_KG: f64 = 1.8;
+/// Linear density of the aluminium link tubes (kg per metre of tube).
+pub const TUBE_KG_PER_M: f64 = 3.0;
+/// Rated torque of a joint module (N m).
+pub const JOINT_MODULE_RATED_TORQUE_NM: f64 = 60.0;
+/// Maximum speed of a joint module (rad/s).
+pub const JOINT_MODULE_MAX_SPEED: f64 = PI;
+/// Joint module limits (rad): +-2 pi.
+pub const JOINT_MODULE_LIMIT: f64 = 2.0 * PI;
+/// Tolerance on economic-mode constraints.
+pub const ECONOMIC_TOLERANCE: f64 = 1e-9;
+
+/// One connection-slot option of the modular catalog.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SlotOption {
+    /// Next joint on the output flange; consecutive axes orthogonal.
+    #[serde(rename = "direct")]
+    Direct,
+    /// Straight tube, 0.15 m, axes orthogonal.
+    #[serde(rename = "I-short")]
+    IShort,
+    /// Straight tube, 0.30 m, axes orthogonal.
+    #[serde(rename = "I-long")]
+    ILong,
+    /// Elbow tube, offset 0.20 m, axes parallel.
+    #[serde(rename = "L-short")]
+    LShort,
+    /// Elbow tube, offset 0.35 m, axes parallel.
+    #[serde(rename = "L-long")]
+    LLong,
+}
+
+impl SlotOption {
+    /// Every option, in catalog order.
+    pub const ALL: [SlotOption; 5] = [Self::Direct, Self::IShort, Self::ILong, Self::LShort, Self::LLong];
+
+    /// The DH row `(d, a, alpha)` of this option.
+    pub fn dh(self) -> [f64; 3] {
+        match self {
+            Self::Direct => [0.10, 0.0, FRAC_PI_2],
+            Self::IShort => [0.25, 0.0, FRAC_PI_2],
+            Self::ILong => [0.40, 0.0, FRAC_PI_2],
+            Self::LShort => [0.10, 0.20, 0.0],
+            Self::LLong => [0.10, 0.35, 0.0],
+        }
+    }
+
+    /// The name used in design files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Direct => "direct",
+            Self::IShort => "I-short",
+            Self::ILong => "I-long",
+            Self::LShort => "L-short",
+            Self::LLong => "L-long",
+        }
+    }
+}
+
+/// Industrial robots whose published DH tables the paper used as baselines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Preset {
+    /// Universal Robots UR5e.
+    #[serde(rename = "UR5e")]
+    Ur5e,
+    /// Universal Robots UR10e.
+    #[serde(rename = "UR10e")]
+    Ur10e,
+    /// Universal Robots UR20.
+    #[serde(rename = "UR20")]
+    Ur20,
+    /// ABB IRB 2600-12/1.65.
+    #[serde(rename = "ABB-IRB-2600")]
+    AbbIrb2600,
+}
+
+impl Preset {
+    /// DH rows `(d, a, alpha)` per joint, standard convention.
+    pub fn dh(self) -> Vec<[f64; 3]> {
+        let ur = |d1: f64, a2: f64, a3: f64, d4: f64, d5: f64, d6: f64| {
+            vec![[d1, 0.0, FRAC_PI_2], [0.0, a2, 0.0], [0.0, a3, 0.0], [d4, 0.0, FRAC_PI_2], [d5, 0.0, -FRAC_PI_2], [d6, 0.0, 0.0]]
+        };
+        match self {
+            Self::Ur5e => ur(0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),
+            Self::Ur10e => ur(0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),
+            Self::Ur20 => ur(0.2363, -0.8620, -0.7287, 0.2010, 0.1593, 0.1543),
+            Self::AbbIrb2600 => vec![
+                [0.445, 0.150, -FRAC_PI_2],
+                [0.0, 0.700, 0.0],
+                [0.0, 0.115, -FRAC_PI_2],
+                [0.795, 0.0, FRAC_PI_2],
+                [0.0, 0.0, -FRAC_PI_2],
+                [0.085, 0.0, 0.0],
+            ],
+        }
+    }
+}
+
+/// Which economic constraint a value breaks, if any: `d` in {0} U [0.1, 0.4]; `a` in
+/// {0} U [-0.4, -0.1] U [0.1, 0.4]; `alpha` in {0, +pi/2, -pi/2}.
+pub fn economic_violation(parameter: &str, value: f64) -> Option<&'static str> {
+    let near = |target: f64| (value - target).abs() <= ECONOMIC_TOLERANCE;
+    let within = |lo: f64, hi: f64| value >= lo - ECONOMIC_TOLERANCE && value <= hi + ECONOMIC_TOLERANCE;
+    let ok = match parameter {
+        "d" => near(0.0) || within(0.1, 0.4),
+        "a" => near(0.0) || within(0.1, 0.4) || within(-0.4, -0.1),
+        "alpha" => near(0.0) || near(FRAC_PI_2) || near(-FRAC_PI_2),
+        _ => true,
+    };
+    if ok {
+        return None;
+    }
+    Some(match parameter {
+        "d" => "{0} U [0.1, 0.4] m",
+        "a" => "{0} U [-0.4, -0.1] U [0.1, 0.4] m",
+        _ => "{0, +pi/2, -pi/2} rad",
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_modular_option_is_economic() {
+        for option in SlotOption::ALL {
+            let [d, a, alpha] = option.dh();
+            assert_eq!(economic_violation("d", d), None, "{option:?}");
+            assert_eq!(economic_violation("a", a), None, "{option:?}");
+            assert_eq!(economic_violation("alpha", alpha), None, "{option:?}");
+        }
+    }
+
+    #[test]
+    fn economic_bounds_are_inclusive_within_tolerance() {
+        assert_eq!(economic_violation("d", 0.4 + 1e-10), None);
+        assert!(economic_violation("d", 0.4 + 1e-8).is_some());
+        assert!(economic_violation("d", 0.05).is_some());
+        assert!(economic_violation("a", -0.05).is_some());
+        assert_eq!(economic_violation("a", -0.25), None);
+        assert!(economic_violation("alpha", 1.0).is_some());
+    }
+}

@@ -1,0 +1,50 @@
+//! The top-level error: one variant per stage. An error means "could not evaluate"; a design
+//! that fails its checks is not an error.
+
+use std::path::PathBuf;
+
+/// Anything that stops proving-ground from evaluating a design.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The design file is unusable.
+    #[error(transparent)]
+    Design(#[from] crate::design::DesignError),
+    /// The robot model could not be built.
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+    /// The model could not be written as URDF or MJCF.
+    #[error(transparent)]
+    Export(#[from] crate::export::ExportError),
+    /// MuJoCo refused a model.
+    #[error(transparent)]
+    Engine(#[from] crate::engine::EngineError),
+    /// An input file type proving-ground does not read.
+    #[error("{path}: unknown input type; expected a design (.json) or a URDF (.urdf) file")]
+    UnknownInput {
+        /// The file.
+        path: PathBuf,
+    },
+    /// An output file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An output file would overwrite an input.
+    #[error("refusing to write {path}: it is an input of this run")]
+    WouldOverwriteInput {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Warnings were found and `--strict` was given.
+    #[error("{count} warning(s) and --strict was given:\n{list}")]
+    Strict {
+        /// Number of warnings.
+        count: usize,
+        /// The warnings, one per line.
+        list: String,
+    },
+}

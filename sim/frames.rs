@@ -1,0 +1,89 @@
+//! Pose and unit helpers shared by every stage.
+//!
+//! Transforms are `nalgebra::Isometry3<f64>` named `a_from_b` (maps coordinates in frame `b` to
+//! frame `a`). URDF and designs give orientations as roll-pitch-yaw (fixed X, then Y, then Z);
+//! MJCF wants quaternions `w x y z`.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// A pose as written in design files: position in metres and roll-pitch-yaw in radians.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseSpec {
+    /// Translation in metres.
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Roll, pitch, yaw in radians (rotation about fixed X, then Y, then Z).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl PoseSpec {
+    /// The isometry this pose describes.
+    pub fn isometry(&self) -> Isometry3<f64> {
+        isometry_from_xyz_rpy(self.position, self.rpy)
+    }
+
+    /// True when every number is finite.
+    pub fn is_finite(&self) -> bool {
+        self.position.iter().chain(self.rpy.iter()).all(|v| v.is_finite())
+    }
+}
+
+/// The isometry `Trans(xyz) * Rz(yaw) * Ry(pitch) * Rx(roll)`, the URDF `<origin>` convention.
+pub fn isometry_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(xyz[0], xyz[1], xyz[2]),
+        UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+    )
+}
+
+/// Roll, pitch, yaw of a rotation, the inverse of [`isometry_from_xyz_rpy`] up to angle wrapping.
+pub fn rpy_of(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
+    let (roll, pitch, yaw) = rotation.euler_angles();
+    [roll, pitch, yaw]
+}
+
+/// A quaternion as `[w, x, y, z]`, the MJCF order.
+pub fn wxyz(rotation: &UnitQuaternion<f64>) -> [f64; 4] {
+    let q = rotation.quaternion();
+    [q.w, q.i, q.j, q.k]
+}
+
+/// Components of a vector as an array.
+pub fn xyz(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// The largest translation and rotation-angle difference between two poses (metres, radians).
+pub fn pose_difference(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
+    let translation = (a.translation.vector - b.translation.vector).norm();
+    let angle = a.rotation.angle_to(&b.rotation);
+    (translation, angle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rpy_round_trips_through_isometry() {
+        let rpy = [0.3, -1.1, 2.5];
+        let pose = isometry_from_xyz_rpy([1.0, 2.0, 3.0], rpy);
+        let back = isometry_from_xyz_rpy([1.0, 2.0, 3.0], rpy_of(&pose.rotation));
+        let (dt, da) = pose_difference(&pose, &back);
+        assert!(dt < 1e-15 && da < 1e-12, "{dt} {da}");
+    }
+
+    #[test]
+    fn rpy_matches_urdf_fixed_axis_order() {
+        // URDF: R = Rz(yaw) * Ry(pitch) * Rx(roll)
+        let (r, p, y) = (0.2, 0.4, -0.7);
+        let expected = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), y)
+            * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), p)
+            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), r);
+        let got = isometry_from_xyz_rpy([0.0; 3], [r, p, y]).rotation;
+        assert!(got.angle_to(&expected) < 1e-14);
+    }
+}

@@ -1,0 +1,434 @@
+//! URDF -> Model.
+//!
+//! urdf-rs parses the file; roxmltree reads it a second time only to learn what urdf-rs hides:
+//! whether `<inertial>` and `<limit>` were written at all (urdf-rs fills both with zeros), and the
+//! line of each element for messages.
+//!
+//! The chain runs from the base link (default: the root) to the tip link (default: the child of
+//! the last movable joint on the longest chain of movable joints; a tie is an error). Fixed joints
+//! are folded into their parent; links off the chain are attached to the chain link they hang
+//! from, at their joints' zero position.
+
+use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
+use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
+use crate::frames::isometry_from_xyz_rpy;
+use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Options for reading a URDF.
+#[derive(Debug, Clone, Default)]
+pub struct UrdfOptions {
+    /// First link of the chain; default the root link.
+    pub base_link: Option<String>,
+    /// Last link of the chain; default the end of the longest chain of movable joints.
+    pub tip_link: Option<String>,
+    /// Roots searched for `package://NAME/...` meshes before `ROS_PACKAGE_PATH` and the folders
+    /// holding the URDF.
+    pub package_paths: Vec<PathBuf>,
+}
+
+/// Environment variable with extra `:`-separated package roots, as in ROS.
+pub const PACKAGE_PATH_ENV: &str = "ROS_PACKAGE_PATH";
+
+/// Reads a URDF file into a model.
+///
+/// # Errors
+/// [`ModelError`] naming the file and the element: unreadable or malformed file, unknown links,
+/// a graph that is not a tree, an ambiguous tip, unsupported joints on the chain, missing limits,
+/// missing or unreadable meshes, non-physical or missing mass on a moving link.
+pub fn from_urdf(path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_path_buf(), source })?;
+    from_urdf_str(&text, path, opts)
+}
+
+/// Reads URDF text; `path` names it in messages and anchors relative mesh paths.
+///
+/// # Errors
+/// As [`from_urdf`].
+pub fn from_urdf_str(text: &str, path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
+    let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfParse { path: path.to_path_buf(), message: e.to_string() })?;
+    let doc = roxmltree::Document::parse(text).map_err(|e| ModelError::UrdfParse { path: path.to_path_buf(), message: e.to_string() })?;
+    let facts = XmlFacts::read(&doc);
+    let mut package_paths = opts.package_paths.clone();
+    package_paths.extend(package_paths_from_env(std::env::var(PACKAGE_PATH_ENV).ok().as_deref()));
+    Builder { path, robot: &robot, facts, package_paths, diagnostics: vec![] }.build(opts)
+}
+
+/// What urdf-rs does not tell: presence of elements and their lines.
+struct XmlFacts {
+    link_has_inertial: HashMap<String, bool>,
+    joint_has_limit: HashMap<String, bool>,
+    line: HashMap<(&'static str, String), u32>,
+}
+
+impl XmlFacts {
+    fn read(doc: &roxmltree::Document) -> Self {
+        let mut facts = XmlFacts { link_has_inertial: HashMap::new(), joint_has_limit: HashMap::new(), line: HashMap::new() };
+        for node in doc.root_element().children().filter(|n| n.is_element()) {
+            let Some(name) = node.attribute("name") else { continue };
+            let has = |tag: &str| node.children().any(|c| c.has_tag_name(tag));
+            let line = doc.text_pos_at(node.range().start).row;
+            match node.tag_name().name() {
+                "link" => {
+                    facts.link_has_inertial.insert(name.to_string(), has("inertial"));
+                    facts.line.insert(("link", name.to_string()), line);
+                }
+                "joint" => {
+                    facts.joint_has_limit.insert(name.to_string(), has("limit"));
+                    facts.line.insert(("joint", name.to_string()), line);
+                }
+                _ => {}
+            }
+        }
+        facts
+    }
+}
+
+struct Builder<'a> {
+    path: &'a Path,
+    robot: &'a urdf_rs::Robot,
+    facts: XmlFacts,
+    package_paths: Vec<PathBuf>,
+    diagnostics: Vec<Diagnostic>,
+}
+
+fn is_movable(kind: &urdf_rs::JointType) -> bool {
+    !matches!(kind, urdf_rs::JointType::Fixed)
+}
+
+impl<'a> Builder<'a> {
+    fn element(&self, kind: &'static str, name: &str) -> String {
+        match self.facts.line.get(&(kind, name.to_string())) {
+            Some(line) => format!("{kind} `{name}` (line {line})"),
+            None => format!("{kind} `{name}`"),
+        }
+    }
+
+    fn invalid(&self, element: String, message: String) -> ModelError {
+        ModelError::InvalidValue { path: self.path.to_path_buf(), element, message }
+    }
+
+    fn build(mut self, opts: &UrdfOptions) -> Result<Model, ModelError> {
+        let robot = self.robot;
+        let links: BTreeMap<&str, &urdf_rs::Link> = robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
+        let known = || links.keys().copied().collect::<Vec<_>>().join(", ");
+        if links.is_empty() {
+            return Err(self.invalid("robot".into(), "has no <link>".into()));
+        }
+
+        // Parent joint of every link; a second parent means the graph is not a tree.
+        let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+        let mut children: BTreeMap<&str, Vec<&urdf_rs::Joint>> = BTreeMap::new();
+        for joint in &robot.joints {
+            for (role, link) in [("<parent>", &joint.parent.link), ("<child>", &joint.child.link)] {
+                if !links.contains_key(link.as_str()) {
+                    return Err(ModelError::UnknownLink {
+                        path: self.path.to_path_buf(),
+                        context: format!("{} {role}", self.element("joint", &joint.name)),
+                        link: link.clone(),
+                        known: known(),
+                    });
+                }
+            }
+            if let Some(previous) = parent_joint.insert(joint.child.link.as_str(), joint) {
+                return Err(ModelError::NotATree {
+                    path: self.path.to_path_buf(),
+                    message: format!("link `{}` is the child of two joints, `{}` and `{}`; a URDF must be a tree", joint.child.link, previous.name, joint.name),
+                });
+            }
+            children.entry(joint.parent.link.as_str()).or_default().push(joint);
+        }
+        let roots: Vec<&str> = links.keys().copied().filter(|l| !parent_joint.contains_key(l)).collect();
+        let root = match roots.as_slice() {
+            [one] => *one,
+            [] => return Err(ModelError::NotATree { path: self.path.to_path_buf(), message: "every link has a parent joint: the joints form a cycle".into() }),
+            many => {
+                return Err(ModelError::NotATree {
+                    path: self.path.to_path_buf(),
+                    message: format!("{} links have no parent joint ({}); a URDF has exactly one root", many.len(), many.join(", ")),
+                })
+            }
+        };
+
+        let base = match &opts.base_link {
+            Some(name) if !links.contains_key(name.as_str()) => {
+                return Err(ModelError::UnknownLink { path: self.path.to_path_buf(), context: "--base".into(), link: name.clone(), known: known() })
+            }
+            Some(name) => name.as_str(),
+            None => root,
+        };
+        let tip = match &opts.tip_link {
+            Some(name) if !links.contains_key(name.as_str()) => {
+                return Err(ModelError::UnknownLink { path: self.path.to_path_buf(), context: "--tip".into(), link: name.clone(), known: known() })
+            }
+            Some(name) => name.clone(),
+            None => self.default_tip(base, &children)?,
+        };
+
+        // Walk up from the tip to the base.
+        let mut path_joints: Vec<&urdf_rs::Joint> = Vec::new();
+        let mut at = tip.as_str();
+        while at != base {
+            match parent_joint.get(at) {
+                Some(joint) => {
+                    path_joints.push(joint);
+                    at = joint.parent.link.as_str();
+                }
+                None => return Err(ModelError::TipNotBelowBase { path: self.path.to_path_buf(), base: base.into(), tip: tip.clone() }),
+            }
+        }
+        path_joints.reverse();
+
+        for joint in &path_joints {
+            let unsupported = match joint.joint_type {
+                _ if joint.mimic.is_some() && is_movable(&joint.joint_type) => Some("a mimic joint"),
+                urdf_rs::JointType::Floating => Some("floating"),
+                urdf_rs::JointType::Planar => Some("planar"),
+                urdf_rs::JointType::Spherical => Some("spherical"),
+                _ => None,
+            };
+            if let Some(kind) = unsupported {
+                return Err(ModelError::UnsupportedJoint { path: self.path.to_path_buf(), joint: joint.name.clone(), kind: kind.into(), base: base.into(), tip: tip.clone() });
+            }
+        }
+
+        // Chain links: the base and the child of every movable joint on the path. Fixed offsets in
+        // between accumulate into the next joint's origin; the ones after the last movable joint
+        // become the tool offset.
+        let mut chain_links: Vec<&str> = vec![base];
+        let mut joints = Vec::new();
+        let mut pending = Isometry3::identity();
+        for joint in &path_joints {
+            let origin = self.origin(&joint.origin, self.element("joint", &joint.name))?;
+            if is_movable(&joint.joint_type) {
+                joints.push(self.joint(joint, pending * origin)?);
+                chain_links.push(joint.child.link.as_str());
+                pending = Isometry3::identity();
+            } else {
+                pending *= origin;
+            }
+        }
+        if joints.is_empty() {
+            return Err(ModelError::NoMovableJoint { path: self.path.to_path_buf(), base: base.into(), tip: tip.clone() });
+        }
+        let last_from_tool = pending;
+
+        // Everything below the base hangs from the nearest chain link above it.
+        let mut owned: Vec<Vec<(&str, Isometry3<f64>)>> = chain_links.iter().map(|l| vec![(*l, Isometry3::identity())]).collect();
+        let chain_index: HashMap<&str, usize> = chain_links.iter().enumerate().map(|(i, l)| (*l, i)).collect();
+        let mut stack: Vec<(&str, usize, Isometry3<f64>)> = vec![(base, 0, Isometry3::identity())];
+        while let Some((link, owner, owner_from_link)) = stack.pop() {
+            for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                let child = joint.child.link.as_str();
+                if let Some(&index) = chain_index.get(child) {
+                    if index > 0 && joints[index - 1].name == joint.name {
+                        stack.push((child, index, Isometry3::identity()));
+                        continue;
+                    }
+                }
+                // Off the chain, or fixed: attached to the owner at the joint's zero position.
+                let origin = self.origin(&joint.origin, self.element("joint", &joint.name))?;
+                let owner_from_child = owner_from_link * origin;
+                owned[owner].push((child, owner_from_child));
+                stack.push((child, owner, owner_from_child));
+            }
+        }
+
+        let mut model_links = Vec::with_capacity(chain_links.len());
+        for (index, group) in owned.iter().enumerate() {
+            model_links.push(self.link(index, group, &links, &joints)?);
+        }
+        Ok(Model {
+            name: if robot.name.is_empty() { "robot".into() } else { robot.name.clone() },
+            source: ModelSource::Urdf { path: self.path.to_path_buf(), base_link: base.into(), tip_link: tip },
+            world_from_base: Isometry3::identity(),
+            joints,
+            links: model_links,
+            last_from_tool,
+            diagnostics: self.diagnostics,
+        })
+    }
+
+    /// The child of the last movable joint on the longest chain of movable joints below `base`.
+    fn default_tip(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> Result<String, ModelError> {
+        let mut best: (usize, Vec<String>) = (0, vec![]);
+        let mut stack = vec![(base, 0usize)];
+        while let Some((link, depth)) = stack.pop() {
+            for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                let child = joint.child.link.as_str();
+                if is_movable(&joint.joint_type) {
+                    let depth = depth + 1;
+                    if depth > best.0 {
+                        best = (depth, vec![child.to_string()]);
+                    } else if depth == best.0 {
+                        best.1.push(child.to_string());
+                    }
+                    stack.push((child, depth));
+                } else {
+                    stack.push((child, depth));
+                }
+            }
+        }
+        match best.1.len() {
+            0 => Err(ModelError::NoMovableJoint { path: self.path.to_path_buf(), base: base.into(), tip: base.into() }),
+            1 => Ok(best.1.remove(0)),
+            _ => {
+                best.1.sort();
+                Err(ModelError::AmbiguousTip { path: self.path.to_path_buf(), base: base.into(), length: best.0, candidates: best.1.join(", ") })
+            }
+        }
+    }
+
+    fn origin(&self, pose: &urdf_rs::Pose, element: String) -> Result<Isometry3<f64>, ModelError> {
+        if pose.xyz.0.iter().chain(pose.rpy.0.iter()).any(|v| !v.is_finite()) {
+            return Err(self.invalid(element, format!("<origin xyz=\"{:?}\" rpy=\"{:?}\"> has a non-finite number", pose.xyz.0, pose.rpy.0)));
+        }
+        Ok(isometry_from_xyz_rpy(pose.xyz.0, pose.rpy.0))
+    }
+
+    fn joint(&mut self, joint: &urdf_rs::Joint, parent_from_joint: Isometry3<f64>) -> Result<Joint, ModelError> {
+        let element = self.element("joint", &joint.name);
+        let axis = Vector3::from(joint.axis.xyz.0);
+        if !axis.iter().all(|v| v.is_finite()) || axis.norm() < 1e-9 {
+            return Err(self.invalid(element, format!("<axis xyz=\"{:?}\"> must be a finite non-zero vector", joint.axis.xyz.0)));
+        }
+        let kind = match joint.joint_type {
+            urdf_rs::JointType::Revolute => JointKind::Revolute,
+            urdf_rs::JointType::Continuous => JointKind::Continuous,
+            _ => JointKind::Prismatic,
+        };
+        let has_limit = self.facts.joint_has_limit.get(&joint.name).copied().unwrap_or(false);
+        let limit = &joint.limit;
+        let limits = if kind == JointKind::Continuous {
+            None
+        } else {
+            if !has_limit {
+                return Err(self.invalid(element, "has no <limit>; a revolute or prismatic joint needs lower and upper limits (urdf-rs would read [0, 0])".into()));
+            }
+            if !(limit.lower.is_finite() && limit.upper.is_finite()) || limit.lower > limit.upper {
+                return Err(self.invalid(format!("{element} <limit>"), format!("lower {} and upper {}: expected finite lower <= upper", limit.lower, limit.upper)));
+            }
+            if limit.lower == limit.upper {
+                self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <limit>"), message: format!("lower = upper = {}: the joint cannot move", limit.lower) });
+            }
+            Some([limit.lower, limit.upper])
+        };
+        let positive = |value: f64, what: &str, diagnostics: &mut Vec<Diagnostic>| {
+            if value.is_finite() && value > 0.0 {
+                Some(value)
+            } else {
+                if has_limit {
+                    diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <limit>"), message: format!("{what} {value} is not positive; treated as unknown") });
+                }
+                None
+            }
+        };
+        let max_effort = positive(limit.effort, "effort", &mut self.diagnostics);
+        let max_velocity = positive(limit.velocity, "velocity", &mut self.diagnostics);
+        Ok(Joint { name: joint.name.clone(), kind, parent_from_joint, axis: Unit::new_normalize(axis), limits, max_velocity, max_effort })
+    }
+
+    fn link(&mut self, index: usize, group: &[(&str, Isometry3<f64>)], links: &BTreeMap<&str, &urdf_rs::Link>, joints: &[Joint]) -> Result<Link, ModelError> {
+        let mut colliders = Vec::new();
+        let mut masses = Vec::new();
+        let (chain_name, _) = group[0];
+        for (name, owner_from_link) in group {
+            let Some(link) = links.get(name) else { continue };
+            let element = self.element("link", name);
+            for (k, collision) in link.collision.iter().enumerate() {
+                let origin = self.origin(&collision.origin, format!("{element} <collision> {k}"))?;
+                let label = match &collision.name {
+                    Some(n) if !n.is_empty() => format!("{name}/{n}"),
+                    _ => format!("{name}/collision {k}"),
+                };
+                for (pose, shape) in self.shapes(&collision.geometry, name, &format!("{element} <collision> {k}"))? {
+                    colliders.push(Collider { link_from_shape: owner_from_link * origin * pose, shape, label: label.clone() });
+                }
+            }
+            if self.facts.link_has_inertial.get(*name).copied().unwrap_or(false) {
+                let inertial = self.inertial(&link.inertial, &element)?;
+                if inertial.mass > 0.0 {
+                    // A single part may be odd (a point mass) while the merged body is fine; the
+                    // merged body is checked below and is what simulators see.
+                    if let Err(problem) = inertial.check() {
+                        self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <inertial>"), message: problem });
+                    }
+                    masses.push(inertial.transformed(owner_from_link));
+                } else if index > 0 && !link.collision.is_empty() {
+                    self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <inertial>"), message: "mass is 0 although the link has collision geometry".into() });
+                }
+            }
+        }
+        if index == 0 {
+            return Ok(Link { name: chain_name.into(), merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(), colliders, inertial: Inertial::combine(&masses) });
+        }
+        let joint = &joints[index - 1].name;
+        let bad = |problem: String| ModelError::BadInertia { path: self.path.to_path_buf(), link: chain_name.into(), joint: joint.clone(), problem };
+        let inertial = Inertial::combine(&masses).ok_or_else(|| {
+            bad(if group.iter().all(|(n, _)| !self.facts.link_has_inertial.get(*n).copied().unwrap_or(false)) {
+                "has no <inertial>; its mass would be 0".into()
+            } else {
+                "its <inertial> mass is 0".into()
+            })
+        })?;
+        inertial.check().map_err(bad)?;
+        Ok(Link { name: chain_name.into(), merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(), colliders, inertial: Some(inertial) })
+    }
+
+    fn inertial(&self, inertial: &urdf_rs::Inertial, element: &str) -> Result<Inertial, ModelError> {
+        let i = &inertial.inertia;
+        let values = [inertial.mass.value, i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz];
+        if values.iter().any(|v| !v.is_finite()) || inertial.mass.value < 0.0 {
+            return Err(self.invalid(format!("{element} <inertial>"), format!("mass {} and inertia {:?}: expected finite numbers, mass >= 0", inertial.mass.value, &values[1..])));
+        }
+        let frame = self.origin(&inertial.origin, format!("{element} <inertial>"))?;
+        let tensor = Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz);
+        Ok(Inertial { mass: inertial.mass.value, com: Vector3::zeros(), inertia: tensor }.transformed(&frame))
+    }
+
+    fn shapes(&self, geometry: &urdf_rs::Geometry, link: &str, element: &str) -> Result<Vec<(Isometry3<f64>, Shape)>, ModelError> {
+        let positive = |values: &[f64], what: &str| -> Result<(), ModelError> {
+            if values.iter().all(|v| v.is_finite() && *v > 0.0) {
+                Ok(())
+            } else {
+                Err(self.invalid(element.to_string(), format!("{what} {values:?}: expected positive finite numbers")))
+            }
+        };
+        Ok(match geometry {
+            urdf_rs::Geometry::Sphere { radius } => {
+                positive(&[*radius], "<sphere radius>")?;
+                vec![(Isometry3::identity(), Shape::Sphere { radius: *radius })]
+            }
+            urdf_rs::Geometry::Cylinder { radius, length } => {
+                positive(&[*radius, *length], "<cylinder radius length>")?;
+                vec![(Isometry3::identity(), Shape::Cylinder { radius: *radius, length: *length })]
+            }
+            urdf_rs::Geometry::Capsule { radius, length } => {
+                // Exact as a cylinder plus one sphere on each end.
+                positive(&[*radius, *length], "<capsule radius length>")?;
+                let end = |z: f64| (Isometry3::from_parts(Translation3::new(0.0, 0.0, z), UnitQuaternion::identity()), Shape::Sphere { radius: *radius });
+                vec![(Isometry3::identity(), Shape::Cylinder { radius: *radius, length: *length }), end(length / 2.0), end(-length / 2.0)]
+            }
+            urdf_rs::Geometry::Box { size } => {
+                positive(&size.0, "<box size>")?;
+                vec![(Isometry3::identity(), Shape::Box { half_extents: [size.0[0] / 2.0, size.0[1] / 2.0, size.0[2] / 2.0] })]
+            }
+            urdf_rs::Geometry::Mesh { filename, scale } => {
+                let scale = scale.as_ref().map(|s| s.0).unwrap_or([1.0; 3]);
+                if scale.iter().any(|v| !v.is_finite() || *v == 0.0) {
+                    return Err(self.invalid(element.to_string(), format!("<mesh scale=\"{scale:?}\">: expected finite non-zero factors")));
+                }
+                let dir = self.path.parent().unwrap_or(Path::new("."));
+                let file = resolve_mesh_uri(filename, dir, &self.package_paths).map_err(|searched| ModelError::MissingMesh {
+                    path: self.path.to_path_buf(),
+                    link: link.into(),
+                    uri: filename.clone(),
+                    searched: searched.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+                })?;
+                let mesh = load_mesh(filename, &file, scale).map_err(|message| ModelError::BadMesh { path: self.path.to_path_buf(), link: link.into(), mesh: file.clone(), message })?;
+                vec![(Isometry3::identity(), Shape::Mesh(mesh))]
+            }
+        })
+    }
+}

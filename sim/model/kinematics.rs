@@ -1,0 +1,110 @@
+//! Forward kinematics and the geometric Jacobian, in f64, without heap allocation per call.
+
+use super::{JointKind, Model};
+use nalgebra::{Isometry3, Matrix6xX, Translation3, UnitQuaternion, Vector3};
+
+/// Buffers for [`Model::forward`] and [`Model::jacobian`]; make one per model and thread with
+/// [`Model::workspace`] and reuse it.
+#[derive(Debug, Clone)]
+pub struct KinematicsWorkspace {
+    /// World pose of every link frame, `links[i]` order.
+    pub link_in_world: Vec<Isometry3<f64>>,
+    /// World pose of the tool frame.
+    pub tool_in_world: Isometry3<f64>,
+    /// Geometric Jacobian of the tool frame origin, world frame: rows 0..3 linear velocity,
+    /// rows 3..6 angular velocity, one column per joint.
+    pub jacobian: Matrix6xX<f64>,
+}
+
+impl Model {
+    /// Buffers sized for this model.
+    pub fn workspace(&self) -> KinematicsWorkspace {
+        KinematicsWorkspace {
+            link_in_world: vec![Isometry3::identity(); self.links.len()],
+            tool_in_world: Isometry3::identity(),
+            jacobian: Matrix6xX::zeros(self.dof()),
+        }
+    }
+
+    /// Pose of the child link relative to the joint's parent link at joint position `q`.
+    #[inline]
+    pub fn joint_transform(&self, joint: usize, q: f64) -> Isometry3<f64> {
+        let j = &self.joints[joint];
+        match j.kind {
+            JointKind::Revolute | JointKind::Continuous => {
+                j.parent_from_joint * UnitQuaternion::from_axis_angle(&j.axis, q)
+            }
+            JointKind::Prismatic => j.parent_from_joint * Translation3::from(j.axis.into_inner() * q),
+        }
+    }
+
+    /// Fills `ws.link_in_world` and `ws.tool_in_world` for configuration `q` (rad or m).
+    ///
+    /// # Panics
+    /// When `q.len()` differs from [`Model::dof`] or `ws` was made for another model.
+    pub fn forward(&self, q: &[f64], ws: &mut KinematicsWorkspace) {
+        assert_eq!(q.len(), self.dof(), "configuration length must equal the model's dof");
+        ws.link_in_world[0] = self.world_from_base;
+        for (i, &qi) in q.iter().enumerate() {
+            ws.link_in_world[i + 1] = ws.link_in_world[i] * self.joint_transform(i, qi);
+        }
+        ws.tool_in_world = ws.link_in_world[self.dof()] * self.last_from_tool;
+    }
+
+    /// World pose of the tool frame at `q`; allocation-free convenience over [`Model::forward`].
+    ///
+    /// # Panics
+    /// When `q.len()` differs from [`Model::dof`].
+    pub fn tool_pose(&self, q: &[f64]) -> Isometry3<f64> {
+        assert_eq!(q.len(), self.dof(), "configuration length must equal the model's dof");
+        let mut pose = self.world_from_base;
+        for (i, &qi) in q.iter().enumerate() {
+            pose *= self.joint_transform(i, qi);
+        }
+        pose * self.last_from_tool
+    }
+
+    /// Runs [`Model::forward`] and fills `ws.jacobian` with the tool frame's geometric Jacobian.
+    ///
+    /// # Panics
+    /// As [`Model::forward`].
+    pub fn jacobian(&self, q: &[f64], ws: &mut KinematicsWorkspace) {
+        self.forward(q, ws);
+        let tool = ws.tool_in_world.translation.vector;
+        for (i, joint) in self.joints.iter().enumerate() {
+            // The joint frame coincides with the child link frame (motion happens after the
+            // fixed offset), so the axis and its origin are read from link i + 1.
+            let frame = &ws.link_in_world[i + 1];
+            let axis: Vector3<f64> = frame.rotation * joint.axis.into_inner();
+            let mut column = ws.jacobian.column_mut(i);
+            match joint.kind {
+                JointKind::Revolute | JointKind::Continuous => {
+                    let linear = axis.cross(&(tool - frame.translation.vector));
+                    column.fixed_rows_mut::<3>(0).copy_from(&linear);
+                    column.fixed_rows_mut::<3>(3).copy_from(&axis);
+                }
+                JointKind::Prismatic => {
+                    column.fixed_rows_mut::<3>(0).copy_from(&axis);
+                    column.fixed_rows_mut::<3>(3).fill(0.0);
+                }
+            }
+        }
+    }
+}
+
+impl Model {
+    /// A configuration drawn uniformly within the joint limits (continuous joints in [-pi, pi]).
+    pub fn random_configuration<R: rand::Rng>(&self, rng: &mut R) -> Vec<f64> {
+        self.joints
+            .iter()
+            .map(|joint| {
+                let [lower, upper] = joint.limits.unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
+                if upper > lower {
+                    rng.random_range(lower..=upper)
+                } else {
+                    lower
+                }
+            })
+            .collect()
+    }
+}

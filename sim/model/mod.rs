@@ -1,0 +1,285 @@
+//! Consumes a validated [`Design`](crate::design::Design), a URDF file or an MJCF file.
+//! Produces a [`Model`]: a serial chain of movable joints with exact collision geometry and
+//! inertia per link, plus forward kinematics and the geometric Jacobian. Fails with [`ModelError`].
+
+mod from_design;
+mod from_urdf;
+mod geometry;
+mod inertia;
+mod kinematics;
+mod mesh;
+
+pub use from_design::from_design;
+pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions};
+pub use geometry::{Collider, Shape};
+pub use inertia::Inertial;
+pub use kinematics::KinematicsWorkspace;
+pub use mesh::{resolve_mesh_uri, TriMesh};
+
+use nalgebra::{Isometry3, Unit, Vector3};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// One robot, as every later stage sees it.
+///
+/// `links[0]` is the fixed base; `links[i + 1]` is moved by `joints[i]`. Link frames follow the
+/// URDF convention: the frame of link `i + 1` is `frame(links[i]) * joints[i].parent_from_joint *
+/// motion(q_i)`, so at `q = 0` a link frame coincides with its joint frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct Model {
+    /// Robot name (design name or URDF `<robot name>`).
+    pub name: String,
+    /// Where the model came from.
+    pub source: ModelSource,
+    /// Pose of the base link in the world.
+    pub world_from_base: Isometry3<f64>,
+    /// Movable joints in chain order, base to tip.
+    pub joints: Vec<Joint>,
+    /// `joints.len() + 1` links: the base, then one per joint.
+    pub links: Vec<Link>,
+    /// The tool frame relative to the last link frame.
+    pub last_from_tool: Isometry3<f64>,
+    /// Suspicious but usable input found while building the model.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+/// Where a [`Model`] came from.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ModelSource {
+    /// A design JSON (free, economic, modular or preset).
+    Design {
+        /// Design mode as written in the file.
+        mode: String,
+    },
+    /// A URDF file.
+    Urdf {
+        /// The file read.
+        path: PathBuf,
+        /// Root link of the chain.
+        base_link: String,
+        /// Tip link of the chain.
+        tip_link: String,
+    },
+    /// An MJCF file, loaded through MuJoCo.
+    Mjcf {
+        /// The file read.
+        path: PathBuf,
+    },
+}
+
+/// Kind of a movable joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKind {
+    /// Rotation about the axis, with limits.
+    Revolute,
+    /// Rotation about the axis without limits.
+    Continuous,
+    /// Translation along the axis, with limits.
+    Prismatic,
+}
+
+/// A movable joint of the chain.
+#[derive(Debug, Clone, Serialize)]
+pub struct Joint {
+    /// Joint name.
+    pub name: String,
+    /// Revolute, continuous or prismatic.
+    pub kind: JointKind,
+    /// Joint frame in the parent link frame at `q = 0`.
+    pub parent_from_joint: Isometry3<f64>,
+    /// Unit axis in the joint frame.
+    pub axis: Unit<Vector3<f64>>,
+    /// Lower and upper position limit (rad or m); `None` for continuous joints.
+    pub limits: Option<[f64; 2]>,
+    /// Maximum speed (rad/s or m/s), if known.
+    pub max_velocity: Option<f64>,
+    /// Rated torque or force (N m or N), if known.
+    pub max_effort: Option<f64>,
+}
+
+/// A rigid body of the chain with everything attached to it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Link {
+    /// Link name (for URDF: the chain link; links folded into it are listed in `merged`).
+    pub name: String,
+    /// Names of links rigidly attached to this one and merged into it (fixed joints, off-chain
+    /// links held at their joints' zero position).
+    pub merged: Vec<String>,
+    /// Exact collision geometry in the link frame.
+    pub colliders: Vec<Collider>,
+    /// Mass properties in the link frame; `None` only for the fixed base.
+    pub inertial: Option<Inertial>,
+}
+
+/// A warning about usable but suspicious input.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnostic {
+    /// File the warning is about.
+    pub path: PathBuf,
+    /// Element or field (e.g. `joint panda_joint1 <limit>`).
+    pub element: String,
+    /// What is suspicious and what was assumed.
+    pub message: String,
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "warning: {}: {}: {}", self.path.display(), self.element, self.message)
+    }
+}
+
+/// Why a model could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// A file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// urdf-rs rejected the XML.
+    #[error("{path}: not a valid URDF: {message}")]
+    UrdfParse {
+        /// The file.
+        path: PathBuf,
+        /// What urdf-rs said.
+        message: String,
+    },
+    /// A link named on the command line or in a joint does not exist.
+    #[error("{path}: {context}: no link named `{link}` (links: {known})")]
+    UnknownLink {
+        /// The file.
+        path: PathBuf,
+        /// Where the name came from.
+        context: String,
+        /// The missing name.
+        link: String,
+        /// Every link the file has.
+        known: String,
+    },
+    /// The URDF is not a tree.
+    #[error("{path}: {message}")]
+    NotATree {
+        /// The file.
+        path: PathBuf,
+        /// Which link breaks the tree property.
+        message: String,
+    },
+    /// Several chains are equally long and no `--tip` was given.
+    #[error("{path}: the longest chains of movable joints from `{base}` tie at {length} joints, ending at {candidates}; choose one with --tip")]
+    AmbiguousTip {
+        /// The file.
+        path: PathBuf,
+        /// Base link.
+        base: String,
+        /// Number of movable joints on each candidate chain.
+        length: usize,
+        /// The candidate tip links.
+        candidates: String,
+    },
+    /// The chosen tip is not below the chosen base.
+    #[error("{path}: link `{tip}` is not below base link `{base}`")]
+    TipNotBelowBase {
+        /// The file.
+        path: PathBuf,
+        /// Base link.
+        base: String,
+        /// Tip link.
+        tip: String,
+    },
+    /// A joint type the serial model cannot represent sits on the chain.
+    #[error("{path}: joint `{joint}` on the chain from `{base}` to `{tip}` is {kind}; only revolute, continuous, prismatic and fixed joints can be on the chain")]
+    UnsupportedJoint {
+        /// The file.
+        path: PathBuf,
+        /// Joint name.
+        joint: String,
+        /// Its kind (`floating`, `planar`, `mimic`).
+        kind: String,
+        /// Base link.
+        base: String,
+        /// Tip link.
+        tip: String,
+    },
+    /// The chain has no movable joint.
+    #[error("{path}: the chain from `{base}` to `{tip}` has no movable joint")]
+    NoMovableJoint {
+        /// The file.
+        path: PathBuf,
+        /// Base link.
+        base: String,
+        /// Tip link.
+        tip: String,
+    },
+    /// A number is NaN, infinite or out of its range.
+    #[error("{path}: {element}: {message}")]
+    InvalidValue {
+        /// The file.
+        path: PathBuf,
+        /// Element and attribute.
+        element: String,
+        /// The value and what was expected.
+        message: String,
+    },
+    /// A mesh file could not be found.
+    #[error("{path}: link `{link}`: mesh `{uri}` not found; searched {searched}")]
+    MissingMesh {
+        /// The URDF.
+        path: PathBuf,
+        /// Link holding the mesh.
+        link: String,
+        /// The URI as written.
+        uri: String,
+        /// Every place searched.
+        searched: String,
+    },
+    /// A mesh file exists but could not be read.
+    #[error("{path}: link `{link}`: cannot load mesh {mesh}: {message}")]
+    BadMesh {
+        /// The URDF.
+        path: PathBuf,
+        /// Link holding the mesh.
+        link: String,
+        /// The mesh file.
+        mesh: PathBuf,
+        /// What the loader said.
+        message: String,
+    },
+    /// A moving link has no usable mass (and `--strict` or no fallback applies).
+    #[error("{path}: link `{link}` is moved by joint `{joint}` but {problem}")]
+    BadInertia {
+        /// The file.
+        path: PathBuf,
+        /// Link name.
+        link: String,
+        /// The joint moving it.
+        joint: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// MuJoCo could not load an MJCF file.
+    #[error("{path}: MuJoCo could not load it: {message}")]
+    Mujoco {
+        /// The file.
+        path: PathBuf,
+        /// MuJoCo's message.
+        message: String,
+    },
+}
+
+impl Model {
+    /// Number of movable joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Link pairs `(i, i + 1)` joined by one joint: the pairs self-collision leaves out.
+    pub fn adjacent_link_pairs(&self) -> Vec<(usize, usize)> {
+        (0..self.joints.len()).map(|i| (i, i + 1)).collect()
+    }
+}

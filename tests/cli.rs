@@ -1,0 +1,194 @@
+//! The `validate-design` binary: exit codes and error messages on real and broken inputs.
+
+mod common;
+
+use assert_cmd::Command;
+use common::{fixture, panda_urdf, repo};
+
+fn validate_design() -> Command {
+    let mut cmd = Command::cargo_bin("validate-design").expect("binary is built");
+    cmd.current_dir(repo());
+    cmd
+}
+
+/// Runs the binary on a broken fixture and returns stderr, asserting exit code 2.
+fn error_for(name: &str, extra: &[&str]) -> String {
+    let output = validate_design().arg(fixture(name)).args(extra).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "{name}: expected exit 2, stderr: {stderr}");
+    assert!(stderr.contains(name), "{name}: the message must name the file: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    stderr
+}
+
+#[test]
+fn main_command_describes_the_paper_robot_and_mujoco_agrees() {
+    let output = validate_design().arg("designs/paper-real-world.json").output().expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("paper-real-world (modular design, 5 joints)"), "{stdout}");
+    assert!(stdout.contains("c_h = sum|a| + sum|d| = 1.1000 m"), "{stdout}");
+    assert!(stdout.contains("MuJoCo 3.17.0") && stdout.contains(": agree"), "{stdout}");
+}
+
+#[test]
+fn panda_needs_a_tip_and_loads_with_one() {
+    let output = validate_design().arg(panda_urdf()).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr.contains("panda_leftfinger, panda_rightfinger") && stderr.contains("--tip"), "{stderr}");
+
+    let output = validate_design().arg(panda_urdf()).args(["--tip", "panda_hand", "--mujoco-checks", "20"]).output().expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("panda (URDF, chain panda_link0 -> panda_hand, 7 joints)"), "{stdout}");
+}
+
+#[test]
+fn rejects_unknown_mode() {
+    let stderr = error_for("unknown_mode.json", &[]);
+    assert!(stderr.contains("unknown mode `telescopic`") && stderr.contains("mode"), "{stderr}");
+}
+
+#[test]
+fn rejects_nan_with_line() {
+    let stderr = error_for("nan_parameter.json", &[]);
+    assert!(stderr.contains("line 5"), "{stderr}");
+}
+
+#[test]
+fn rejects_out_of_range_number_with_line() {
+    let stderr = error_for("out_of_range_number.json", &[]);
+    assert!(stderr.contains("line 4") && stderr.contains("out of range"), "{stderr}");
+}
+
+#[test]
+fn rejects_economic_violation_naming_joint_parameter_and_allowed_set() {
+    let stderr = error_for("economic_violation.json", &[]);
+    assert!(stderr.contains("joint 2 (joints[1]): a = 0.45 is not economic; allowed {0} U [-0.4, -0.1] U [0.1, 0.4] m"), "{stderr}");
+}
+
+#[test]
+fn rejects_unknown_module_listing_the_catalog() {
+    let stderr = error_for("unknown_module.json", &[]);
+    assert!(stderr.contains("T-short") && stderr.contains("L-long") && stderr.contains("line 3"), "{stderr}");
+}
+
+#[test]
+fn rejects_missing_mesh_naming_link_uri_and_places() {
+    let stderr = error_for("missing_mesh.urdf", &["--package-path", "/opt/robots"]);
+    assert!(stderr.contains("link `arm`") && stderr.contains("package://nowhere_description/meshes/arm.stl"), "{stderr}");
+    assert!(stderr.contains("/opt/robots/nowhere_description/meshes/arm.stl"), "{stderr}");
+}
+
+#[test]
+fn rejects_branching_tree_with_tied_chains() {
+    let stderr = error_for("branching_tree.urdf", &[]);
+    assert!(stderr.contains("tie at 2 joints, ending at left_lower, right_lower; choose one with --tip"), "{stderr}");
+}
+
+#[test]
+fn branching_tree_loads_with_a_tip() {
+    let output = validate_design().arg(fixture("branching_tree.urdf")).args(["--tip", "left_lower", "--describe"]).output().expect("runs");
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
+fn rejects_unknown_link() {
+    let stderr = error_for("unknown_parent_link.urdf", &[]);
+    assert!(stderr.contains("joint `shoulder` (line 5) <parent>: no link named `bsae`"), "{stderr}");
+    let stderr = error_for("branching_tree.urdf", &["--tip", "left_hand"]);
+    assert!(stderr.contains("--tip: no link named `left_hand`"), "{stderr}");
+}
+
+#[test]
+fn rejects_revolute_joint_without_limit() {
+    let stderr = error_for("revolute_without_limit.urdf", &[]);
+    assert!(stderr.contains("joint `shoulder` (line 5)") && stderr.contains("has no <limit>"), "{stderr}");
+}
+
+#[test]
+fn rejects_moving_link_without_inertial() {
+    let stderr = error_for("missing_inertial.urdf", &[]);
+    assert!(stderr.contains("link `arm` is moved by joint `shoulder` but has no <inertial>; its mass would be 0"), "{stderr}");
+}
+
+#[test]
+fn rejects_inertia_breaking_triangle_inequality() {
+    let stderr = error_for("bad_inertia.urdf", &[]);
+    assert!(stderr.contains("link `arm`") && stderr.contains("triangle inequality"), "{stderr}");
+}
+
+#[test]
+fn rejects_link_with_two_parents() {
+    let stderr = error_for("two_parents.urdf", &[]);
+    assert!(stderr.contains("link `b` is the child of two joints, `j2` and `j3`"), "{stderr}");
+}
+
+#[test]
+fn rejects_mimic_joint_on_the_chain() {
+    let stderr = error_for("mimic_on_chain.urdf", &[]);
+    assert!(stderr.contains("joint `j2`") && stderr.contains("is a mimic joint"), "{stderr}");
+}
+
+#[test]
+fn rejects_unknown_input_type_and_missing_file() {
+    let output = validate_design().arg("Cargo.toml").output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("Cargo.toml: unknown input type"));
+    let output = validate_design().arg("designs/no-such-design.json").output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("cannot read design designs/no-such-design.json"));
+}
+
+#[test]
+fn usage_errors_exit_2_and_help_lists_examples_and_exit_codes() {
+    let output = validate_design().arg("--no-such-flag").output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    let output = validate_design().arg("--help").output().expect("runs");
+    let help = String::from_utf8_lossy(&output.stdout);
+    assert!(help.contains("Examples:") && help.contains("Exit codes:") && help.contains("--export-mjcf"), "{help}");
+}
+
+#[test]
+fn exports_are_written_and_never_over_an_input() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let urdf = dir.path().join("robot.urdf");
+    let mjcf = dir.path().join("robot.xml");
+    let output = validate_design()
+        .arg("designs/ur5e.json")
+        .args(["--describe", "--export-urdf"])
+        .arg(&urdf)
+        .arg("--export-mjcf")
+        .arg(&mjcf)
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(std::fs::read_to_string(&urdf).expect("URDF written").contains("<robot"));
+    assert!(std::fs::read_to_string(&mjcf).expect("MJCF written").contains("<mujoco"));
+
+    let copy = dir.path().join("design.json");
+    std::fs::copy(repo().join("designs/ur5e.json"), &copy).expect("copy");
+    let before = std::fs::read(&copy).expect("read");
+    let output = validate_design().arg(&copy).arg("--export-mjcf").arg(&copy).output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("refusing to write"));
+    assert_eq!(std::fs::read(&copy).expect("read"), before, "the input must be untouched");
+}
+
+#[test]
+fn strict_turns_warnings_into_errors() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("frozen.urdf");
+    std::fs::write(
+        &path,
+        r#"<robot name="frozen"><link name="base"/><link name="arm"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+        <joint name="j" type="revolute"><parent link="base"/><child link="arm"/><limit lower="0" upper="0" effort="1" velocity="1"/></joint></robot>"#,
+    )
+    .expect("write");
+    let output = validate_design().arg(&path).arg("--describe").output().expect("runs");
+    assert_eq!(output.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("the joint cannot move"));
+    let output = validate_design().arg(&path).args(["--describe", "--strict"]).output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+}
