@@ -100,7 +100,10 @@ fn sha256_file(path: &Path) -> Result<String, String> {
 /// The library of an importable Python `mujoco` of exactly the pinned version, if any.
 fn python_mujoco_lib(version: &str, lib_name: &str) -> Option<PathBuf> {
     let out = Command::new("python3")
-        .args(["-c", "import os, mujoco; print(mujoco.__version__); print(os.path.dirname(mujoco.__file__))"])
+        .args([
+            "-c",
+            "import os, mujoco; print(mujoco.__version__); print(os.path.dirname(mujoco.__file__))",
+        ])
         .output()
         .ok()?;
     if !out.status.success() {
@@ -165,7 +168,12 @@ fn fetch_wheel(manifest: &Path, dest: &Path, lib_name: &str, pin: &Pin) -> Resul
     }
     // A wheel is a zip file; python3 is already required for pip, so its zipfile does the unpacking.
     let script = "import sys, zipfile\nz = zipfile.ZipFile(sys.argv[1])\nopen(sys.argv[3], 'wb').write(z.read('mujoco/' + sys.argv[2]))";
-    let status = Command::new("python3").args(["-c", script]).arg(&wheel).arg(lib_name).arg(dest).status();
+    let status = Command::new("python3")
+        .args(["-c", script])
+        .arg(&wheel)
+        .arg(lib_name)
+        .arg(dest)
+        .status();
     if !matches!(status, Ok(s) if s.success()) {
         return Err(format!("cannot unpack {lib_name} from {}", wheel.display()));
     }

@@ -4,7 +4,7 @@
 //! frame `a`). URDF and designs give orientations as roll-pitch-yaw (fixed X, then Y, then Z);
 //! MJCF wants quaternions `w x y z`.
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// A pose as written in design files: position in metres and roll-pitch-yaw in radians.
@@ -40,9 +40,19 @@ pub fn isometry_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Isometry3<f64> {
 }
 
 /// Roll, pitch, yaw of a rotation, the inverse of [`isometry_from_xyz_rpy`] up to angle wrapping.
+///
+/// Pitch and yaw come from the first column; roll from what remains after undoing them. Unlike
+/// `UnitQuaternion::euler_angles`, this stays exact (<= 1e-15 rad) near pitch = +-pi/2.
 pub fn rpy_of(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
-    let (roll, pitch, yaw) = rotation.euler_angles();
-    [roll, pitch, yaw]
+    let world_from_frame = rotation.to_rotation_matrix();
+    let m = world_from_frame.matrix();
+    let pitch = (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)]));
+    let yaw = m[(1, 0)].atan2(m[(0, 0)]);
+    let roll_only =
+        Rotation3::from_axis_angle(&Vector3::y_axis(), -pitch) * Rotation3::from_axis_angle(&Vector3::z_axis(), -yaw) * world_from_frame;
+    let r = roll_only.matrix();
+    // `atan2(-0.0, x)` is `-0.0`; write it as plain `0`.
+    [r[(2, 1)].atan2(r[(2, 2)]), pitch, yaw].map(|angle| if angle == 0.0 { 0.0 } else { angle })
 }
 
 /// A quaternion as `[w, x, y, z]`, the MJCF order.
@@ -74,6 +84,15 @@ mod tests {
         let back = isometry_from_xyz_rpy([1.0, 2.0, 3.0], rpy_of(&pose.rotation));
         let (dt, da) = pose_difference(&pose, &back);
         assert!(dt < 1e-15 && da < 1e-12, "{dt} {da}");
+    }
+
+    #[test]
+    fn rpy_is_exact_near_gimbal_lock() {
+        for pitch in [-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2 - 1e-8, -1.5707963] {
+            let pose = isometry_from_xyz_rpy([0.0; 3], [0.3, pitch, 0.4]);
+            let back = isometry_from_xyz_rpy([0.0; 3], rpy_of(&pose.rotation));
+            assert!(pose.rotation.angle_to(&back.rotation) < 1e-14, "pitch {pitch}");
+        }
     }
 
     #[test]

@@ -30,9 +30,9 @@
 //!   (as a cylinder plus two spheres), cylinder, box and mesh are read.
 
 pub mod design;
+pub mod engine;
 pub mod error;
 pub mod export;
 pub mod frames;
 pub mod model;
-pub mod engine;
 pub mod pipeline;

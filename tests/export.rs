@@ -23,10 +23,17 @@ const SEED: u64 = 7;
 fn urdf_export_read_back_gives_the_same_kinematics() {
     for (id, model) in shipped_models() {
         let text = to_urdf(&model, &UrdfExportOptions::default()).unwrap_or_else(|e| panic!("{id}: {e}"));
-        let opts = UrdfOptions { tip_link: Some("tool".into()), ..UrdfOptions::default() };
+        let opts = UrdfOptions {
+            tip_link: Some("tool".into()),
+            ..UrdfOptions::default()
+        };
         let back = from_urdf_str(&text, Path::new(&format!("{id}.urdf")), &opts).unwrap_or_else(|e| panic!("{id}: {e}\n{text}"));
         assert_eq!(back.dof(), model.dof(), "{id}");
-        assert_eq!(back.links.iter().map(|l| l.colliders.len()).sum::<usize>(), model.links.iter().map(|l| l.colliders.len()).sum::<usize>(), "{id}: colliders");
+        assert_eq!(
+            back.links.iter().map(|l| l.colliders.len()).sum::<usize>(),
+            model.links.iter().map(|l| l.colliders.len()).sum::<usize>(),
+            "{id}: colliders"
+        );
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(SEED);
         let (mut ws, mut back_ws) = (model.workspace(), back.workspace());
         for _ in 0..CONFIGURATIONS {
@@ -36,14 +43,27 @@ fn urdf_export_read_back_gives_the_same_kinematics() {
             // links[0] of the read-back model is the URDF's `world`; compare the moving links.
             for i in 1..model.links.len() {
                 let (dt, da) = pose_difference(&ws.link_in_world[i], &back_ws.link_in_world[i]);
-                assert!(dt <= URDF_ROUND_TRIP && da <= URDF_ROUND_TRIP, "{id}: link {i} differs by {dt} m, {da} rad at q = {q:?}");
+                assert!(
+                    dt <= URDF_ROUND_TRIP && da <= URDF_ROUND_TRIP,
+                    "{id}: link {i} differs by {dt} m, {da} rad at q = {q:?}"
+                );
             }
             let (dt, da) = pose_difference(&ws.tool_in_world, &back_ws.tool_in_world);
-            assert!(dt <= URDF_ROUND_TRIP && da <= URDF_ROUND_TRIP, "{id}: tool differs by {dt} m, {da} rad at q = {q:?}");
+            assert!(
+                dt <= URDF_ROUND_TRIP && da <= URDF_ROUND_TRIP,
+                "{id}: tool differs by {dt} m, {da} rad at q = {q:?}"
+            );
         }
         for (a, b) in model.links.iter().skip(1).zip(back.links.iter().skip(1)) {
-            let (ma, mb) = (a.inertial.as_ref().expect("moving link has mass"), b.inertial.as_ref().expect("moving link has mass"));
-            assert!((ma.mass - mb.mass).abs() < 1e-12 && (ma.com - mb.com).norm() < 1e-12 && (ma.inertia - mb.inertia).abs().max() < 1e-12, "{id}: {} inertia", a.name);
+            let (ma, mb) = (
+                a.inertial.as_ref().expect("moving link has mass"),
+                b.inertial.as_ref().expect("moving link has mass"),
+            );
+            assert!(
+                (ma.mass - mb.mass).abs() < 1e-12 && (ma.com - mb.com).norm() < 1e-12 && (ma.inertia - mb.inertia).abs().max() < 1e-12,
+                "{id}: {} inertia",
+                a.name
+            );
         }
     }
 }
@@ -54,10 +74,13 @@ fn mjcf_export_matches_mujoco_kinematics_and_jacobian() {
         let xml = to_mjcf(&model, &MjcfOptions::default()).unwrap_or_else(|e| panic!("{id}: {e}"));
         let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
         let mujoco = MujocoKinematics::from_xml_str(&xml, &id, &names).unwrap_or_else(|e| panic!("{id}: {e}"));
-        let agreement = compare_kinematics(&model, &mujoco, ToolElement::Site("tool"), CONFIGURATIONS, SEED).unwrap_or_else(|e| panic!("{id}: {e}"));
+        let agreement =
+            compare_kinematics(&model, &mujoco, ToolElement::Site("tool"), CONFIGURATIONS, SEED).unwrap_or_else(|e| panic!("{id}: {e}"));
         let jacobian = agreement.max_jacobian_error.expect("site Jacobian compared");
         assert!(
-            agreement.max_position_error_m <= MUJOCO_AGREEMENT && agreement.max_angle_error_rad <= MUJOCO_AGREEMENT && jacobian <= MUJOCO_AGREEMENT,
+            agreement.max_position_error_m <= MUJOCO_AGREEMENT
+                && agreement.max_angle_error_rad <= MUJOCO_AGREEMENT
+                && jacobian <= MUJOCO_AGREEMENT,
             "{id}: MuJoCo disagrees: {agreement:?}"
         );
         // MuJoCo's world body, one body per link, nothing else.
@@ -74,7 +97,8 @@ fn urdf_export_matches_mujocos_own_urdf_importer() {
         std::fs::write(&path, &text).expect("write URDF");
         let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
         let mujoco = MujocoKinematics::from_file(&path, &names).unwrap_or_else(|e| panic!("{id}: {e}\n{text}"));
-        let agreement = compare_kinematics(&model, &mujoco, ToolElement::Body("tool"), CONFIGURATIONS, SEED).unwrap_or_else(|e| panic!("{id}: {e}"));
+        let agreement =
+            compare_kinematics(&model, &mujoco, ToolElement::Body("tool"), CONFIGURATIONS, SEED).unwrap_or_else(|e| panic!("{id}: {e}"));
         assert!(
             agreement.max_position_error_m <= MUJOCO_AGREEMENT && agreement.max_angle_error_rad <= MUJOCO_AGREEMENT,
             "{id}: MuJoCo's URDF importer disagrees: {agreement:?}"

@@ -28,8 +28,13 @@ fn jacobian_matches_central_finite_differences_of_fk() {
                 // Angular velocity from the relative rotation tm^-1 * tp, expressed in the world.
                 let delta = tm.rotation.rotation_to(&tp.rotation).scaled_axis() / (2.0 * h);
                 let column = ws.jacobian.column(j);
-                let error = (column.fixed_rows::<3>(0) - linear).norm().max((column.fixed_rows::<3>(3) - delta).norm());
-                assert!(error < FINITE_DIFFERENCE_AGREEMENT, "{id}: column {j} differs by {error} at q = {q:?}");
+                let error = (column.fixed_rows::<3>(0) - linear)
+                    .norm()
+                    .max((column.fixed_rows::<3>(3) - delta).norm());
+                assert!(
+                    error < FINITE_DIFFERENCE_AGREEMENT,
+                    "{id}: column {j} differs by {error} at q = {q:?}"
+                );
             }
         }
     }
@@ -38,7 +43,10 @@ fn jacobian_matches_central_finite_differences_of_fk() {
 #[test]
 fn every_moving_link_has_physical_mass_properties() {
     for (id, model) in shipped_models() {
-        assert!(model.links[0].inertial.is_none() || model.links[0].inertial.as_ref().is_some_and(|i| i.check().is_ok()), "{id}");
+        assert!(
+            model.links[0].inertial.is_none() || model.links[0].inertial.as_ref().is_some_and(|i| i.check().is_ok()),
+            "{id}"
+        );
         for link in &model.links[1..] {
             let inertial = link.inertial.as_ref().unwrap_or_else(|| panic!("{id}: {} has no mass", link.name));
             inertial.check().unwrap_or_else(|e| panic!("{id}: {}: {e}", link.name));
@@ -48,14 +56,27 @@ fn every_moving_link_has_physical_mass_properties() {
 
 #[test]
 fn panda_chain_folds_fixed_links_and_holds_fingers_at_zero() {
-    let opts = UrdfOptions { tip_link: Some("panda_hand".into()), ..UrdfOptions::default() };
+    let opts = UrdfOptions {
+        tip_link: Some("panda_hand".into()),
+        ..UrdfOptions::default()
+    };
     let model = from_urdf(&panda_urdf(), &opts).expect("loads");
     assert_eq!(model.dof(), 7);
     assert!(model.diagnostics.is_empty(), "{:?}", model.diagnostics);
     let last = model.links.last().expect("links");
     assert_eq!(last.name, "panda_link7");
-    for name in ["panda_link8", "panda_hand", "panda_hand_tcp", "panda_leftfinger", "panda_rightfinger"] {
-        assert!(last.merged.iter().any(|n| n == name), "{name} not merged into panda_link7: {:?}", last.merged);
+    for name in [
+        "panda_link8",
+        "panda_hand",
+        "panda_hand_tcp",
+        "panda_leftfinger",
+        "panda_rightfinger",
+    ] {
+        assert!(
+            last.merged.iter().any(|n| n == name),
+            "{name} not merged into panda_link7: {:?}",
+            last.merged
+        );
     }
     // link7 mesh + hand mesh + 4 boxes per finger.
     let meshes = last.colliders.iter().filter(|c| matches!(c.shape, Shape::Mesh(_))).count();

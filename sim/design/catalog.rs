@@ -89,7 +89,14 @@ impl Preset {
     /// DH rows `(d, a, alpha)` per joint, standard convention.
     pub fn dh(self) -> Vec<[f64; 3]> {
         let ur = |d1: f64, a2: f64, a3: f64, d4: f64, d5: f64, d6: f64| {
-            vec![[d1, 0.0, FRAC_PI_2], [0.0, a2, 0.0], [0.0, a3, 0.0], [d4, 0.0, FRAC_PI_2], [d5, 0.0, -FRAC_PI_2], [d6, 0.0, 0.0]]
+            vec![
+                [d1, 0.0, FRAC_PI_2],
+                [0.0, a2, 0.0],
+                [0.0, a3, 0.0],
+                [d4, 0.0, FRAC_PI_2],
+                [d5, 0.0, -FRAC_PI_2],
+                [d6, 0.0, 0.0],
+            ]
         };
         match self {
             Self::Ur5e => ur(0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),

@@ -40,7 +40,13 @@ pub struct KinematicsAgreement {
 ///
 /// # Errors
 /// When MuJoCo lacks a link body, joint, or the tool element.
-pub fn compare_kinematics(model: &Model, mujoco: &MujocoKinematics, tool: ToolElement, configurations: usize, seed: u64) -> Result<KinematicsAgreement, EngineError> {
+pub fn compare_kinematics(
+    model: &Model,
+    mujoco: &MujocoKinematics,
+    tool: ToolElement,
+    configurations: usize,
+    seed: u64,
+) -> Result<KinematicsAgreement, EngineError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut bodies: Vec<&str> = model.links.iter().map(|l| l.name.as_str()).collect();
     if let ToolElement::Body(name) = tool {
@@ -64,7 +70,12 @@ pub fn compare_kinematics(model: &Model, mujoco: &MujocoKinematics, tool: ToolEl
         let q = model.random_configuration(&mut rng);
         model.jacobian(&q, &mut ws);
         let sample = mujoco.sample(&q, &bodies, site)?;
-        let mut ours: Vec<(&str, Isometry3<f64>)> = model.links.iter().map(|l| l.name.as_str()).zip(ws.link_in_world.iter().copied()).collect();
+        let mut ours: Vec<(&str, Isometry3<f64>)> = model
+            .links
+            .iter()
+            .map(|l| l.name.as_str())
+            .zip(ws.link_in_world.iter().copied())
+            .collect();
         if let ToolElement::Body(name) = tool {
             ours.push((name, ws.tool_in_world));
         }

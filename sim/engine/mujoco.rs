@@ -36,7 +36,10 @@ impl MujocoKinematics {
     /// [`EngineError::MujocoLoad`] with MuJoCo's message, or a missing joint.
     pub fn from_xml_str(xml: &str, source_name: &str, joint_names: &[&str]) -> Result<Self, EngineError> {
         check_version()?;
-        let model = MjModel::from_xml_string(xml).map_err(|e| EngineError::MujocoLoad { source_name: source_name.into(), message: e.to_string() })?;
+        let model = MjModel::from_xml_string(xml).map_err(|e| EngineError::MujocoLoad {
+            source_name: source_name.into(),
+            message: e.to_string(),
+        })?;
         Self::locate(model, source_name, joint_names)
     }
 
@@ -47,7 +50,10 @@ impl MujocoKinematics {
     pub fn from_file(path: &Path, joint_names: &[&str]) -> Result<Self, EngineError> {
         check_version()?;
         let name = path.display().to_string();
-        let model = MjModel::from_xml(path).map_err(|e| EngineError::MujocoLoad { source_name: name.clone(), message: e.to_string() })?;
+        let model = MjModel::from_xml(path).map_err(|e| EngineError::MujocoLoad {
+            source_name: name.clone(),
+            message: e.to_string(),
+        })?;
         Self::locate(model, &name, joint_names)
     }
 
@@ -57,11 +63,20 @@ impl MujocoKinematics {
         for name in joint_names {
             let id = model
                 .name_to_id(MjtObjBase::mjOBJ_JOINT, name)
-                .ok_or_else(|| EngineError::MissingElement { source_name: source_name.into(), kind: "joint", name: name.to_string() })?;
+                .ok_or_else(|| EngineError::MissingElement {
+                    source_name: source_name.into(),
+                    kind: "joint",
+                    name: name.to_string(),
+                })?;
             qpos_address.push(model.jnt_qposadr()[id] as usize);
             dof_address.push(model.jnt_dofadr()[id] as usize);
         }
-        Ok(Self { model, source_name: source_name.into(), qpos_address, dof_address })
+        Ok(Self {
+            model,
+            source_name: source_name.into(),
+            qpos_address,
+            dof_address,
+        })
     }
 
     /// Number of bodies including the world body.
@@ -76,9 +91,16 @@ impl MujocoKinematics {
     /// [`EngineError::MissingElement`] for an unknown body or site name.
     pub fn sample(&self, q: &[f64], bodies: &[&str], site: Option<&str>) -> Result<MujocoSample, EngineError> {
         let find = |kind: MjtObjBase, label: &'static str, name: &str| {
-            self.model.name_to_id(kind, name).ok_or_else(|| EngineError::MissingElement { source_name: self.source_name.clone(), kind: label, name: name.to_string() })
+            self.model.name_to_id(kind, name).ok_or_else(|| EngineError::MissingElement {
+                source_name: self.source_name.clone(),
+                kind: label,
+                name: name.to_string(),
+            })
         };
-        let body_ids = bodies.iter().map(|b| find(MjtObjBase::mjOBJ_BODY, "body", b)).collect::<Result<Vec<_>, _>>()?;
+        let body_ids = bodies
+            .iter()
+            .map(|b| find(MjtObjBase::mjOBJ_BODY, "body", b))
+            .collect::<Result<Vec<_>, _>>()?;
         let site_id = site.map(|s| find(MjtObjBase::mjOBJ_SITE, "site", s)).transpose()?;
 
         let mut data = self.model.make_data();
@@ -102,7 +124,10 @@ impl MujocoKinematics {
                 let matrix = data.site_xmat()[id];
                 let rotation = nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_row_slice(&matrix));
                 let position = data.site_xpos()[id];
-                let site_pose = Isometry3::from_parts(Translation3::new(position[0], position[1], position[2]), UnitQuaternion::from_rotation_matrix(&rotation));
+                let site_pose = Isometry3::from_parts(
+                    Translation3::new(position[0], position[1], position[2]),
+                    UnitQuaternion::from_rotation_matrix(&rotation),
+                );
                 let (jacp, jacr) = data.jac_site(true, true, id);
                 let nv = self.model.ffi().nv as usize;
                 let mut jacobian = Matrix6xX::zeros(self.dof_address.len());
@@ -116,7 +141,11 @@ impl MujocoKinematics {
             }
             None => (None, None),
         };
-        Ok(MujocoSample { bodies: body_poses, site: site_pose, site_jacobian })
+        Ok(MujocoSample {
+            bodies: body_poses,
+            site: site_pose,
+            site_jacobian,
+        })
     }
 }
 
@@ -126,9 +155,14 @@ impl MujocoKinematics {
 /// [`EngineError::Version`].
 pub fn check_version() -> Result<(), EngineError> {
     // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
-    let found = unsafe { std::ffi::CStr::from_ptr(mujoco_rs::mujoco_c::mj_versionString()) }.to_string_lossy().into_owned();
+    let found = unsafe { std::ffi::CStr::from_ptr(mujoco_rs::mujoco_c::mj_versionString()) }
+        .to_string_lossy()
+        .into_owned();
     if found != MUJOCO_VERSION {
-        return Err(EngineError::Version { found, expected: MUJOCO_VERSION });
+        return Err(EngineError::Version {
+            found,
+            expected: MUJOCO_VERSION,
+        });
     }
     Ok(())
 }

@@ -28,11 +28,19 @@ pub fn from_design(design: &Design) -> Model {
     let fixed_part = |row: usize| {
         let j = &design.joints[row];
         Isometry3::from_parts(Translation3::new(0.0, 0.0, j.d), UnitQuaternion::identity())
-            * Isometry3::from_parts(Translation3::new(j.a, 0.0, 0.0), UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha))
+            * Isometry3::from_parts(
+                Translation3::new(j.a, 0.0, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha),
+            )
     };
 
     let mut joints = Vec::with_capacity(design.dof());
-    let mut links = vec![Link { name: "base".into(), merged: vec![], colliders: vec![], inertial: None }];
+    let mut links = vec![Link {
+        name: "base".into(),
+        merged: vec![],
+        colliders: vec![],
+        inertial: None,
+    }];
     for (i, dh) in design.joints.iter().enumerate() {
         let number = i + 1;
         joints.push(Joint {
@@ -50,23 +58,47 @@ pub fn from_design(design: &Design) -> Model {
         if design.mode == DesignMode::Modular {
             colliders.push(Collider {
                 link_from_shape: Isometry3::identity(),
-                shape: Shape::Cylinder { radius, length: JOINT_MODULE_LENGTH_M },
+                shape: Shape::Cylinder {
+                    radius,
+                    length: JOINT_MODULE_LENGTH_M,
+                },
                 label: format!("joint module {number}"),
             });
         }
         if dh.d.abs() > ZERO_LENGTH_M {
             let pose = Isometry3::translation(0.0, 0.0, dh.d / 2.0);
-            colliders.push(Collider { link_from_shape: pose, shape: Shape::Cylinder { radius, length: dh.d.abs() }, label: format!("d tube of joint {number}") });
+            colliders.push(Collider {
+                link_from_shape: pose,
+                shape: Shape::Cylinder {
+                    radius,
+                    length: dh.d.abs(),
+                },
+                label: format!("d tube of joint {number}"),
+            });
             masses.push(Inertial::thin_tube(TUBE_KG_PER_M * dh.d.abs(), radius, dh.d.abs()).transformed(&pose));
         }
         if dh.a.abs() > ZERO_LENGTH_M {
             // A cylinder's axis is its local z; turning it about y by +90 degrees lays it along x.
-            let pose = Isometry3::from_parts(Translation3::new(dh.a / 2.0, 0.0, dh.d), UnitQuaternion::from_axis_angle(&Vector3::y_axis(), FRAC_PI_2));
-            colliders.push(Collider { link_from_shape: pose, shape: Shape::Cylinder { radius, length: dh.a.abs() }, label: format!("a tube of joint {number}") });
+            let pose = Isometry3::from_parts(
+                Translation3::new(dh.a / 2.0, 0.0, dh.d),
+                UnitQuaternion::from_axis_angle(&Vector3::y_axis(), FRAC_PI_2),
+            );
+            colliders.push(Collider {
+                link_from_shape: pose,
+                shape: Shape::Cylinder {
+                    radius,
+                    length: dh.a.abs(),
+                },
+                label: format!("a tube of joint {number}"),
+            });
             masses.push(Inertial::thin_tube(TUBE_KG_PER_M * dh.a.abs(), radius, dh.a.abs()).transformed(&pose));
         }
         if dh.d.abs() <= ZERO_LENGTH_M && dh.a.abs() <= ZERO_LENGTH_M {
-            colliders.push(Collider { link_from_shape: Isometry3::identity(), shape: Shape::Sphere { radius }, label: format!("joint sphere {number}") });
+            colliders.push(Collider {
+                link_from_shape: Isometry3::identity(),
+                shape: Shape::Sphere { radius },
+                label: format!("joint sphere {number}"),
+            });
         }
         links.push(Link {
             name: format!("link{number}"),
@@ -78,7 +110,9 @@ pub fn from_design(design: &Design) -> Model {
 
     Model {
         name: design.name.clone(),
-        source: ModelSource::Design { mode: design.mode.name().into() },
+        source: ModelSource::Design {
+            mode: design.mode.name().into(),
+        },
         world_from_base: design.base.isometry(),
         joints,
         links,
@@ -122,8 +156,18 @@ mod tests {
     fn zero_offset_joint_becomes_a_sphere() {
         let text = r#"{"mode": "free", "joints": [{"d": 0, "a": 0, "alpha": 1.5}, {"d": 0.2, "a": 0, "alpha": 0}]}"#;
         let model = from_design(&design::parse(text, Path::new("t.json")).expect("valid"));
-        assert!(matches!(model.links[1].colliders[..], [Collider { shape: Shape::Sphere { .. }, .. }]));
-        assert!(model.links.iter().skip(1).all(|l| l.inertial.as_ref().is_some_and(|i| i.check().is_ok())));
+        assert!(matches!(
+            model.links[1].colliders[..],
+            [Collider {
+                shape: Shape::Sphere { .. },
+                ..
+            }]
+        ));
+        assert!(model
+            .links
+            .iter()
+            .skip(1)
+            .all(|l| l.inertial.as_ref().is_some_and(|i| i.check().is_ok())));
     }
 
     #[test]

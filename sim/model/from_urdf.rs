@@ -38,7 +38,10 @@ pub const PACKAGE_PATH_ENV: &str = "ROS_PACKAGE_PATH";
 /// a graph that is not a tree, an ambiguous tip, unsupported joints on the chain, missing limits,
 /// missing or unreadable meshes, non-physical or missing mass on a moving link.
 pub fn from_urdf(path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     from_urdf_str(&text, path, opts)
 }
 
@@ -47,12 +50,25 @@ pub fn from_urdf(path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`from_urdf`].
 pub fn from_urdf_str(text: &str, path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
-    let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfParse { path: path.to_path_buf(), message: e.to_string() })?;
-    let doc = roxmltree::Document::parse(text).map_err(|e| ModelError::UrdfParse { path: path.to_path_buf(), message: e.to_string() })?;
+    let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfParse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let doc = roxmltree::Document::parse(text).map_err(|e| ModelError::UrdfParse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
     let facts = XmlFacts::read(&doc);
     let mut package_paths = opts.package_paths.clone();
     package_paths.extend(package_paths_from_env(std::env::var(PACKAGE_PATH_ENV).ok().as_deref()));
-    Builder { path, robot: &robot, facts, package_paths, diagnostics: vec![] }.build(opts)
+    Builder {
+        path,
+        robot: &robot,
+        facts,
+        package_paths,
+        diagnostics: vec![],
+    }
+    .build(opts)
 }
 
 /// What urdf-rs does not tell: presence of elements and their lines.
@@ -64,7 +80,11 @@ struct XmlFacts {
 
 impl XmlFacts {
     fn read(doc: &roxmltree::Document) -> Self {
-        let mut facts = XmlFacts { link_has_inertial: HashMap::new(), joint_has_limit: HashMap::new(), line: HashMap::new() };
+        let mut facts = XmlFacts {
+            link_has_inertial: HashMap::new(),
+            joint_has_limit: HashMap::new(),
+            line: HashMap::new(),
+        };
         for node in doc.root_element().children().filter(|n| n.is_element()) {
             let Some(name) = node.attribute("name") else { continue };
             let has = |tag: &str| node.children().any(|c| c.has_tag_name(tag));
@@ -106,7 +126,11 @@ impl<'a> Builder<'a> {
     }
 
     fn invalid(&self, element: String, message: String) -> ModelError {
-        ModelError::InvalidValue { path: self.path.to_path_buf(), element, message }
+        ModelError::InvalidValue {
+            path: self.path.to_path_buf(),
+            element,
+            message,
+        }
     }
 
     fn build(mut self, opts: &UrdfOptions) -> Result<Model, ModelError> {
@@ -134,7 +158,10 @@ impl<'a> Builder<'a> {
             if let Some(previous) = parent_joint.insert(joint.child.link.as_str(), joint) {
                 return Err(ModelError::NotATree {
                     path: self.path.to_path_buf(),
-                    message: format!("link `{}` is the child of two joints, `{}` and `{}`; a URDF must be a tree", joint.child.link, previous.name, joint.name),
+                    message: format!(
+                        "link `{}` is the child of two joints, `{}` and `{}`; a URDF must be a tree",
+                        joint.child.link, previous.name, joint.name
+                    ),
                 });
             }
             children.entry(joint.parent.link.as_str()).or_default().push(joint);
@@ -142,25 +169,44 @@ impl<'a> Builder<'a> {
         let roots: Vec<&str> = links.keys().copied().filter(|l| !parent_joint.contains_key(l)).collect();
         let root = match roots.as_slice() {
             [one] => *one,
-            [] => return Err(ModelError::NotATree { path: self.path.to_path_buf(), message: "every link has a parent joint: the joints form a cycle".into() }),
+            [] => {
+                return Err(ModelError::NotATree {
+                    path: self.path.to_path_buf(),
+                    message: "every link has a parent joint: the joints form a cycle".into(),
+                })
+            }
             many => {
                 return Err(ModelError::NotATree {
                     path: self.path.to_path_buf(),
-                    message: format!("{} links have no parent joint ({}); a URDF has exactly one root", many.len(), many.join(", ")),
+                    message: format!(
+                        "{} links have no parent joint ({}); a URDF has exactly one root",
+                        many.len(),
+                        many.join(", ")
+                    ),
                 })
             }
         };
 
         let base = match &opts.base_link {
             Some(name) if !links.contains_key(name.as_str()) => {
-                return Err(ModelError::UnknownLink { path: self.path.to_path_buf(), context: "--base".into(), link: name.clone(), known: known() })
+                return Err(ModelError::UnknownLink {
+                    path: self.path.to_path_buf(),
+                    context: "--base".into(),
+                    link: name.clone(),
+                    known: known(),
+                })
             }
             Some(name) => name.as_str(),
             None => root,
         };
         let tip = match &opts.tip_link {
             Some(name) if !links.contains_key(name.as_str()) => {
-                return Err(ModelError::UnknownLink { path: self.path.to_path_buf(), context: "--tip".into(), link: name.clone(), known: known() })
+                return Err(ModelError::UnknownLink {
+                    path: self.path.to_path_buf(),
+                    context: "--tip".into(),
+                    link: name.clone(),
+                    known: known(),
+                })
             }
             Some(name) => name.clone(),
             None => self.default_tip(base, &children)?,
@@ -175,7 +221,13 @@ impl<'a> Builder<'a> {
                     path_joints.push(joint);
                     at = joint.parent.link.as_str();
                 }
-                None => return Err(ModelError::TipNotBelowBase { path: self.path.to_path_buf(), base: base.into(), tip: tip.clone() }),
+                None => {
+                    return Err(ModelError::TipNotBelowBase {
+                        path: self.path.to_path_buf(),
+                        base: base.into(),
+                        tip: tip.clone(),
+                    })
+                }
             }
         }
         path_joints.reverse();
@@ -189,7 +241,13 @@ impl<'a> Builder<'a> {
                 _ => None,
             };
             if let Some(kind) = unsupported {
-                return Err(ModelError::UnsupportedJoint { path: self.path.to_path_buf(), joint: joint.name.clone(), kind: kind.into(), base: base.into(), tip: tip.clone() });
+                return Err(ModelError::UnsupportedJoint {
+                    path: self.path.to_path_buf(),
+                    joint: joint.name.clone(),
+                    kind: kind.into(),
+                    base: base.into(),
+                    tip: tip.clone(),
+                });
             }
         }
 
@@ -210,7 +268,11 @@ impl<'a> Builder<'a> {
             }
         }
         if joints.is_empty() {
-            return Err(ModelError::NoMovableJoint { path: self.path.to_path_buf(), base: base.into(), tip: tip.clone() });
+            return Err(ModelError::NoMovableJoint {
+                path: self.path.to_path_buf(),
+                base: base.into(),
+                tip: tip.clone(),
+            });
         }
         let last_from_tool = pending;
 
@@ -240,8 +302,16 @@ impl<'a> Builder<'a> {
             model_links.push(self.link(index, group, &links, &joints)?);
         }
         Ok(Model {
-            name: if robot.name.is_empty() { "robot".into() } else { robot.name.clone() },
-            source: ModelSource::Urdf { path: self.path.to_path_buf(), base_link: base.into(), tip_link: tip },
+            name: if robot.name.is_empty() {
+                "robot".into()
+            } else {
+                robot.name.clone()
+            },
+            source: ModelSource::Urdf {
+                path: self.path.to_path_buf(),
+                base_link: base.into(),
+                tip_link: tip,
+            },
             world_from_base: Isometry3::identity(),
             joints,
             links: model_links,
@@ -271,18 +341,30 @@ impl<'a> Builder<'a> {
             }
         }
         match best.1.len() {
-            0 => Err(ModelError::NoMovableJoint { path: self.path.to_path_buf(), base: base.into(), tip: base.into() }),
+            0 => Err(ModelError::NoMovableJoint {
+                path: self.path.to_path_buf(),
+                base: base.into(),
+                tip: base.into(),
+            }),
             1 => Ok(best.1.remove(0)),
             _ => {
                 best.1.sort();
-                Err(ModelError::AmbiguousTip { path: self.path.to_path_buf(), base: base.into(), length: best.0, candidates: best.1.join(", ") })
+                Err(ModelError::AmbiguousTip {
+                    path: self.path.to_path_buf(),
+                    base: base.into(),
+                    length: best.0,
+                    candidates: best.1.join(", "),
+                })
             }
         }
     }
 
     fn origin(&self, pose: &urdf_rs::Pose, element: String) -> Result<Isometry3<f64>, ModelError> {
         if pose.xyz.0.iter().chain(pose.rpy.0.iter()).any(|v| !v.is_finite()) {
-            return Err(self.invalid(element, format!("<origin xyz=\"{:?}\" rpy=\"{:?}\"> has a non-finite number", pose.xyz.0, pose.rpy.0)));
+            return Err(self.invalid(
+                element,
+                format!("<origin xyz=\"{:?}\" rpy=\"{:?}\"> has a non-finite number", pose.xyz.0, pose.rpy.0),
+            ));
         }
         Ok(isometry_from_xyz_rpy(pose.xyz.0, pose.rpy.0))
     }
@@ -291,7 +373,10 @@ impl<'a> Builder<'a> {
         let element = self.element("joint", &joint.name);
         let axis = Vector3::from(joint.axis.xyz.0);
         if !axis.iter().all(|v| v.is_finite()) || axis.norm() < 1e-9 {
-            return Err(self.invalid(element, format!("<axis xyz=\"{:?}\"> must be a finite non-zero vector", joint.axis.xyz.0)));
+            return Err(self.invalid(
+                element,
+                format!("<axis xyz=\"{:?}\"> must be a finite non-zero vector", joint.axis.xyz.0),
+            ));
         }
         let kind = match joint.joint_type {
             urdf_rs::JointType::Revolute => JointKind::Revolute,
@@ -304,32 +389,61 @@ impl<'a> Builder<'a> {
             None
         } else {
             if !has_limit {
-                return Err(self.invalid(element, "has no <limit>; a revolute or prismatic joint needs lower and upper limits (urdf-rs would read [0, 0])".into()));
+                return Err(self.invalid(
+                    element,
+                    "has no <limit>; a revolute or prismatic joint needs lower and upper limits (urdf-rs would read [0, 0])".into(),
+                ));
             }
             if !(limit.lower.is_finite() && limit.upper.is_finite()) || limit.lower > limit.upper {
-                return Err(self.invalid(format!("{element} <limit>"), format!("lower {} and upper {}: expected finite lower <= upper", limit.lower, limit.upper)));
+                return Err(self.invalid(
+                    format!("{element} <limit>"),
+                    format!("lower {} and upper {}: expected finite lower <= upper", limit.lower, limit.upper),
+                ));
             }
             if limit.lower == limit.upper {
-                self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <limit>"), message: format!("lower = upper = {}: the joint cannot move", limit.lower) });
+                self.diagnostics.push(Diagnostic {
+                    path: self.path.to_path_buf(),
+                    element: format!("{element} <limit>"),
+                    message: format!("lower = upper = {}: the joint cannot move", limit.lower),
+                });
             }
             Some([limit.lower, limit.upper])
         };
+        // URDF requires effort and velocity; 0 is the common way of writing "not specified".
         let positive = |value: f64, what: &str, diagnostics: &mut Vec<Diagnostic>| {
             if value.is_finite() && value > 0.0 {
                 Some(value)
             } else {
-                if has_limit {
-                    diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <limit>"), message: format!("{what} {value} is not positive; treated as unknown") });
+                if has_limit && value != 0.0 {
+                    diagnostics.push(Diagnostic {
+                        path: self.path.to_path_buf(),
+                        element: format!("{element} <limit>"),
+                        message: format!("{what} {value} is not positive; treated as unknown"),
+                    });
                 }
                 None
             }
         };
         let max_effort = positive(limit.effort, "effort", &mut self.diagnostics);
         let max_velocity = positive(limit.velocity, "velocity", &mut self.diagnostics);
-        Ok(Joint { name: joint.name.clone(), kind, parent_from_joint, axis: Unit::new_normalize(axis), limits, max_velocity, max_effort })
+        Ok(Joint {
+            name: joint.name.clone(),
+            kind,
+            parent_from_joint,
+            axis: Unit::new_normalize(axis),
+            limits,
+            max_velocity,
+            max_effort,
+        })
     }
 
-    fn link(&mut self, index: usize, group: &[(&str, Isometry3<f64>)], links: &BTreeMap<&str, &urdf_rs::Link>, joints: &[Joint]) -> Result<Link, ModelError> {
+    fn link(
+        &mut self,
+        index: usize,
+        group: &[(&str, Isometry3<f64>)],
+        links: &BTreeMap<&str, &urdf_rs::Link>,
+        joints: &[Joint],
+    ) -> Result<Link, ModelError> {
         let mut colliders = Vec::new();
         let mut masses = Vec::new();
         let (chain_name, _) = group[0];
@@ -343,7 +457,11 @@ impl<'a> Builder<'a> {
                     _ => format!("{name}/collision {k}"),
                 };
                 for (pose, shape) in self.shapes(&collision.geometry, name, &format!("{element} <collision> {k}"))? {
-                    colliders.push(Collider { link_from_shape: owner_from_link * origin * pose, shape, label: label.clone() });
+                    colliders.push(Collider {
+                        link_from_shape: owner_from_link * origin * pose,
+                        shape,
+                        label: label.clone(),
+                    });
                 }
             }
             if self.facts.link_has_inertial.get(*name).copied().unwrap_or(false) {
@@ -352,39 +470,79 @@ impl<'a> Builder<'a> {
                     // A single part may be odd (a point mass) while the merged body is fine; the
                     // merged body is checked below and is what simulators see.
                     if let Err(problem) = inertial.check() {
-                        self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <inertial>"), message: problem });
+                        self.diagnostics.push(Diagnostic {
+                            path: self.path.to_path_buf(),
+                            element: format!("{element} <inertial>"),
+                            message: problem,
+                        });
                     }
                     masses.push(inertial.transformed(owner_from_link));
                 } else if index > 0 && !link.collision.is_empty() {
-                    self.diagnostics.push(Diagnostic { path: self.path.to_path_buf(), element: format!("{element} <inertial>"), message: "mass is 0 although the link has collision geometry".into() });
+                    self.diagnostics.push(Diagnostic {
+                        path: self.path.to_path_buf(),
+                        element: format!("{element} <inertial>"),
+                        message: "mass is 0 although the link has collision geometry".into(),
+                    });
                 }
             }
         }
         if index == 0 {
-            return Ok(Link { name: chain_name.into(), merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(), colliders, inertial: Inertial::combine(&masses) });
+            return Ok(Link {
+                name: chain_name.into(),
+                merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
+                colliders,
+                inertial: Inertial::combine(&masses),
+            });
         }
         let joint = &joints[index - 1].name;
-        let bad = |problem: String| ModelError::BadInertia { path: self.path.to_path_buf(), link: chain_name.into(), joint: joint.clone(), problem };
+        let bad = |problem: String| ModelError::BadInertia {
+            path: self.path.to_path_buf(),
+            link: chain_name.into(),
+            joint: joint.clone(),
+            problem,
+        };
         let inertial = Inertial::combine(&masses).ok_or_else(|| {
-            bad(if group.iter().all(|(n, _)| !self.facts.link_has_inertial.get(*n).copied().unwrap_or(false)) {
-                "has no <inertial>; its mass would be 0".into()
-            } else {
-                "its <inertial> mass is 0".into()
-            })
+            bad(
+                if group
+                    .iter()
+                    .all(|(n, _)| !self.facts.link_has_inertial.get(*n).copied().unwrap_or(false))
+                {
+                    "has no <inertial>; its mass would be 0".into()
+                } else {
+                    "its <inertial> mass is 0".into()
+                },
+            )
         })?;
         inertial.check().map_err(bad)?;
-        Ok(Link { name: chain_name.into(), merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(), colliders, inertial: Some(inertial) })
+        Ok(Link {
+            name: chain_name.into(),
+            merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
+            colliders,
+            inertial: Some(inertial),
+        })
     }
 
     fn inertial(&self, inertial: &urdf_rs::Inertial, element: &str) -> Result<Inertial, ModelError> {
         let i = &inertial.inertia;
         let values = [inertial.mass.value, i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz];
         if values.iter().any(|v| !v.is_finite()) || inertial.mass.value < 0.0 {
-            return Err(self.invalid(format!("{element} <inertial>"), format!("mass {} and inertia {:?}: expected finite numbers, mass >= 0", inertial.mass.value, &values[1..])));
+            return Err(self.invalid(
+                format!("{element} <inertial>"),
+                format!(
+                    "mass {} and inertia {:?}: expected finite numbers, mass >= 0",
+                    inertial.mass.value,
+                    &values[1..]
+                ),
+            ));
         }
         let frame = self.origin(&inertial.origin, format!("{element} <inertial>"))?;
         let tensor = Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz);
-        Ok(Inertial { mass: inertial.mass.value, com: Vector3::zeros(), inertia: tensor }.transformed(&frame))
+        Ok(Inertial {
+            mass: inertial.mass.value,
+            com: Vector3::zeros(),
+            inertia: tensor,
+        }
+        .transformed(&frame))
     }
 
     fn shapes(&self, geometry: &urdf_rs::Geometry, link: &str, element: &str) -> Result<Vec<(Isometry3<f64>, Shape)>, ModelError> {
@@ -402,22 +560,51 @@ impl<'a> Builder<'a> {
             }
             urdf_rs::Geometry::Cylinder { radius, length } => {
                 positive(&[*radius, *length], "<cylinder radius length>")?;
-                vec![(Isometry3::identity(), Shape::Cylinder { radius: *radius, length: *length })]
+                vec![(
+                    Isometry3::identity(),
+                    Shape::Cylinder {
+                        radius: *radius,
+                        length: *length,
+                    },
+                )]
             }
             urdf_rs::Geometry::Capsule { radius, length } => {
                 // Exact as a cylinder plus one sphere on each end.
                 positive(&[*radius, *length], "<capsule radius length>")?;
-                let end = |z: f64| (Isometry3::from_parts(Translation3::new(0.0, 0.0, z), UnitQuaternion::identity()), Shape::Sphere { radius: *radius });
-                vec![(Isometry3::identity(), Shape::Cylinder { radius: *radius, length: *length }), end(length / 2.0), end(-length / 2.0)]
+                let end = |z: f64| {
+                    (
+                        Isometry3::from_parts(Translation3::new(0.0, 0.0, z), UnitQuaternion::identity()),
+                        Shape::Sphere { radius: *radius },
+                    )
+                };
+                vec![
+                    (
+                        Isometry3::identity(),
+                        Shape::Cylinder {
+                            radius: *radius,
+                            length: *length,
+                        },
+                    ),
+                    end(length / 2.0),
+                    end(-length / 2.0),
+                ]
             }
             urdf_rs::Geometry::Box { size } => {
                 positive(&size.0, "<box size>")?;
-                vec![(Isometry3::identity(), Shape::Box { half_extents: [size.0[0] / 2.0, size.0[1] / 2.0, size.0[2] / 2.0] })]
+                vec![(
+                    Isometry3::identity(),
+                    Shape::Box {
+                        half_extents: [size.0[0] / 2.0, size.0[1] / 2.0, size.0[2] / 2.0],
+                    },
+                )]
             }
             urdf_rs::Geometry::Mesh { filename, scale } => {
                 let scale = scale.as_ref().map(|s| s.0).unwrap_or([1.0; 3]);
                 if scale.iter().any(|v| !v.is_finite() || *v == 0.0) {
-                    return Err(self.invalid(element.to_string(), format!("<mesh scale=\"{scale:?}\">: expected finite non-zero factors")));
+                    return Err(self.invalid(
+                        element.to_string(),
+                        format!("<mesh scale=\"{scale:?}\">: expected finite non-zero factors"),
+                    ));
                 }
                 let dir = self.path.parent().unwrap_or(Path::new("."));
                 let file = resolve_mesh_uri(filename, dir, &self.package_paths).map_err(|searched| ModelError::MissingMesh {
@@ -426,7 +613,12 @@ impl<'a> Builder<'a> {
                     uri: filename.clone(),
                     searched: searched.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
                 })?;
-                let mesh = load_mesh(filename, &file, scale).map_err(|message| ModelError::BadMesh { path: self.path.to_path_buf(), link: link.into(), mesh: file.clone(), message })?;
+                let mesh = load_mesh(filename, &file, scale).map_err(|message| ModelError::BadMesh {
+                    path: self.path.to_path_buf(),
+                    link: link.into(),
+                    mesh: file.clone(),
+                    message,
+                })?;
                 vec![(Isometry3::identity(), Shape::Mesh(mesh))]
             }
         })

@@ -61,7 +61,11 @@ impl Shape {
                 let [x, y, z] = *half_extents;
                 (x * x + y * y + z * z).sqrt()
             }
-            Shape::Mesh(mesh) => mesh.vertices.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max),
+            Shape::Mesh(mesh) => mesh
+                .vertices
+                .iter()
+                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                .fold(0.0, f64::max),
         }
     }
 }

@@ -41,14 +41,22 @@ impl Inertial {
     }
 
     fn diagonal(mass: f64, moments: [f64; 3]) -> Self {
-        Self { mass, com: Vector3::zeros(), inertia: Matrix3::from_diagonal(&Vector3::from(moments)) }
+        Self {
+            mass,
+            com: Vector3::zeros(),
+            inertia: Matrix3::from_diagonal(&Vector3::from(moments)),
+        }
     }
 
     /// The same body seen from a frame in which its own frame sits at `outer_from_inner`.
     pub fn transformed(&self, outer_from_inner: &Isometry3<f64>) -> Self {
         let rotation = outer_from_inner.rotation.to_rotation_matrix();
         let r = rotation.matrix();
-        Self { mass: self.mass, com: outer_from_inner * nalgebra::Point3::from(self.com).coords, inertia: r * self.inertia * r.transpose() }
+        Self {
+            mass: self.mass,
+            com: (outer_from_inner * nalgebra::Point3::from(self.com)).coords,
+            inertia: r * self.inertia * r.transpose(),
+        }
     }
 
     /// Several rigidly joined bodies as one (parallel-axis theorem). `None` for an empty list or
@@ -93,10 +101,14 @@ impl Inertial {
         }
         let [a, b, c] = self.principal_moments();
         if a <= 0.0 {
-            return Err(format!("inertia is not positive definite (principal moments {a:.3e}, {b:.3e}, {c:.3e} kg m^2)"));
+            return Err(format!(
+                "inertia is not positive definite (principal moments {a:.3e}, {b:.3e}, {c:.3e} kg m^2)"
+            ));
         }
         if a + b < c * (1.0 - TRIANGLE_SLACK) {
-            return Err(format!("principal moments {a:.3e} + {b:.3e} < {c:.3e} kg m^2 break the triangle inequality"));
+            return Err(format!(
+                "principal moments {a:.3e} + {b:.3e} < {c:.3e} kg m^2 break the triangle inequality"
+            ));
         }
         Ok(())
     }
@@ -132,13 +144,21 @@ mod tests {
 
     #[test]
     fn rejects_triangle_inequality_violation() {
-        let bad = Inertial { mass: 1.0, com: Vector3::zeros(), inertia: Matrix3::from_diagonal(&Vector3::new(0.1, 0.1, 0.3)) };
+        let bad = Inertial {
+            mass: 1.0,
+            com: Vector3::zeros(),
+            inertia: Matrix3::from_diagonal(&Vector3::new(0.1, 0.1, 0.3)),
+        };
         assert!(bad.check().unwrap_err().contains("triangle"));
     }
 
     #[test]
     fn rejects_zero_mass() {
-        let zero = Inertial { mass: 0.0, com: Vector3::zeros(), inertia: Matrix3::identity() };
+        let zero = Inertial {
+            mass: 0.0,
+            com: Vector3::zeros(),
+            inertia: Matrix3::identity(),
+        };
         assert!(zero.check().unwrap_err().contains("mass"));
     }
 }

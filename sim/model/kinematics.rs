@@ -31,9 +31,7 @@ impl Model {
     pub fn joint_transform(&self, joint: usize, q: f64) -> Isometry3<f64> {
         let j = &self.joints[joint];
         match j.kind {
-            JointKind::Revolute | JointKind::Continuous => {
-                j.parent_from_joint * UnitQuaternion::from_axis_angle(&j.axis, q)
-            }
+            JointKind::Revolute | JointKind::Continuous => j.parent_from_joint * UnitQuaternion::from_axis_angle(&j.axis, q),
             JointKind::Prismatic => j.parent_from_joint * Translation3::from(j.axis.into_inner() * q),
         }
     }

@@ -34,7 +34,10 @@ pub struct TriMesh {
 pub fn resolve_mesh_uri(uri: &str, description_dir: &Path, package_paths: &[PathBuf]) -> Result<PathBuf, Vec<PathBuf>> {
     let candidates: Vec<PathBuf> = if let Some(rest) = uri.strip_prefix("package://") {
         let (package, inner) = rest.split_once('/').unwrap_or((rest, ""));
-        let roots = package_paths.iter().cloned().chain(description_dir.ancestors().map(Path::to_path_buf));
+        let roots = package_paths
+            .iter()
+            .cloned()
+            .chain(description_dir.ancestors().map(Path::to_path_buf));
         roots
             .flat_map(|root| {
                 let mut found = vec![root.join(package).join(inner)];
@@ -53,7 +56,9 @@ pub fn resolve_mesh_uri(uri: &str, description_dir: &Path, package_paths: &[Path
 
 /// Package search roots from a `ROS_PACKAGE_PATH`-style variable (`:`-separated).
 pub fn package_paths_from_env(value: Option<&str>) -> Vec<PathBuf> {
-    value.map(|v| v.split(':').filter(|s| !s.is_empty()).map(PathBuf::from).collect()).unwrap_or_default()
+    value
+        .map(|v| v.split(':').filter(|s| !s.is_empty()).map(PathBuf::from).collect())
+        .unwrap_or_default()
 }
 
 /// Loads a mesh file and applies `scale`.
@@ -61,7 +66,10 @@ pub fn package_paths_from_env(value: Option<&str>) -> Vec<PathBuf> {
 /// # Errors
 /// The loader's message when the file is unreadable, of an unknown format or has no triangles.
 pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, String> {
-    let scene = mesh_loader::Loader::default().merge_meshes(true).load(file).map_err(|e| e.to_string())?;
+    let scene = mesh_loader::Loader::default()
+        .merge_meshes(true)
+        .load(file)
+        .map_err(|e| e.to_string())?;
     let mesh = scene.meshes.into_iter().next().ok_or("the file holds no mesh")?;
     if mesh.faces.is_empty() {
         return Err("the mesh has no triangles".into());
@@ -78,7 +86,13 @@ pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, Str
     if mesh.faces.iter().flatten().any(|&i| i >= count) {
         return Err("a face refers to a vertex that does not exist".into());
     }
-    Ok(TriMesh { uri: uri.to_string(), file: file.to_path_buf(), scale, vertices, triangles: mesh.faces })
+    Ok(TriMesh {
+        uri: uri.to_string(),
+        file: file.to_path_buf(),
+        scale,
+        vertices,
+        triangles: mesh.faces,
+    })
 }
 
 #[cfg(test)]
@@ -102,7 +116,10 @@ mod tests {
 
     #[test]
     fn env_path_splits_on_colons() {
-        assert_eq!(package_paths_from_env(Some("/a::/b")), vec![PathBuf::from("/a"), PathBuf::from("/b")]);
+        assert_eq!(
+            package_paths_from_env(Some("/a::/b")),
+            vec![PathBuf::from("/a"), PathBuf::from("/b")]
+        );
         assert!(package_paths_from_env(None).is_empty());
     }
 }

@@ -10,11 +10,11 @@ mod kinematics;
 mod mesh;
 
 pub use from_design::from_design;
-pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions};
+pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;
-pub use mesh::{resolve_mesh_uri, TriMesh};
+pub use mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri, TriMesh};
 
 use nalgebra::{Isometry3, Unit, Vector3};
 use serde::Serialize;
@@ -60,11 +60,6 @@ pub enum ModelSource {
         base_link: String,
         /// Tip link of the chain.
         tip_link: String,
-    },
-    /// An MJCF file, loaded through MuJoCo.
-    Mjcf {
-        /// The file read.
-        path: PathBuf,
     },
 }
 
@@ -171,7 +166,9 @@ pub enum ModelError {
         message: String,
     },
     /// Several chains are equally long and no `--tip` was given.
-    #[error("{path}: the longest chains of movable joints from `{base}` tie at {length} joints, ending at {candidates}; choose one with --tip")]
+    #[error(
+        "{path}: the longest chains of movable joints from `{base}` tie at {length} joints, ending at {candidates}; choose one with --tip"
+    )]
     AmbiguousTip {
         /// The file.
         path: PathBuf,
@@ -261,14 +258,6 @@ pub enum ModelError {
         joint: String,
         /// What is wrong.
         problem: String,
-    },
-    /// MuJoCo could not load an MJCF file.
-    #[error("{path}: MuJoCo could not load it: {message}")]
-    Mujoco {
-        /// The file.
-        path: PathBuf,
-        /// MuJoCo's message.
-        message: String,
     },
 }
 

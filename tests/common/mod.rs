@@ -35,8 +35,14 @@ pub fn shipped_models() -> Vec<(String, Model)> {
             (stem(path), model)
         })
         .collect();
-    let opts = LoadOptions { tip_link: Some("panda_hand".into()), ..LoadOptions::default() };
-    models.push(("panda".into(), pipeline::load_model(&panda_urdf(), &opts).expect("the Panda URDF loads")));
+    let opts = LoadOptions {
+        tip_link: Some("panda_hand".into()),
+        ..LoadOptions::default()
+    };
+    models.push((
+        "panda".into(),
+        pipeline::load_model(&panda_urdf(), &opts).expect("the Panda URDF loads"),
+    ));
     models
 }
 

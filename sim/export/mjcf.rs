@@ -1,0 +1,483 @@
+//! Model -> MJCF text, written directly.
+//!
+//! One body per link, nested along the chain: the base body at `world_from_base` (static, no
+//! joint), every other body at its joint's `parent_from_joint` with a hinge or slide joint, its
+//! inertial, and its colliders as geoms. The tool frame is a site `tool` in the last body. Meshes
+//! are written inline as assets (vertices already scaled), so no mesh file is read and any format
+//! the model loader understood works. One position actuator per joint, and contact exclusions for
+//! the body pairs one joint connects.
+//!
+//! Numbers are written with `{}` (shortest text that parses back to the same f64) and angles in
+//! radians, declared in `<compiler>`. MuJoCo re-centres and re-orients mesh geoms at their
+//! centroid and collides with their convex hull; the body frames and sites stay as written.
+
+use super::{check_chain, check_unique, ExportError};
+use crate::frames::{wxyz, xyz};
+use crate::model::{Collider, JointKind, Model, Shape};
+use nalgebra::Isometry3;
+
+/// Name of MuJoCo's world body; no other body may use it.
+const WORLD_BODY: &str = "world";
+/// Position gain used when [`MjcfOptions::kp`] is `None` (N m/rad for hinges, N/m for slides).
+const DEFAULT_KP: f64 = 100.0;
+/// Velocity gain used when [`MjcfOptions::kv`] is `None` (N m s/rad for hinges, N s/m for slides).
+const DEFAULT_KV: f64 = 10.0;
+
+/// Options for [`to_mjcf`].
+#[derive(Debug, Clone)]
+pub struct MjcfOptions {
+    /// Simulation time step in seconds; default 0.001 s.
+    pub timestep: f64,
+    /// Position-actuator stiffness per joint, chain order (N m/rad for hinges, N/m for slides);
+    /// default `None`: 100 for every joint.
+    pub kp: Option<Vec<f64>>,
+    /// Position-actuator damping per joint, chain order (N m s/rad for hinges, N s/m for
+    /// slides); default `None`: 10 for every joint.
+    pub kv: Option<Vec<f64>>,
+    /// Write one `<position>` actuator per joint; default `true`.
+    pub include_actuators: bool,
+}
+
+impl Default for MjcfOptions {
+    fn default() -> Self {
+        Self {
+            timestep: 0.001,
+            kp: None,
+            kv: None,
+            include_actuators: true,
+        }
+    }
+}
+
+/// Writes a model as MJCF text.
+///
+/// Body, joint and actuator names are the model's link and joint names; geoms are named
+/// `<link>/<k>` and mesh assets `mesh_<link>_<k>` after the collider's index `k` in its link. A
+/// base link called `world` is MuJoCo's world body itself: its geoms go straight into
+/// `<worldbody>` (inside a `<frame>` when `world_from_base` is not the identity) and its inertial,
+/// which a static body does not need, is left out.
+///
+/// # Errors
+/// [`ExportError::ChainShape`] for a model that is not a serial chain,
+/// [`ExportError::MissingInertial`] for a moving link without mass properties,
+/// [`ExportError::GainCount`] when `opts.kp` or `opts.kv` does not have one value per joint,
+/// [`ExportError::DuplicateName`] when two bodies or two joints would share a name (including a
+/// link other than the base called `world`).
+pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError> {
+    check_chain(model)?;
+    // Without an inertial MuJoCo would derive the mass from the geoms at water density, or
+    // make it zero; neither is the robot.
+    for (joint, link) in model.joints.iter().zip(&model.links[1..]) {
+        if link.inertial.is_none() {
+            return Err(ExportError::MissingInertial {
+                robot: model.name.clone(),
+                link: link.name.clone(),
+                joint: joint.name.clone(),
+            });
+        }
+    }
+    let kp = gains(model, "kp", opts.kp.as_deref(), DEFAULT_KP)?;
+    let kv = gains(model, "kv", opts.kv.as_deref(), DEFAULT_KV)?;
+    let base_is_world = model.links[0].name == WORLD_BODY;
+    let body_names = model.links.iter().map(|l| l.name.as_str());
+    let reserved = (!base_is_world).then_some(WORLD_BODY);
+    check_unique(model, "MJCF", "body", reserved.into_iter().chain(body_names))?;
+    check_unique(model, "MJCF", "joint", model.joints.iter().map(|j| j.name.as_str()))?;
+
+    let mut out = String::new();
+    line(&mut out, 0, &format!(r#"<mujoco model="{}">"#, escape(&model.name)));
+    line(&mut out, 1, r#"<compiler angle="radian" autolimits="true"/>"#);
+    let timestep = opts.timestep;
+    line(&mut out, 1, &format!(r#"<option timestep="{timestep}" gravity="0 0 -9.81"/>"#));
+    write_assets(&mut out, model);
+    write_bodies(&mut out, model, base_is_world);
+    if opts.include_actuators && !model.joints.is_empty() {
+        line(&mut out, 1, "<actuator>");
+        for ((joint, kp), kv) in model.joints.iter().zip(&kp).zip(&kv) {
+            let name = escape(&joint.name);
+            let text = format!(r#"<position name="{name}" joint="{name}" kp="{kp}" kv="{kv}"/>"#);
+            line(&mut out, 2, &text);
+        }
+        line(&mut out, 1, "</actuator>");
+    }
+    let pairs = model.adjacent_link_pairs();
+    if !pairs.is_empty() {
+        line(&mut out, 1, "<contact>");
+        for (a, b) in pairs {
+            let (body1, body2) = (escape(&model.links[a].name), escape(&model.links[b].name));
+            line(&mut out, 2, &format!(r#"<exclude body1="{body1}" body2="{body2}"/>"#));
+        }
+        line(&mut out, 1, "</contact>");
+    }
+    line(&mut out, 0, "</mujoco>");
+    Ok(out)
+}
+
+/// One gain per joint: the given ones (checked for length) or the default for all.
+fn gains(model: &Model, gain: &'static str, given: Option<&[f64]>, default: f64) -> Result<Vec<f64>, ExportError> {
+    match given {
+        None => Ok(vec![default; model.dof()]),
+        Some(values) if values.len() == model.dof() => Ok(values.to_vec()),
+        Some(values) => Err(ExportError::GainCount {
+            robot: model.name.clone(),
+            gain,
+            given: values.len(),
+            joints: model.dof(),
+        }),
+    }
+}
+
+fn write_assets(out: &mut String, model: &Model) {
+    let meshes: Vec<String> = model
+        .links
+        .iter()
+        .flat_map(|link| {
+            link.colliders.iter().enumerate().filter_map(|(k, collider)| {
+                let Shape::Mesh(mesh) = &collider.shape else {
+                    return None;
+                };
+                let vertex = numbers(mesh.vertices.iter().flatten().copied());
+                let face = mesh.triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
+                let name = escape(&mesh_name(&link.name, k));
+                Some(format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#))
+            })
+        })
+        .collect();
+    if meshes.is_empty() {
+        return;
+    }
+    line(out, 1, "<asset>");
+    for mesh in &meshes {
+        line(out, 2, mesh);
+    }
+    line(out, 1, "</asset>");
+}
+
+/// The bodies, nested: each link's body is opened inside its parent's and all are closed at the
+/// end, innermost first.
+fn write_bodies(out: &mut String, model: &Model, base_is_world: bool) {
+    line(out, 1, "<worldbody>");
+    let mut depth = 2;
+    let mut closing = Vec::with_capacity(model.links.len());
+    for (i, link) in model.links.iter().enumerate() {
+        let parent_from_body = match i {
+            0 => &model.world_from_base,
+            _ => &model.joints[i - 1].parent_from_joint,
+        };
+        let is_world = i == 0 && base_is_world;
+        if is_world {
+            if *parent_from_body != Isometry3::identity() {
+                line(out, depth, &format!("<frame {}>", pose(parent_from_body)));
+                closing.push("</frame>");
+                depth += 1;
+            }
+        } else {
+            let name = escape(&link.name);
+            line(out, depth, &format!(r#"<body name="{name}" {}>"#, pose(parent_from_body)));
+            closing.push("</body>");
+            depth += 1;
+        }
+
+        if i > 0 {
+            let joint = &model.joints[i - 1];
+            let kind = match joint.kind {
+                JointKind::Revolute | JointKind::Continuous => "hinge",
+                JointKind::Prismatic => "slide",
+            };
+            let limits = match (joint.kind, joint.limits) {
+                (JointKind::Continuous, _) | (_, None) => r#"limited="false""#.to_string(),
+                (_, Some([lower, upper])) => format!(r#"range="{lower} {upper}""#),
+            };
+            let (name, axis) = (escape(&joint.name), numbers(joint.axis.iter().copied()));
+            let text = format!(r#"<joint name="{name}" type="{kind}" axis="{axis}" {limits}/>"#);
+            line(out, depth, &text);
+        }
+        if let (Some(inertial), false) = (&link.inertial, is_world) {
+            let i = &inertial.inertia;
+            let full = numbers([i[(0, 0)], i[(1, 1)], i[(2, 2)], i[(0, 1)], i[(0, 2)], i[(1, 2)]]);
+            let (pos, mass) = (numbers(xyz(&inertial.com)), inertial.mass);
+            let text = format!(r#"<inertial pos="{pos}" mass="{mass}" fullinertia="{full}"/>"#);
+            line(out, depth, &text);
+        }
+        for (k, collider) in link.colliders.iter().enumerate() {
+            line(out, depth, &geom(&link.name, k, collider));
+        }
+        if i == model.links.len() - 1 {
+            line(out, depth, &format!(r#"<site name="tool" {}/>"#, pose(&model.last_from_tool)));
+        }
+    }
+    while let Some(tag) = closing.pop() {
+        depth -= 1;
+        line(out, depth, tag);
+    }
+    line(out, 1, "</worldbody>");
+}
+
+fn geom(link: &str, k: usize, collider: &Collider) -> String {
+    let shape = match &collider.shape {
+        Shape::Sphere { radius } => format!(r#"type="sphere" size="{radius}""#),
+        Shape::Cylinder { radius, length } => {
+            format!(r#"type="cylinder" size="{radius} {}""#, length / 2.0)
+        }
+        Shape::Box { half_extents } => format!(r#"type="box" size="{}""#, numbers(*half_extents)),
+        Shape::Mesh(_) => format!(r#"type="mesh" mesh="{}""#, escape(&mesh_name(link, k))),
+    };
+    let name = escape(&format!("{link}/{k}"));
+    format!(r#"<geom name="{name}" {shape} {}/>"#, pose(&collider.link_from_shape))
+}
+
+fn mesh_name(link: &str, k: usize) -> String {
+    format!("mesh_{link}_{k}")
+}
+
+/// `pos="x y z" quat="w x y z"` of a pose in its parent frame.
+fn pose(parent_from_child: &Isometry3<f64>) -> String {
+    let pos = numbers(xyz(&parent_from_child.translation.vector));
+    let quat = numbers(wxyz(&parent_from_child.rotation));
+    format!(r#"pos="{pos}" quat="{quat}""#)
+}
+
+/// Space-separated numbers, each at full precision.
+fn numbers(values: impl IntoIterator<Item = f64>) -> String {
+    values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
+}
+
+fn line(out: &mut String, depth: usize, text: &str) {
+    for _ in 0..depth {
+        out.push_str("  ");
+    }
+    out.push_str(text);
+    out.push('\n');
+}
+
+/// Escapes text for an XML attribute value.
+fn escape(text: &str) -> String {
+    let mut escaped = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => escaped.push_str("&amp;"),
+            '<' => escaped.push_str("&lt;"),
+            '>' => escaped.push_str("&gt;"),
+            '"' => escaped.push_str("&quot;"),
+            '\'' => escaped.push_str("&apos;"),
+            _ => escaped.push(c),
+        }
+    }
+    escaped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{from_design, TriMesh};
+    use std::path::{Path, PathBuf};
+
+    fn modular_model() -> Model {
+        let text = r#"{"mode": "modular", "modules": ["direct", "L-short", "direct", "direct", "I-long"]}"#;
+        let design = crate::design::parse(text, Path::new("modular.json")).expect("valid design");
+        from_design(&design)
+    }
+
+    fn body_block<'a>(text: &'a str, name: &str) -> &'a str {
+        let start = text.find(&format!(r#"<body name="{name}""#)).expect("body written");
+        &text[start..]
+    }
+
+    #[test]
+    fn modular_design_has_tool_site_actuators_and_exclusions() {
+        let model = modular_model();
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        assert!(text.starts_with(&format!(r#"<mujoco model="{}">"#, model.name)), "{text}");
+        assert!(text.contains(r#"<compiler angle="radian" autolimits="true"/>"#));
+        assert!(text.contains(r#"<option timestep="0.001" gravity="0 0 -9.81"/>"#));
+        assert_eq!(text.matches(r#"<site name="tool""#).count(), 1, "{text}");
+        assert_eq!(text.matches("<position ").count(), model.dof(), "{text}");
+        assert_eq!(text.matches("<joint ").count(), model.dof(), "{text}");
+        assert_eq!(text.matches(r#"type="hinge""#).count(), model.dof(), "{text}");
+        for joint in &model.joints {
+            let actuator = format!(r#"<position name="{0}" joint="{0}" kp="100" kv="10"/>"#, joint.name);
+            assert!(text.contains(&actuator), "{actuator} not in\n{text}");
+        }
+        for (a, b) in model.adjacent_link_pairs() {
+            let exclude = format!(r#"<exclude body1="{}" body2="{}"/>"#, model.links[a].name, model.links[b].name);
+            assert!(text.contains(&exclude), "{exclude} not in\n{text}");
+        }
+        assert_eq!(text.matches("<exclude ").count(), model.dof());
+        assert_eq!(text.matches("<body ").count(), model.links.len());
+        assert_eq!(text.matches("</body>").count(), model.links.len());
+        assert!(!text.contains("<asset>"));
+    }
+
+    #[test]
+    fn base_body_is_static_and_the_site_is_in_the_last_body() {
+        let model = modular_model();
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        let base = body_block(&text, "base");
+        let first_child = base.find(r#"<body name="link1""#).expect("link1 nested in base");
+        assert!(!base[..first_child].contains("<joint"), "{text}");
+        let last = body_block(&text, "link5");
+        assert!(last.contains(r#"<site name="tool""#));
+        assert!(!last[1..].contains("<body "), "the last body has no child");
+        assert!(last.contains(r#"<joint name="joint5" type="hinge""#));
+        assert!(last.contains("fullinertia="));
+    }
+
+    #[test]
+    fn geoms_are_named_after_link_and_index() {
+        let model = modular_model();
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        for link in &model.links {
+            for k in 0..link.colliders.len() {
+                assert!(text.contains(&format!(r#"<geom name="{}/{k}" "#, link.name)), "{}/{k}", link.name);
+            }
+        }
+        // The joint module housing: a 0.12 m x 0.12 m cylinder.
+        assert!(text.contains(r#"<geom name="link1/0" type="cylinder" size="0.06 0.06""#), "{text}");
+    }
+
+    #[test]
+    fn floats_keep_full_precision() {
+        let mut model = modular_model();
+        model.last_from_tool = Isometry3::translation(0.1 + 0.2, -1.0 / 3.0, 0.0);
+        model.joints[0].limits = Some([-2.0 / 3.0, 1e-20]);
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        assert!(
+            text.contains(r#"<site name="tool" pos="0.30000000000000004 -0.3333333333333333 0" quat="1 0 0 0"/>"#),
+            "{text}"
+        );
+        let range = format!(r#"range="{} {}""#, -2.0 / 3.0, 1e-20);
+        assert!(text.contains(&range), "{range} not in\n{text}");
+        let parsed: Vec<f64> = range[7..range.len() - 1].split(' ').map(|v| v.parse().expect("number")).collect();
+        assert_eq!(parsed, [-2.0 / 3.0, 1e-20]);
+    }
+
+    #[test]
+    fn rejects_moving_link_without_inertial() {
+        let mut model = modular_model();
+        model.links[3].inertial = None;
+        let error = to_mjcf(&model, &MjcfOptions::default()).expect_err("massless link");
+        assert!(
+            matches!(&error, ExportError::MissingInertial { link, joint, .. } if link == "link3" && joint == "joint3"),
+            "{error}"
+        );
+        assert!(error.to_string().contains("link `link3`"), "{error}");
+    }
+
+    #[test]
+    fn continuous_joint_is_unlimited_and_prismatic_is_a_slide() {
+        let mut model = modular_model();
+        model.joints[0].kind = JointKind::Continuous;
+        model.joints[0].limits = None;
+        model.joints[1].kind = JointKind::Prismatic;
+        model.joints[1].limits = Some([0.0, 0.5]);
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        let axis = numbers(model.joints[0].axis.iter().copied());
+        assert!(
+            text.contains(&format!(r#"<joint name="joint1" type="hinge" axis="{axis}" limited="false"/>"#)),
+            "{text}"
+        );
+        assert!(
+            text.contains(r#"<joint name="joint2" type="slide" axis="0 0 1" range="0 0.5"/>"#),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn mesh_collider_is_written_inline() {
+        let mut model = modular_model();
+        let vertices = vec![[0.0; 3], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0], [0.0, 0.0, 0.001]];
+        model.links[2].colliders.push(Collider {
+            link_from_shape: Isometry3::translation(0.0, 0.0, 0.1),
+            shape: Shape::Mesh(TriMesh {
+                uri: "meshes/part.dae".into(),
+                file: PathBuf::from("/nonexistent/part.dae"),
+                scale: [0.001, 0.002, 0.001],
+                vertices,
+                triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            }),
+            label: "part".into(),
+        });
+        let k = model.links[2].colliders.len() - 1;
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        let asset = format!(r#"<mesh name="mesh_link2_{k}" vertex="0 0 0 0.001 0 0 0 0.002 0 0 0 0.001" face="0 2 1 0 1 3 0 3 2 1 2 3"/>"#);
+        assert!(text.contains(&asset), "{asset} not in\n{text}");
+        assert!(
+            text.contains(&format!(r#"<geom name="link2/{k}" type="mesh" mesh="mesh_link2_{k}""#)),
+            "{text}"
+        );
+        assert!(!text.contains("part.dae"), "no file is referenced");
+    }
+
+    #[test]
+    fn gains_come_from_options_and_must_match_the_joints() {
+        let model = modular_model();
+        let opts = MjcfOptions {
+            kp: Some(vec![1.0, 2.0, 3.0, 4.0, 5.5]),
+            timestep: 0.002,
+            ..MjcfOptions::default()
+        };
+        let text = to_mjcf(&model, &opts).expect("exports");
+        assert!(
+            text.contains(r#"<position name="joint5" joint="joint5" kp="5.5" kv="10"/>"#),
+            "{text}"
+        );
+        assert!(text.contains(r#"timestep="0.002""#));
+
+        let opts = MjcfOptions {
+            kv: Some(vec![1.0; 3]),
+            ..MjcfOptions::default()
+        };
+        let error = to_mjcf(&model, &opts).expect_err("3 gains for 5 joints");
+        assert!(
+            matches!(
+                error,
+                ExportError::GainCount {
+                    gain: "kv",
+                    given: 3,
+                    joints: 5,
+                    ..
+                }
+            ),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn actuators_can_be_left_out() {
+        let opts = MjcfOptions {
+            include_actuators: false,
+            ..MjcfOptions::default()
+        };
+        let text = to_mjcf(&modular_model(), &opts).expect("exports");
+        assert!(!text.contains("<actuator>"), "{text}");
+        assert!(text.contains("<contact>"));
+    }
+
+    #[test]
+    fn base_named_world_is_the_world_body() {
+        let mut model = modular_model();
+        model.links[0].name = "world".into();
+        model.world_from_base = Isometry3::translation(0.0, 0.0, 0.5);
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        assert!(!text.contains(r#"<body name="world""#), "{text}");
+        assert!(text.contains(r#"<frame pos="0 0 0.5" quat="1 0 0 0">"#), "{text}");
+        assert!(text.contains(r#"<exclude body1="world" body2="link1"/>"#), "{text}");
+        assert_eq!(text.matches("</frame>").count(), 1);
+
+        model.links[2].name = "world".into();
+        let error = to_mjcf(&model, &MjcfOptions::default()).expect_err("two world bodies");
+        assert!(
+            matches!(&error, ExportError::DuplicateName { kind: "body", name, .. } if name == "world"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn names_are_escaped() {
+        assert_eq!(escape(r#"a&b<c>"d'"#), "a&amp;b&lt;c&gt;&quot;d&apos;");
+        let mut model = modular_model();
+        model.name = "arm \"A\" & <B>".into();
+        let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        assert!(text.starts_with(r#"<mujoco model="arm &quot;A&quot; &amp; &lt;B&gt;">"#), "{text}");
+    }
+}
