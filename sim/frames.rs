@@ -88,7 +88,11 @@ mod tests {
 
     #[test]
     fn rpy_is_exact_near_gimbal_lock() {
-        for pitch in [-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2 - 1e-8, -std::f64::consts::FRAC_PI_2 + 3e-8] {
+        for pitch in [
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::FRAC_PI_2 - 1e-8,
+            -std::f64::consts::FRAC_PI_2 + 3e-8,
+        ] {
             let pose = isometry_from_xyz_rpy([0.0; 3], [0.3, pitch, 0.4]);
             let back = isometry_from_xyz_rpy([0.0; 3], rpy_of(&pose.rotation));
             assert!(pose.rotation.angle_to(&back.rotation) < 1e-14, "pitch {pitch}");

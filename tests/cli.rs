@@ -244,3 +244,57 @@ fn strict_turns_warnings_into_errors() {
         .expect("runs");
     assert_eq!(output.status.code(), Some(2));
 }
+
+#[test]
+fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the_urdf_folder() {
+    let packages = tempfile::tempdir().expect("temp dir");
+    let meshes = packages.path().join("tetra_description/meshes");
+    std::fs::create_dir_all(&meshes).expect("mkdir");
+    std::fs::copy(fixture("meshes/tetrahedron.dae"), meshes.join("tetra.dae")).expect("copy");
+    let elsewhere = tempfile::tempdir().expect("temp dir");
+    std::fs::copy(fixture("meshes/tetrahedron.obj"), elsewhere.path().join("tip.obj")).expect("copy");
+    let urdf = elsewhere.path().join("tetra.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="tetra"><link name="base"/>
+        <link name="arm"><collision><geometry><mesh filename="package://tetra_description/meshes/tetra.dae" scale="2 2 2"/></geometry></collision>
+          <collision><origin xyz="0 0 0.5"/><geometry><mesh filename="tip.obj"/></geometry></collision>
+          <inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+        <joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+    )
+    .expect("write");
+
+    let output = validate_design()
+        .arg(&urdf)
+        .env("ROS_PACKAGE_PATH", packages.path())
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("mesh package://tetra_description/meshes/tetra.dae (4 triangles)") && stdout.contains("mesh tip.obj"),
+        "{stdout}"
+    );
+
+    let output = validate_design().arg(&urdf).env_remove("ROS_PACKAGE_PATH").output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("link `arm`: mesh `package://tetra_description/meshes/tetra.dae` not found"),
+        "{stderr}"
+    );
+
+    let output = validate_design()
+        .arg(&urdf)
+        .arg("--package-path")
+        .arg(packages.path())
+        .env_remove("ROS_PACKAGE_PATH")
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+}

@@ -100,3 +100,37 @@ fn default_tip_of_a_design_export_is_the_last_moving_link() {
     assert_eq!(back.links.last().map(|l| l.name.as_str()), Some("link6"));
     assert!(back.links.last().is_some_and(|l| l.merged == ["tool"]));
 }
+
+/// Signed volume of a closed triangle mesh (divergence theorem).
+fn volume(mesh: &proving_ground::model::TriMesh) -> f64 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| nalgebra::Vector3::from(mesh.vertices[i as usize]));
+            a.dot(&b.cross(&c)) / 6.0
+        })
+        .sum()
+}
+
+#[test]
+fn stl_obj_and_dae_meshes_load_to_the_same_solid_with_scale() {
+    // Right tetrahedron with legs 0.1, 0.2, 0.3 m, stretched x2 along x: volume 2 * 0.006 / 6.
+    let expected = 2.0 * 0.1 * 0.2 * 0.3 / 6.0;
+    for format in ["stl", "obj", "dae"] {
+        let file = common::fixture(&format!("meshes/tetrahedron.{format}"));
+        let mesh = proving_ground::model::load_mesh(format, &file, [2.0, 1.0, 1.0]).unwrap_or_else(|e| panic!("{format}: {e}"));
+        assert_eq!(mesh.triangles.len(), 4, "{format}");
+        let v = volume(&mesh).abs();
+        // STL stores f32 coordinates: 1e-9 relative is far below that rounding's effect here.
+        assert!((v - expected).abs() < 1e-9, "{format}: volume {v}, expected {expected}");
+        let max_x = mesh.vertices.iter().map(|p| p[0]).fold(f64::MIN, f64::max);
+        assert!((max_x - 0.2).abs() < 1e-7, "{format}: scale not applied, max x {max_x}");
+    }
+}
+
+#[test]
+fn shipped_models_raise_no_warnings() {
+    for (id, model) in shipped_models() {
+        assert!(model.diagnostics.is_empty(), "{id}: {:?}", model.diagnostics);
+    }
+}
