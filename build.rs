@@ -31,9 +31,10 @@ fn main() {
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
 
+    // `cargo::error` fails the build with just this message; exiting non-zero as well would make
+    // cargo dump the script's whole output around it.
     if let Err(message) = run(&manifest, &pin_path) {
         println!("cargo::error={}", message.replace('\n', " "));
-        std::process::exit(1);
     }
 }
 
@@ -144,16 +145,20 @@ fn fetch_wheel(manifest: &Path, dest: &Path, lib_name: &str, pin: &Pin) -> Resul
         v = pin.version
     );
     if !wheel.is_file() {
-        let status = Command::new("python3")
+        let output = Command::new("python3")
             .args(["-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:"])
             .args(["--platform", "manylinux_2_28_x86_64", "--python-version", "3.11"])
             .args(["--implementation", "cp", "--abi", "cp311", "--dest"])
             .arg(&download)
             .arg(format!("mujoco=={}", pin.version))
-            .status();
-        match status {
-            Ok(s) if s.success() && wheel.is_file() => {}
-            Ok(_) => return Err(offline_help),
+            .output();
+        match output {
+            Ok(out) if out.status.success() && wheel.is_file() => {}
+            Ok(out) => {
+                let said = String::from_utf8_lossy(&out.stderr);
+                let last = said.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
+                return Err(format!("{offline_help} (pip said: {})", last.trim()));
+            }
             Err(e) => return Err(format!("cannot run python3 ({e}). {offline_help}")),
         }
     }
