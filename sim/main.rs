@@ -191,6 +191,7 @@ fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
             .map(|c| match &c.shape {
                 Shape::Sphere { radius } => format!("sphere r={radius:.3}"),
                 Shape::Cylinder { radius, length } => format!("cylinder r={radius:.3} l={length:.3}"),
+                Shape::Capsule { radius, length } => format!("capsule r={radius:.3} l={length:.3}"),
                 Shape::Box { half_extents: [x, y, z] } => format!("box {:.3}x{:.3}x{:.3}", 2.0 * x, 2.0 * y, 2.0 * z),
                 Shape::Mesh(mesh) => format!("mesh {} ({} triangles)", mesh.uri, mesh.triangles.len()),
             })

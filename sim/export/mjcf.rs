@@ -219,6 +219,7 @@ fn geom(link: &str, k: usize, collider: &Collider) -> String {
         Shape::Cylinder { radius, length } => {
             format!(r#"type="cylinder" size="{radius} {}""#, length / 2.0)
         }
+        Shape::Capsule { radius, length } => format!(r#"type="capsule" size="{radius} {}""#, length / 2.0),
         Shape::Box { half_extents } => format!(r#"type="box" size="{}""#, numbers(*half_extents)),
         Shape::Mesh(_) => format!(r#"type="mesh" mesh="{}""#, escape(&mesh_name(link, k))),
     };

@@ -12,7 +12,7 @@
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
 use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
 use crate::frames::isometry_from_xyz_rpy;
-use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -569,25 +569,8 @@ impl<'a> Builder<'a> {
                 )]
             }
             urdf_rs::Geometry::Capsule { radius, length } => {
-                // Exact as a cylinder plus one sphere on each end.
                 positive(&[*radius, *length], "<capsule radius length>")?;
-                let end = |z: f64| {
-                    (
-                        Isometry3::from_parts(Translation3::new(0.0, 0.0, z), UnitQuaternion::identity()),
-                        Shape::Sphere { radius: *radius },
-                    )
-                };
-                vec![
-                    (
-                        Isometry3::identity(),
-                        Shape::Cylinder {
-                            radius: *radius,
-                            length: *length,
-                        },
-                    ),
-                    end(length / 2.0),
-                    end(-length / 2.0),
-                ]
+                vec![(Isometry3::identity(), Shape::Capsule { radius: *radius, length: *length })]
             }
             urdf_rs::Geometry::Box { size } => {
                 positive(&size.0, "<box size>")?;

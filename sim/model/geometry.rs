@@ -31,6 +31,13 @@ pub enum Shape {
         /// Full length along z in metres.
         length: f64,
     },
+    /// Capsule centred at the origin: a cylinder along z capped by two hemispheres.
+    Capsule {
+        /// Radius in metres.
+        radius: f64,
+        /// Length of the cylindrical part (distance between the cap centres) in metres.
+        length: f64,
+    },
     /// Box centred at the origin.
     Box {
         /// Half the edge lengths along x, y, z in metres.
@@ -46,6 +53,7 @@ impl Shape {
         match self {
             Shape::Sphere { .. } => "sphere",
             Shape::Cylinder { .. } => "cylinder",
+            Shape::Capsule { .. } => "capsule",
             Shape::Box { .. } => "box",
             Shape::Mesh(_) => "mesh",
         }
@@ -57,6 +65,7 @@ impl Shape {
         match self {
             Shape::Sphere { radius } => *radius,
             Shape::Cylinder { radius, length } => radius.hypot(length / 2.0),
+            Shape::Capsule { radius, length } => radius + length / 2.0,
             Shape::Box { half_extents } => {
                 let [x, y, z] = *half_extents;
                 (x * x + y * y + z * z).sqrt()
