@@ -36,3 +36,4 @@ pub mod export;
 pub mod frames;
 pub mod model;
 pub mod pipeline;
+pub mod scenario;

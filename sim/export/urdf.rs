@@ -153,7 +153,10 @@ fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider) -> Result
             radius: *radius,
             length: *length,
         },
-        Shape::Capsule { radius, length } => urdf_rs::Geometry::Capsule { radius: *radius, length: *length },
+        Shape::Capsule { radius, length } => urdf_rs::Geometry::Capsule {
+            radius: *radius,
+            length: *length,
+        },
         Shape::Box { half_extents } => urdf_rs::Geometry::Box {
             size: urdf_rs::Vec3(half_extents.map(|h| 2.0 * h)),
         },

@@ -13,7 +13,7 @@
 //! 1.8 kg joint module per joint as a solid 0.12 x 0.12 m cylinder on the joint axis, both on the
 //! link the joint moves.
 
-use super::{Collider, Inertial, Joint, JointKind, Link, Model, ModelSource, Shape};
+use super::{Collider, Inertial, Joint, JointKind, Link, Model, ModelSource, Segment, Shape};
 use crate::design::catalog::{JOINT_MODULE_KG, JOINT_MODULE_LENGTH_M, LINK_DIAMETER_M, TUBE_KG_PER_M};
 use crate::design::{Design, DesignMode};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -40,6 +40,7 @@ pub fn from_design(design: &Design) -> Model {
         merged: vec![],
         colliders: vec![],
         inertial: None,
+        segments: vec![],
     }];
     for (i, dh) in design.joints.iter().enumerate() {
         let number = i + 1;
@@ -100,7 +101,29 @@ pub fn from_design(design: &Design) -> Model {
                 label: format!("joint sphere {number}"),
             });
         }
+        // The paper's capsules follow the same d and a segments; no segment at all is its sphere.
+        let corner = Vector3::new(0.0, 0.0, dh.d);
+        let mut segments = Vec::new();
+        if dh.d.abs() > ZERO_LENGTH_M {
+            segments.push(Segment {
+                start: Vector3::zeros(),
+                end: corner,
+            });
+        }
+        if dh.a.abs() > ZERO_LENGTH_M {
+            segments.push(Segment {
+                start: corner,
+                end: Vector3::new(dh.a, 0.0, dh.d),
+            });
+        }
+        if segments.is_empty() {
+            segments.push(Segment {
+                start: Vector3::zeros(),
+                end: Vector3::zeros(),
+            });
+        }
         links.push(Link {
+            segments,
             name: format!("link{number}"),
             merged: vec![],
             colliders,

@@ -10,7 +10,7 @@
 //! from, at their joints' zero position.
 
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
-use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
+use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Segment, Shape};
 use crate::frames::isometry_from_xyz_rpy;
 use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -301,6 +301,20 @@ impl<'a> Builder<'a> {
         for (index, group) in owned.iter().enumerate() {
             model_links.push(self.link(index, group, &links, &joints)?);
         }
+        // The capsule approximation of a URDF link: the bone from its origin to the next joint
+        // (the tool frame for the last link); a link whose next joint sits at its origin gets none.
+        for (i, link) in model_links.iter_mut().enumerate().skip(1) {
+            let next = joints
+                .get(i)
+                .map(|j| j.parent_from_joint.translation.vector)
+                .unwrap_or(last_from_tool.translation.vector);
+            if next.norm() > 1e-9 {
+                link.segments.push(Segment {
+                    start: Vector3::zeros(),
+                    end: next,
+                });
+            }
+        }
         Ok(Model {
             name: if robot.name.is_empty() {
                 "robot".into()
@@ -492,6 +506,7 @@ impl<'a> Builder<'a> {
                 merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
                 colliders,
                 inertial: Inertial::combine(&masses),
+                segments: vec![],
             });
         }
         let joint = &joints[index - 1].name;
@@ -519,6 +534,7 @@ impl<'a> Builder<'a> {
             merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
             colliders,
             inertial: Some(inertial),
+            segments: vec![],
         })
     }
 
@@ -570,7 +586,13 @@ impl<'a> Builder<'a> {
             }
             urdf_rs::Geometry::Capsule { radius, length } => {
                 positive(&[*radius, *length], "<capsule radius length>")?;
-                vec![(Isometry3::identity(), Shape::Capsule { radius: *radius, length: *length })]
+                vec![(
+                    Isometry3::identity(),
+                    Shape::Capsule {
+                        radius: *radius,
+                        length: *length,
+                    },
+                )]
             }
             urdf_rs::Geometry::Box { size } => {
                 positive(&size.0, "<box size>")?;

@@ -12,6 +12,7 @@ mod mesh;
 pub use from_design::from_design;
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
+
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;
 pub use mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri, TriMesh};
@@ -106,6 +107,21 @@ pub struct Link {
     pub colliders: Vec<Collider>,
     /// Mass properties in the link frame; `None` only for the fixed base.
     pub inertial: Option<Inertial>,
+    /// Axis segments of the paper's capsule approximation of this link, in the link frame
+    /// (a zero-length segment is a sphere). Radius: [`PAPER_CAPSULE_RADIUS_M`].
+    pub segments: Vec<Segment>,
+}
+
+/// Radius of the capsules of the paper's approximate link model (m).
+pub const PAPER_CAPSULE_RADIUS_M: f64 = 0.06;
+
+/// A line segment in a link frame (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Segment {
+    /// One end.
+    pub start: Vector3<f64>,
+    /// The other end.
+    pub end: Vector3<f64>,
 }
 
 /// A warning about usable but suspicious input.
