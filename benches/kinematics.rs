@@ -18,19 +18,43 @@ fn kinematics(c: &mut Criterion) {
         let mut i = 0;
         c.bench_function(&format!("fk+jacobian/{name}"), |b| {
             b.iter(|| {
-                i = (i + 1) % configurations.len();
+                i = (i + 1) & 63;
+                model.tool_jacobian(black_box(&configurations[i]), &mut ws);
+                black_box(ws.jacobian[(0, 0)])
+            })
+        });
+        c.bench_function(&format!("all-links-fk+jacobian/{name}"), |b| {
+            b.iter(|| {
+                i = (i + 1) & 63;
                 model.jacobian(black_box(&configurations[i]), &mut ws);
                 black_box(ws.jacobian[(0, 0)])
             })
         });
         c.bench_function(&format!("fk/{name}"), |b| {
             b.iter(|| {
-                i = (i + 1) % configurations.len();
+                i = (i + 1) & 63;
                 black_box(model.tool_pose(black_box(&configurations[i])))
             })
         });
     }
 }
 
-criterion_group!(benches, kinematics);
+fn trigonometry(c: &mut Criterion) {
+    let angles: Vec<f64> = (0..64).map(|i| f64::from(i) * 0.19 - 6.0).collect();
+    let mut i = 0;
+    c.bench_function("sin_cos/libm", |b| {
+        b.iter(|| {
+            i = (i + 1) & 63;
+            black_box(black_box(angles[i]).sin_cos())
+        })
+    });
+    c.bench_function("sin_cos/kinematics", |b| {
+        b.iter(|| {
+            i = (i + 1) & 63;
+            black_box(proving_ground::model::sin_cos(black_box(angles[i])))
+        })
+    });
+}
+
+criterion_group!(benches, kinematics, trigonometry);
 criterion_main!(benches);

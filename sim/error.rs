@@ -15,6 +15,9 @@ pub enum Error {
     /// The model could not be written as URDF or MJCF.
     #[error(transparent)]
     Export(#[from] crate::export::ExportError),
+    /// The collision geometry could not be built.
+    #[error(transparent)]
+    Collide(#[from] crate::collide::CollideError),
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),

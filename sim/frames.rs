@@ -73,6 +73,35 @@ pub fn pose_difference(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
     (translation, angle)
 }
 
+/// A nalgebra isometry as a parry pose (glam `f64` types). Conversions between nalgebra and
+/// parry's glam types live here and nowhere else.
+pub fn parry_pose(isometry: &Isometry3<f64>) -> parry3d_f64::math::Pose {
+    let q = isometry.rotation.quaternion();
+    parry3d_f64::math::Pose::from_parts(
+        parry_vector(&isometry.translation.vector),
+        parry3d_f64::math::Rotation::from_xyzw(q.i, q.j, q.k, q.w),
+    )
+}
+
+/// A parry pose as a nalgebra isometry; the inverse of [`parry_pose`].
+pub fn isometry_from_parry(pose: &parry3d_f64::math::Pose) -> Isometry3<f64> {
+    let q = pose.rotation;
+    Isometry3::from_parts(
+        Translation3::from(vector_from_parry(pose.translation)),
+        UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(q.w, q.x, q.y, q.z)),
+    )
+}
+
+/// A nalgebra vector (or point coordinates) as a parry vector.
+pub fn parry_vector(v: &Vector3<f64>) -> parry3d_f64::math::Vector {
+    parry3d_f64::math::Vector::new(v.x, v.y, v.z)
+}
+
+/// A parry vector as a nalgebra vector; the inverse of [`parry_vector`].
+pub fn vector_from_parry(v: parry3d_f64::math::Vector) -> Vector3<f64> {
+    Vector3::new(v.x, v.y, v.z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +137,17 @@ mod tests {
             * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), r);
         let got = isometry_from_xyz_rpy([0.0; 3], [r, p, y]).rotation;
         assert!(got.angle_to(&expected) < 1e-14);
+    }
+
+    #[test]
+    fn parry_pose_round_trips_and_transforms_like_nalgebra() {
+        let pose = isometry_from_xyz_rpy([0.3, -0.2, 1.1], [0.7, -1.2, 2.9]);
+        let back = isometry_from_parry(&parry_pose(&pose));
+        let (dt, da) = pose_difference(&pose, &back);
+        assert!(dt == 0.0 && da < 1e-15, "{dt} {da}");
+        let point = Vector3::new(0.4, 0.5, -0.6);
+        let ours = pose * nalgebra::Point3::from(point);
+        let theirs = vector_from_parry(parry_pose(&pose) * parry_vector(&point));
+        assert!((ours.coords - theirs).norm() < 1e-15, "{ours} {theirs}");
     }
 }

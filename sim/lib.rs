@@ -29,11 +29,13 @@
 //! - MJCF input: a serial chain of hinge and slide joints only; geoms of type sphere, capsule
 //!   (as a cylinder plus two spheres), cylinder, box and mesh are read.
 
+pub mod collide;
 pub mod design;
 pub mod engine;
 pub mod error;
 pub mod export;
 pub mod frames;
+pub mod ik;
 pub mod model;
 pub mod pipeline;
 pub mod scenario;

@@ -1,12 +1,12 @@
 //! Consumes exported models (MJCF, URDF text) and joint configurations.
-//! Produces what the engines compute: today MuJoCo's kinematics and Jacobians, the independent
-//! oracle for our own. Fails with [`EngineError`] when an engine refuses a model.
+//! Produces what the engines compute: today MuJoCo's kinematics, Jacobians and geom distances,
+//! the independent oracles for our own. Fails with [`EngineError`] when an engine refuses a model.
 
 mod crosscheck;
 mod mujoco;
 
 pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
-pub use mujoco::{check_version, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
+pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
 
 use std::path::PathBuf;
 

@@ -149,6 +149,78 @@ impl MujocoKinematics {
     }
 }
 
+/// A MuJoCo model whose geoms are measured against each other with `mj_geomDistance`: the
+/// oracle for exact collision distances (tests only; MuJoCo is exact for spheres, capsules and
+/// boxes, approximates cylinders, and uses the convex hull of a mesh).
+pub struct MujocoGeomDistance {
+    model: MjModel,
+    source_name: String,
+}
+
+/// What `mj_geomDistance` reports for two geoms, world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GeomDistance {
+    /// Signed distance (m), negative in penetration; `distance_max` when farther than that.
+    pub distance: f64,
+    /// Witness point on the first geom (m); zero when farther than `distance_max`.
+    pub from: [f64; 3],
+    /// Witness point on the second geom (m); zero when farther than `distance_max`.
+    pub to: [f64; 3],
+}
+
+impl MujocoGeomDistance {
+    /// Loads MJCF text.
+    ///
+    /// # Errors
+    /// [`EngineError::MujocoLoad`] with MuJoCo's message, or [`EngineError::Version`].
+    pub fn from_xml_str(xml: &str, source_name: &str) -> Result<Self, EngineError> {
+        check_version()?;
+        let model = MjModel::from_xml_string(xml).map_err(|e| EngineError::MujocoLoad {
+            source_name: source_name.into(),
+            message: e.to_string(),
+        })?;
+        Ok(Self {
+            model,
+            source_name: source_name.into(),
+        })
+    }
+
+    /// Runs `mj_kinematics` at the reference configuration and measures each named geom pair,
+    /// looking no farther than `distance_max` (m).
+    ///
+    /// # Errors
+    /// [`EngineError::MissingElement`] for an unknown geom name.
+    pub fn distances(&self, pairs: &[(&str, &str)], distance_max: f64) -> Result<Vec<GeomDistance>, EngineError> {
+        let find = |name: &str| {
+            self.model
+                .name_to_id(MjtObjBase::mjOBJ_GEOM, name)
+                .ok_or_else(|| EngineError::MissingElement {
+                    source_name: self.source_name.clone(),
+                    kind: "geom",
+                    name: name.to_string(),
+                })
+        };
+        let ids = pairs
+            .iter()
+            .map(|(a, b)| Ok((find(a)?, find(b)?)))
+            .collect::<Result<Vec<_>, EngineError>>()?;
+        let mut data = self.model.make_data();
+        data.kinematics();
+        Ok(ids
+            .into_iter()
+            .map(|(a, b)| {
+                let mut fromto = [0.0; 6];
+                let distance = data.geom_distance(a, b, distance_max, Some(&mut fromto));
+                GeomDistance {
+                    distance,
+                    from: [fromto[0], fromto[1], fromto[2]],
+                    to: [fromto[3], fromto[4], fromto[5]],
+                }
+            })
+            .collect())
+    }
+}
+
 /// Fails when the MuJoCo library found at run time is not the pinned version.
 ///
 /// # Errors

@@ -8,6 +8,7 @@ mod geometry;
 mod inertia;
 mod kinematics;
 mod mesh;
+mod trig;
 
 pub use from_design::from_design;
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
@@ -16,6 +17,7 @@ pub use geometry::{Collider, Shape};
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;
 pub use mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri, TriMesh};
+pub use trig::sin_cos;
 
 use nalgebra::{Isometry3, Unit, Vector3};
 use serde::Serialize;
@@ -281,6 +283,15 @@ impl Model {
     /// Number of movable joints.
     pub fn dof(&self) -> usize {
         self.joints.len()
+    }
+
+    /// The same robot mounted at `world_from_mount` (a scenario's base pose): the design's own
+    /// base pose is then relative to the mount.
+    pub fn placed(&self, world_from_mount: &Isometry3<f64>) -> Model {
+        Model {
+            world_from_base: world_from_mount * self.world_from_base,
+            ..self.clone()
+        }
     }
 
     /// Link pairs `(i, i + 1)` joined by one joint: the pairs self-collision leaves out.

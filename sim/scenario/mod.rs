@@ -2,6 +2,13 @@
 //! Produces a validated [`Scenario`]: obstacles with exact shapes, goals in course order with
 //! their tolerance modes, the robot base pose, an optional floor. Fails with [`ScenarioError`].
 
+mod file;
+pub mod generate;
+mod write;
+
+pub use file::{load, parse, ORIENTATION_TOLERANCE};
+pub use write::to_json;
+
 use crate::model::Shape;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Serialize;
@@ -54,6 +61,17 @@ pub enum Tolerance {
     ZSymmetric,
     /// Position only.
     Position,
+}
+
+impl Tolerance {
+    /// The name used in files and messages: `pose`, `z_symmetric` or `position`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tolerance::Pose => "pose",
+            Tolerance::ZSymmetric => "z_symmetric",
+            Tolerance::Position => "position",
+        }
+    }
 }
 
 /// One target pose of the tool frame, in the world.
@@ -122,6 +140,16 @@ pub enum ScenarioError {
         /// The mesh file looked for.
         mesh: PathBuf,
         /// What went wrong.
+        message: String,
+    },
+    /// A generator was given a parameter outside its range.
+    #[error("{generator} generator: {parameter} {message}")]
+    Parameter {
+        /// The generator (`cluttered`, `workspace`, `course`).
+        generator: String,
+        /// The parameter (`scale`, `count`).
+        parameter: String,
+        /// The value and what was expected.
         message: String,
     },
     /// A generated file could not be written.

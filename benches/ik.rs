@@ -1,0 +1,66 @@
+//! IK for one goal without obstacles, 4 seeds (target in issue 3: <= 15 us).
+#![allow(missing_docs)] // criterion_group! generates undocumented items
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use proving_ground::ik::{Ik, IkOptions};
+use proving_ground::pipeline::{load_model, LoadOptions};
+use proving_ground::scenario::{Goal, Tolerance};
+use rand::SeedableRng;
+use std::hint::black_box;
+use std::path::Path;
+
+fn ik(c: &mut Criterion) {
+    for design in ["designs/ur5e.json", "designs/modular-elbow.json", "designs/paper-real-world.json"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(design);
+        let model = load_model(&path, &LoadOptions::default()).expect("shipped design loads");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let goals: Vec<Goal> = (0..256)
+            .map(|i| {
+                let tool = model.tool_pose(&model.random_configuration(&mut rng));
+                Goal {
+                    name: format!("goal {i}"),
+                    position: tool.translation.vector,
+                    rotation: tool.rotation,
+                    tolerance: Tolerance::Pose,
+                }
+            })
+            .collect();
+        let mut solver = Ik::new(&model, IkOptions::default());
+        let mut i = 0;
+        c.bench_function(&format!("ik-4-seeds/{}", model.name), |b| {
+            b.iter(|| {
+                i = (i + 1) % goals.len();
+                black_box(solver.solve(black_box(&goals[i]), i, None).reached())
+            })
+        });
+    }
+}
+
+/// Every goal of a scenario, collision-aware, with exact verification of each solution.
+fn scenarios(c: &mut Criterion) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut group = c.benchmark_group("scenario");
+    group.sample_size(10);
+    for (design, scenario) in [
+        ("designs/modular-elbow.json", "scenarios/cluttered/task-00.json"),
+        ("designs/ur20.json", "scenarios/cluttered/task-00.json"),
+        ("designs/ur20.json", "scenarios/workspace/pose.json"),
+        ("designs/paper-real-world.json", "scenarios/course.json"),
+    ] {
+        let model = load_model(&root.join(design), &LoadOptions::default()).expect("shipped design loads");
+        let scenario = proving_ground::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
+        let placed = model.placed(&scenario.world_from_base);
+        let opts = proving_ground::collide::CollideOptions {
+            excluded_pairs: proving_ground::collide::structural_overlaps(&placed, &Default::default()).expect("geometry builds"),
+            ..Default::default()
+        };
+        let world = proving_ground::collide::world(&placed, &scenario, &opts).expect("world builds");
+        group.bench_function(format!("{}/{}", model.name, scenario.name), |b| {
+            b.iter(|| black_box(proving_ground::ik::solve_goals(&placed, &scenario, Some(&world), &IkOptions::default()).len()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, ik, scenarios);
+criterion_main!(benches);

@@ -1,0 +1,255 @@
+//! The paper's approximate model: capsules of radius 0.06 m on each link's segments, closed-form
+//! signed distances to other capsules, spheres, capsule obstacles and the floor plane.
+
+use super::exact::floor_part;
+use super::narrow::measure_shapes;
+use super::world::{CollisionWorld, Other};
+use super::{effective_margin, Body, Distances, PairDistance, PairEstimate, Part, QueryOptions};
+use crate::frames::{parry_pose, vector_from_parry};
+use crate::model::PAPER_CAPSULE_RADIUS_M;
+use nalgebra::{Isometry3, Point3, Vector3};
+
+/// Squared length (m^2) below which a segment is a point (a sphere, for a capsule).
+const POINT_SQUARED_M2: f64 = 1e-24;
+
+/// Signed distances of every checked pair at one configuration, in the paper's capsule model.
+///
+/// Same pairs, output and reuse as [`distances`](super::distances); `Part::element` is the
+/// segment's index in `Link::segments`. Every capsule pair is measured (the closed forms are
+/// cheaper than bounds), so every estimate is exact; there are no hull findings.
+///
+/// # Panics
+/// When `link_in_world.len()` differs from [`CollisionWorld::link_count`].
+pub fn approximate_distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query: &QueryOptions, out: &mut Distances) {
+    assert_eq!(
+        link_in_world.len(),
+        world.link_count(),
+        "one pose per link of the model the collision world was built for"
+    );
+    out.reset(effective_margin(query.margin), world.pairs.len());
+    let Distances {
+        scratch,
+        narrow_phase_calls,
+        estimates,
+        ..
+    } = out;
+    scratch.segments.clear();
+    for capsule in &world.capsules {
+        let pose = &link_in_world[capsule.link];
+        let ends = [pose * Point3::from(capsule.start), pose * Point3::from(capsule.end)];
+        scratch.segments.push(ends.map(|p| p.coords));
+    }
+
+    let radius = PAPER_CAPSULE_RADIUS_M;
+    for candidate in &world.capsule_candidates {
+        let capsule = &world.capsules[candidate.a];
+        let a = Part {
+            body: Body::Link(capsule.link),
+            element: capsule.element,
+        };
+        let [start, end] = scratch.segments[candidate.a];
+        let (closest, b, enclosed) = match candidate.b {
+            Other::Link(j) => {
+                let other = &world.capsules[j];
+                let [other_start, other_end] = scratch.segments[j];
+                let b = Part {
+                    body: Body::Link(other.link),
+                    element: other.element,
+                };
+                (capsules(start, end, radius, other_start, other_end, radius), b, false)
+            }
+            Other::Obstacle(k) => {
+                let obstacle = &world.obstacles[k];
+                let b = Part {
+                    body: Body::Obstacle(k),
+                    element: 0,
+                };
+                match obstacle.rounded {
+                    Some(rounded) => (capsules(start, end, radius, rounded.start, rounded.end, rounded.radius), b, false),
+                    // Boxes, cylinders and meshes have no closed form against a capsule: the
+                    // exact model's narrow phase measures the same capsule as a `Capsule` shape.
+                    None => {
+                        let pose = parry_pose(&link_in_world[capsule.link]);
+                        let measured = measure_shapes(&pose, &capsule.geometry, &obstacle.world_from_shape, &obstacle.geometry);
+                        let closest = Closest {
+                            distance: measured.distance,
+                            point_a: vector_from_parry(measured.point_a),
+                            point_b: vector_from_parry(measured.point_b),
+                            normal: vector_from_parry(measured.normal),
+                        };
+                        (closest, b, measured.enclosed)
+                    }
+                }
+            }
+            Other::Floor => {
+                let height = world.floor.expect("floor pairs exist only with a floor");
+                (capsule_floor(start, end, radius, height), floor_part(), false)
+            }
+        };
+        *narrow_phase_calls += 1;
+        let best = &mut scratch.best[candidate.pair];
+        if best.is_none_or(|best| closest.distance < best.distance) {
+            *best = Some(PairDistance {
+                pair: candidate.pair,
+                a,
+                b,
+                distance: closest.distance,
+                point_a: closest.point_a,
+                point_b: closest.point_b,
+                normal: closest.normal,
+                enclosed,
+            });
+        }
+    }
+    estimates.extend(world.pairs.iter().zip(&scratch.best).map(|(pair, best)| PairEstimate {
+        a: pair.a,
+        b: pair.b,
+        distance: best.map_or(f64::INFINITY, |best| best.distance),
+        exact: true,
+    }));
+    out.collect();
+}
+
+/// A signed distance with witness points and the unit normal from `a` to `b` (world frame, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Closest {
+    pub(super) distance: f64,
+    pub(super) point_a: Vector3<f64>,
+    pub(super) point_b: Vector3<f64>,
+    pub(super) normal: Vector3<f64>,
+}
+
+/// The closest points of segments `[p1, q1]` and `[p2, q2]`, one on each (Ericson, Real-Time
+/// Collision Detection, 5.1.9, with point segments and parallel segments handled).
+pub(super) fn closest_points_of_segments(
+    p1: Vector3<f64>,
+    q1: Vector3<f64>,
+    p2: Vector3<f64>,
+    q2: Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.norm_squared(), d2.norm_squared(), d2.dot(&r));
+    let (s, t) = if a <= POINT_SQUARED_M2 && e <= POINT_SQUARED_M2 {
+        (0.0, 0.0)
+    } else if a <= POINT_SQUARED_M2 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(&r);
+        if e <= POINT_SQUARED_M2 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(&d2);
+            let denominator = a * e - b * b;
+            // Parallel segments: any s works; start from 0 and let the clamping below fix t, s.
+            let s = if denominator > 0.0 {
+                ((b * f - c * e) / denominator).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t = (b * s + f) / e;
+            if t < 0.0 {
+                ((-c / a).clamp(0.0, 1.0), 0.0)
+            } else if t > 1.0 {
+                (((b - c) / a).clamp(0.0, 1.0), 1.0)
+            } else {
+                (s, t)
+            }
+        }
+    };
+    (p1 + d1 * s, p2 + d2 * t)
+}
+
+/// Signed distance between capsules (segment ends in the world, radii in m); a zero-length
+/// segment is a sphere.
+pub(super) fn capsules(
+    start_a: Vector3<f64>,
+    end_a: Vector3<f64>,
+    radius_a: f64,
+    start_b: Vector3<f64>,
+    end_b: Vector3<f64>,
+    radius_b: f64,
+) -> Closest {
+    let (centre_a, centre_b) = closest_points_of_segments(start_a, end_a, start_b, end_b);
+    let between = centre_b - centre_a;
+    let length = between.norm();
+    let normal = if length > 0.0 {
+        between / length
+    } else {
+        // The axes cross: any direction across axis a separates them.
+        perpendicular(end_a - start_a)
+            .or_else(|| perpendicular(end_b - start_b))
+            .unwrap_or(Vector3::z())
+    };
+    Closest {
+        distance: length - radius_a - radius_b,
+        point_a: centre_a + normal * radius_a,
+        point_b: centre_b - normal * radius_b,
+        normal,
+    }
+}
+
+/// Signed distance between a capsule and the floor, the half-space below `z = height` (m).
+pub(super) fn capsule_floor(start: Vector3<f64>, end: Vector3<f64>, radius: f64, height: f64) -> Closest {
+    let lowest = if end.z < start.z { end } else { start };
+    Closest {
+        distance: lowest.z - radius - height,
+        point_a: lowest - Vector3::z() * radius,
+        point_b: Vector3::new(lowest.x, lowest.y, height),
+        normal: -Vector3::z(),
+    }
+}
+
+/// A unit vector perpendicular to `axis`, if `axis` is not zero.
+fn perpendicular(axis: Vector3<f64>) -> Option<Vector3<f64>> {
+    let axis = axis.try_normalize(0.0)?;
+    let helper = if axis.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    Some(axis.cross(&helper).normalize())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skew_segments_meet_at_their_common_perpendicular() {
+        let (a, b) = closest_points_of_segments(
+            Vector3::new(-1.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.3, -1.0, 2.0),
+            Vector3::new(0.3, 1.0, 2.0),
+        );
+        assert!((a - Vector3::new(0.3, 0.0, 0.0)).norm() < 1e-15, "{a}");
+        assert!((b - Vector3::new(0.3, 0.0, 2.0)).norm() < 1e-15, "{b}");
+    }
+
+    #[test]
+    fn parallel_and_point_segments_are_handled() {
+        let (a, b) = closest_points_of_segments(
+            Vector3::zeros(),
+            Vector3::x(),
+            Vector3::new(0.5, 1.0, 0.0),
+            Vector3::new(3.0, 1.0, 0.0),
+        );
+        assert!(((b - a).norm() - 1.0).abs() < 1e-15, "{a} {b}");
+        let point = Vector3::new(0.2, 0.3, 0.4);
+        let (a, b) = closest_points_of_segments(point, point, Vector3::zeros(), Vector3::z());
+        assert_eq!((a, b), (point, Vector3::new(0.0, 0.0, 0.4)));
+        let (a, b) = closest_points_of_segments(Vector3::zeros(), Vector3::z(), point, point);
+        assert_eq!((a, b), (Vector3::new(0.0, 0.0, 0.4), point));
+    }
+
+    #[test]
+    fn crossing_capsules_penetrate_by_both_radii() {
+        let closest = capsules(-Vector3::x(), Vector3::x(), 0.1, -Vector3::y(), Vector3::y(), 0.2);
+        assert!((closest.distance + 0.3).abs() < 1e-15);
+        assert!((closest.normal.norm() - 1.0).abs() < 1e-15);
+        assert!(closest.normal.x.abs() < 1e-15);
+    }
+
+    #[test]
+    fn floor_distance_uses_the_lower_end() {
+        let closest = capsule_floor(Vector3::new(0.0, 0.0, 1.0), Vector3::new(1.0, 0.0, 0.1), 0.06, 0.0);
+        assert!((closest.distance - 0.04).abs() < 1e-15);
+        assert_eq!(closest.point_b, Vector3::new(1.0, 0.0, 0.0));
+    }
+}

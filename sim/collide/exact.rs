@@ -1,0 +1,304 @@
+//! Exact signed distances with parry3d-f64: AABB and bounding-capsule lower bounds, every
+//! collider pair within the margin, then branch and bound for the closest pair; mesh hulls beside
+//! the meshes.
+
+use super::narrow::{measure_convex, measure_floor, measure_shapes, Measured};
+use super::world::{CollisionWorld, Other};
+use super::{approx, effective_margin, Body, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
+use crate::frames::{parry_pose, vector_from_parry};
+use nalgebra::Isometry3;
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Vector;
+use std::cmp::Reverse;
+
+/// Subtracted from every AABB bound (m): the bound and a narrow phase round differently, and a
+/// bound a rounding error above the distance it bounds could skip the closest pair.
+const BOUND_ROUNDING_M: f64 = 1e-9;
+
+/// Signed distances of every checked pair at one configuration, in the exact geometry.
+///
+/// `link_in_world[i]` is the world pose of link `i` (e.g. `KinematicsWorkspace::link_in_world`
+/// after `Model::forward`). Fills `out` (see [`Distances`]): every pair within `query.margin`, the
+/// closest pair, one estimate per pair, and hull disagreements. Reusing `out` across calls keeps its
+/// buffers, so a call in steady state does not allocate.
+///
+/// # Panics
+/// When `link_in_world.len()` differs from [`CollisionWorld::link_count`].
+pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query: &QueryOptions, out: &mut Distances) {
+    assert_eq!(
+        link_in_world.len(),
+        world.link_count(),
+        "one pose per link of the model the collision world was built for"
+    );
+    let margin = effective_margin(query.margin);
+    out.reset(margin, world.pairs.len());
+    let Distances {
+        scratch,
+        findings,
+        narrow_phase_calls,
+        hull_calls,
+        estimates,
+        ..
+    } = out;
+
+    scratch.link_poses.clear();
+    scratch.link_poses.extend(link_in_world.iter().map(parry_pose));
+    scratch.poses.clear();
+    scratch.aabbs.clear();
+    scratch.segments.clear();
+    for collider in &world.colliders {
+        let pose = scratch.link_poses[collider.link] * collider.link_from_shape;
+        let bounding = &collider.geometry.bounding;
+        scratch.aabbs.push(aabb_of(&*collider.geometry.shape, &pose));
+        scratch
+            .segments
+            .push([bounding.start, bounding.end].map(|end| vector_from_parry(pose * end)));
+        scratch.poses.push(pose);
+    }
+    scratch.bounds.clear();
+    scratch.stages.clear();
+    for candidate in &world.candidates {
+        let a = &scratch.aabbs[candidate.a];
+        let bound = match candidate.b {
+            Other::Link(b) => aabb_bound(a, &scratch.aabbs[b]),
+            Other::Obstacle(k) => aabb_bound(a, &world.obstacles[k].aabb),
+            Other::Floor => a.mins.z - world.floor.expect("floor pairs exist only with a floor"),
+        };
+        scratch.bounds.push(bound - BOUND_ROUNDING_M);
+        scratch.stages.push(Stage::Boxed);
+    }
+
+    // Collider pairs by bound, smallest first; each is measured only if it can change an answer:
+    // a pair's distance within the margin (it could be below the pair's best so far), the
+    // closest pair (it could be below the closest so far), or a hull finding. Its bounding
+    // capsules are tried before its shapes.
+    let mut closest = f64::INFINITY;
+    scratch.queue.clear();
+    scratch.queue.extend(
+        scratch
+            .bounds
+            .iter()
+            .enumerate()
+            .map(|(index, &bound)| Reverse((order_key(bound), index))),
+    );
+    while let Some(Reverse((_, index))) = scratch.queue.pop() {
+        let bound = scratch.bounds[index];
+        if bound > margin && bound >= closest {
+            break;
+        }
+        let candidate = &world.candidates[index];
+        let pair_best = scratch.best[candidate.pair].map_or(f64::INFINITY, |best| best.distance);
+        let hulls = query.hulls && bound <= margin && world.has_mesh(candidate);
+        if !(bound < closest || (bound <= margin && (bound < pair_best || hulls))) {
+            continue;
+        }
+        if scratch.stages[index] == Stage::Boxed && candidate.b != Other::Floor {
+            let bound = tighten(world, index, scratch);
+            scratch.queue.push(Reverse((order_key(bound), index)));
+            continue;
+        }
+        *narrow_phase_calls += 1;
+        let (distance, hull_measured) = measure(world, index, scratch, findings, hulls);
+        closest = closest.min(distance);
+        *hull_calls += usize::from(hull_measured);
+    }
+
+    // A pair's estimate is exact when no unmeasured collider pair of it could be closer.
+    estimates.extend(world.pairs.iter().zip(&scratch.best).map(|(pair, best)| PairEstimate {
+        a: pair.a,
+        b: pair.b,
+        distance: best.map_or(f64::INFINITY, |best| best.distance),
+        exact: true,
+    }));
+    for (index, candidate) in world.candidates.iter().enumerate() {
+        let estimate = &mut estimates[candidate.pair];
+        if scratch.stages[index] != Stage::Measured && scratch.bounds[index] < estimate.distance {
+            estimate.distance = scratch.bounds[index];
+            estimate.exact = false;
+        }
+    }
+    out.collect();
+}
+
+/// Measures candidate `index` (and its hulls when `with_hulls` and a side is a mesh), records it
+/// in `scratch`, and returns its signed distance and whether hulls were measured.
+fn measure(
+    world: &CollisionWorld,
+    index: usize,
+    scratch: &mut super::Scratch,
+    findings: &mut Vec<CollisionFinding>,
+    with_hulls: bool,
+) -> (f64, bool) {
+    let candidate = &world.candidates[index];
+    let a = &world.colliders[candidate.a];
+    let pose_a = &scratch.poses[candidate.a];
+    let part_a = Part {
+        body: Body::Link(a.link),
+        element: a.element,
+    };
+    let (pose_b, b, part_b) = match candidate.b {
+        Other::Floor => {
+            let height = world.floor.expect("floor pairs exist only with a floor");
+            let measured = measure_floor(pose_a, &a.geometry, height);
+            record(scratch, index, candidate.pair, measured, part_a, floor_part());
+            return (measured.distance, false);
+        }
+        Other::Link(j) => {
+            let b = &world.colliders[j];
+            let part = Part {
+                body: Body::Link(b.link),
+                element: b.element,
+            };
+            (&scratch.poses[j], &b.geometry, part)
+        }
+        Other::Obstacle(k) => {
+            let part = Part {
+                body: Body::Obstacle(k),
+                element: 0,
+            };
+            (&world.obstacles[k].world_from_shape, &world.obstacles[k].geometry, part)
+        }
+    };
+    let measured = measure_shapes(pose_a, &a.geometry, pose_b, b);
+    let with_hulls = with_hulls && (a.geometry.is_mesh() || b.is_mesh());
+    if with_hulls {
+        let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);
+        let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
+        let hull_distance = measure_convex(pose_a, &**hull_a, pose_b, &**hull_b).distance;
+        if hull_distance <= 0.0 && measured.distance > 0.0 {
+            findings.push(CollisionFinding::HullDisagreement {
+                pair: candidate.pair,
+                a: part_a,
+                b: part_b,
+                exact_distance: measured.distance,
+                hull_distance,
+            });
+        }
+    }
+    record(scratch, index, candidate.pair, measured, part_a, part_b);
+    (measured.distance, with_hulls)
+}
+
+/// Raises candidate `index`'s bound to its bounding capsules' signed distance (the floor keeps
+/// its AABB bound, which is exact for the lowest point) and returns the bound.
+fn tighten(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch) -> f64 {
+    let candidate = &world.candidates[index];
+    let [start, end] = scratch.segments[candidate.a];
+    let radius = world.colliders[candidate.a].geometry.bounding.radius;
+    let other = match candidate.b {
+        Other::Link(b) => Some((scratch.segments[b], world.colliders[b].geometry.bounding.radius)),
+        Other::Obstacle(k) => Some((world.obstacles[k].bounding, world.obstacles[k].geometry.bounding.radius)),
+        Other::Floor => None,
+    };
+    if let Some(([other_start, other_end], other_radius)) = other {
+        let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance;
+        let bound = &mut scratch.bounds[index];
+        *bound = bound.max(capsules - BOUND_ROUNDING_M);
+    }
+    scratch.stages[index] = Stage::Capsuled;
+    scratch.bounds[index]
+}
+
+/// Stores a measured candidate: its bound becomes its distance, and its pair's best improves.
+fn record(scratch: &mut super::Scratch, index: usize, pair: usize, measured: Measured, a: Part, b: Part) {
+    scratch.bounds[index] = measured.distance;
+    scratch.stages[index] = Stage::Measured;
+    let best = &mut scratch.best[pair];
+    if best.is_none_or(|best| measured.distance < best.distance) {
+        *best = Some(measured.into_pair_distance(pair, a, b));
+    }
+}
+
+/// A key whose unsigned order is the total order of `value`.
+fn order_key(value: f64) -> u64 {
+    let bits = value.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+/// The part the floor is.
+pub(super) fn floor_part() -> Part {
+    Part {
+        body: Body::Floor,
+        element: 0,
+    }
+}
+
+/// The world AABB of a shape at `pose`: closed form for cylinders (parry asks their support
+/// function six times), parry's otherwise.
+fn aabb_of(shape: &dyn parry3d_f64::shape::Shape, pose: &parry3d_f64::math::Pose) -> Aabb {
+    let Some(cylinder) = shape.as_cylinder() else {
+        return shape.compute_aabb(pose);
+    };
+    // Along each world axis: half the axis's projection plus the radius times the sine.
+    let axis = pose.rotation * Vector::Y;
+    let reach = |a: f64| a.abs() * cylinder.half_height + (1.0 - a * a).max(0.0).sqrt() * cylinder.radius;
+    let half = Vector::new(reach(axis.x), reach(axis.y), reach(axis.z));
+    Aabb::new(pose.translation - half, pose.translation + half)
+}
+
+/// A lower bound on the signed distance of two bodies inside these boxes (m): the gap between
+/// the boxes, or, when they overlap, minus their smallest overlap along an axis (moving one body
+/// that far along that axis separates the boxes, hence the bodies).
+pub(super) fn aabb_bound(a: &Aabb, b: &Aabb) -> f64 {
+    let gap = (b.mins - a.maxs).max(a.mins - b.maxs);
+    let outside = gap.max(Vector::ZERO);
+    if outside == Vector::ZERO {
+        gap.max_element()
+    } else {
+        outside.length()
+    }
+}
+
+impl Measured {
+    fn into_pair_distance(self, pair: usize, a: Part, b: Part) -> PairDistance {
+        PairDistance {
+            pair,
+            a,
+            b,
+            distance: self.distance,
+            point_a: vector_from_parry(self.point_a),
+            point_b: vector_from_parry(self.point_b),
+            normal: vector_from_parry(self.normal),
+            enclosed: self.enclosed,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn aabb(mins: [f64; 3], maxs: [f64; 3]) -> Aabb {
+        Aabb::new(Vector::from_array(mins), Vector::from_array(maxs))
+    }
+
+    #[test]
+    fn aabb_bound_is_the_gap_or_minus_the_smallest_overlap() {
+        let unit = aabb([0.0; 3], [1.0; 3]);
+        assert_eq!(aabb_bound(&unit, &aabb([4.0, 5.0, 0.0], [5.0, 6.0, 1.0])), 5.0);
+        assert_eq!(aabb_bound(&unit, &aabb([0.5, 0.9, -1.0], [2.0, 2.0, 2.0])), -0.09999999999999998);
+        assert_eq!(aabb_bound(&aabb([4.0, 5.0, 0.0], [5.0, 6.0, 1.0]), &unit), 5.0);
+    }
+
+    #[test]
+    fn cylinder_aabb_matches_parry() {
+        let cylinder = parry3d_f64::shape::Cylinder::new(0.3, 0.1);
+        let pose = parry3d_f64::math::Pose::new(Vector::new(0.1, -0.2, 0.3), Vector::new(0.4, -1.1, 0.7));
+        let (ours, parry) = (aabb_of(&cylinder, &pose), parry3d_f64::shape::Shape::compute_aabb(&cylinder, &pose));
+        assert!(
+            (ours.mins - parry.mins).length() < 1e-15 && (ours.maxs - parry.maxs).length() < 1e-15,
+            "{ours:?} {parry:?}"
+        );
+    }
+
+    #[test]
+    fn order_keys_sort_like_the_numbers() {
+        let values = [f64::NEG_INFINITY, -2.0, -1e-300, -0.0, 0.0, 1e-300, 3.0, f64::INFINITY];
+        let keys: Vec<u64> = values.iter().map(|&v| order_key(v)).collect();
+        assert!(keys.windows(2).all(|w| w[0] < w[1]), "{keys:?}");
+    }
+}

@@ -1,0 +1,173 @@
+//! Collision-aware refinement: damped least squares on the goal with the gradient of the paper's
+//! exponential collision loss in the null space of the task, and random restarts when stuck.
+//!
+//! The loss of one pair at signed distance `d` (threshold `t = 0.12 m`) is
+//! `L(d) = (exp(-d / t) - e^-1) / (1 - e^-1)` for `d <= t`, else 0. Its gradient in joint space is
+//! `L'(d) * dd/dq`, with `dd/dq = n . (J_b(p_b) - J_a(p_a))` from the witness points `p_a`, `p_b`
+//! and the normal `n` (from `a` to `b`); `J_x(p)` is the linear Jacobian of point `p` on link `x`.
+
+use super::dls::{Convergence, Solver};
+use crate::collide::{self, Body, CollisionWorld, Distances, QueryOptions};
+use crate::model::{JointKind, KinematicsWorkspace, Model};
+use crate::scenario::Goal;
+use nalgebra::{DVector, Isometry3, Vector3};
+
+/// The paper's collision loss threshold `t` (m).
+pub const COLLISION_THRESHOLD_M: f64 = 0.12;
+/// The paper's weight of the collision loss against the pose distance.
+pub const COLLISION_WEIGHT: f64 = 0.6;
+/// Largest joint change the collision term may ask for in one step (rad or m).
+const MAX_AVOIDANCE_STEP: f64 = 0.05;
+/// Steps without getting out of contact after which the refinement jumps to a fresh start.
+const STUCK_STEPS: usize = 20;
+
+/// Clearance of one configuration in both geometric models.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Clearance {
+    /// Smallest signed distance over all checked pairs, exact geometry (m).
+    pub exact_m: f64,
+    /// Smallest signed distance over all checked pairs, the paper's capsule model (m).
+    pub approximate_m: f64,
+}
+
+/// Collision queries for IK, with their buffers.
+pub(crate) struct Checker<'a> {
+    world: &'a CollisionWorld,
+    model: &'a Model,
+    ws: KinematicsWorkspace,
+    exact: Distances,
+    approximate: Distances,
+    gradient: DVector<f64>,
+}
+
+impl<'a> Checker<'a> {
+    pub(crate) fn new(model: &'a Model, world: &'a CollisionWorld) -> Self {
+        Self {
+            world,
+            model,
+            ws: model.workspace(),
+            exact: Distances::new(),
+            approximate: Distances::new(),
+            gradient: DVector::zeros(model.dof()),
+        }
+    }
+
+    /// Exact and approximate clearance at `q`.
+    pub(crate) fn clearance(&mut self, q: &[f64]) -> Clearance {
+        self.model.forward(q, &mut self.ws);
+        let query = QueryOptions { margin: 0.0, hulls: false };
+        collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
+        collide::approximate_distances(self.world, &self.ws.link_in_world, &query, &mut self.approximate);
+        let smallest = |d: &Distances| d.closest.map_or(f64::INFINITY, |c| c.distance);
+        Clearance {
+            exact_m: smallest(&self.exact),
+            approximate_m: smallest(&self.approximate),
+        }
+    }
+
+    /// Exact clearance at `q`, and the gradient of the weighted collision loss in `self.gradient`.
+    fn loss_gradient(&mut self, q: &[f64]) -> f64 {
+        self.model.forward(q, &mut self.ws);
+        let query = QueryOptions {
+            margin: COLLISION_THRESHOLD_M,
+            hulls: false,
+        };
+        collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
+        self.gradient.fill(0.0);
+        let scale = 1.0 / (1.0 - (-1.0f64).exp());
+        for pair in &self.exact.within_margin {
+            let slope = -COLLISION_WEIGHT * scale * (-pair.distance / COLLISION_THRESHOLD_M).exp() / COLLISION_THRESHOLD_M;
+            if let Body::Link(link) = pair.a.body {
+                add_point_gradient(
+                    self.model,
+                    &self.ws.link_in_world,
+                    &mut self.gradient,
+                    link,
+                    &pair.point_a,
+                    &(-pair.normal),
+                    slope,
+                );
+            }
+            if let Body::Link(link) = pair.b.body {
+                add_point_gradient(
+                    self.model,
+                    &self.ws.link_in_world,
+                    &mut self.gradient,
+                    link,
+                    &pair.point_b,
+                    &pair.normal,
+                    slope,
+                );
+            }
+        }
+        self.exact.closest.map_or(f64::INFINITY, |c| c.distance)
+    }
+}
+
+/// Adds `slope * direction . J(link, point)` to `gradient`, `J` the linear Jacobian of a point
+/// fixed to `link`.
+fn add_point_gradient(
+    model: &Model,
+    link_in_world: &[Isometry3<f64>],
+    gradient: &mut DVector<f64>,
+    link: usize,
+    point: &Vector3<f64>,
+    direction: &Vector3<f64>,
+    slope: f64,
+) {
+    // Joint j moves links j + 1 and beyond; its frame is the frame of link j + 1.
+    for j in 0..link.min(model.dof()) {
+        let frame = &link_in_world[j + 1];
+        let axis = frame.rotation * model.joints[j].axis.into_inner();
+        let velocity = match model.joints[j].kind {
+            JointKind::Prismatic => axis,
+            _ => axis.cross(&(point - frame.translation.vector)),
+        };
+        gradient[j] += slope * direction.dot(&velocity);
+    }
+}
+
+/// Refines `q` towards a pose-reaching, collision-free configuration within `steps` steps.
+/// Returns true when it got there.
+pub(crate) fn refine<R: rand::Rng>(
+    solver: &mut Solver,
+    checker: &mut Checker,
+    goal: &Goal,
+    q: &mut [f64],
+    steps: usize,
+    done: Convergence,
+    rng: &mut R,
+) -> bool {
+    let mut stuck = 0;
+    let mut step = 0;
+    while step < steps {
+        let clearance = checker.loss_gradient(q);
+        let pose_ok = solver.converged_at(goal, q, done);
+        if clearance > 0.0 {
+            if pose_ok {
+                return true;
+            }
+            // Free but not at the goal: a plain solve (which restarts itself when stuck).
+            stuck = 0;
+            step += 1 + solver.solve(goal, q, (steps - step).min(50), done, rng);
+            continue;
+        }
+        stuck += 1;
+        if stuck >= STUCK_STEPS {
+            // A collision the null space cannot resolve (a 6-dof pose goal has none): this
+            // branch of solutions is blocked, try another.
+            q.copy_from_slice(&checker.model.random_configuration(rng));
+            step += 1 + solver.solve(goal, q, (steps - step).min(50), done, rng);
+            stuck = 0;
+            continue;
+        }
+        // Descend the loss inside the task's null space, then restore the task.
+        let largest = checker.gradient.amax();
+        if largest > 0.0 {
+            let scale = (MAX_AVOIDANCE_STEP / largest).min(1.0);
+            solver.null_space_step(goal, q, &checker.gradient, -scale);
+        }
+        step += 1 + solver.solve(goal, q, 3, done, rng);
+    }
+    checker.loss_gradient(q) > 0.0 && solver.converged_at(goal, q, done)
+}
