@@ -36,27 +36,30 @@ fn ik(c: &mut Criterion) {
     }
 }
 
-/// Every goal of a scenario, collision-aware, with exact verification of each solution.
+/// Every goal of a scenario, collision-aware, with exact verification of each solution; the
+/// scenarios come from the same generators as the committed files.
 fn scenarios(c: &mut Criterion) {
+    use proving_ground::scenario::generate;
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut group = c.benchmark_group("scenario");
     group.sample_size(10);
+    let task = generate::cluttered(0, generate::CLUTTERED_MASTER_SEED);
+    let workspace =
+        generate::workspace(generate::WORKSPACE_GOALS, 1.0, Tolerance::Pose, generate::WORKSPACE_SEED).expect("valid parameters");
+    let course = generate::course(generate::COURSE_SEED);
     for (design, scenario) in [
-        ("designs/modular-elbow.json", "scenarios/cluttered/task-00.json"),
-        ("designs/ur20.json", "scenarios/cluttered/task-00.json"),
-        ("designs/ur20.json", "scenarios/workspace/pose.json"),
-        ("designs/paper-real-world.json", "scenarios/course.json"),
+        ("designs/modular-elbow.json", &task),
+        ("designs/ur20.json", &task),
+        ("designs/ur20.json", &workspace),
+        ("designs/paper-real-world.json", &course),
     ] {
         let model = load_model(&root.join(design), &LoadOptions::default()).expect("shipped design loads");
-        let scenario = proving_ground::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
         let placed = model.placed(&scenario.world_from_base);
-        let opts = proving_ground::collide::CollideOptions {
-            excluded_pairs: proving_ground::collide::structural_overlaps(&placed, &Default::default()).expect("geometry builds"),
-            ..Default::default()
-        };
-        let world = proving_ground::collide::world(&placed, &scenario, &opts).expect("world builds");
+        let excluded_pairs = proving_ground::collide::structural_overlaps(&placed, &Default::default()).expect("geometry builds");
+        let opts = proving_ground::collide::CollideOptions { excluded_pairs };
+        let world = proving_ground::collide::world(&placed, scenario, &opts).expect("world builds");
         group.bench_function(format!("{}/{}", model.name, scenario.name), |b| {
-            b.iter(|| black_box(proving_ground::ik::solve_goals(&placed, &scenario, Some(&world), &IkOptions::default()).len()))
+            b.iter(|| black_box(proving_ground::ik::solve_goals(&placed, scenario, Some(&world), &IkOptions::default()).len()))
         });
     }
     group.finish();

@@ -198,23 +198,6 @@ impl<'a> CapsuleRobot<'a> {
         clearance
     }
 
-    /// Self-clearance per checked link pair (m), for diagnostics.
-    #[cfg(test)]
-    pub(crate) fn self_clearance_by_pair(&self) -> Vec<((usize, usize), f64)> {
-        self.self_pairs
-            .iter()
-            .map(|&(i, j)| {
-                let mut clearance = f64::INFINITY;
-                for a in self.world.iter().filter(|c| c.paper && c.link == i) {
-                    for b in self.world.iter().filter(|c| c.paper && c.link == j) {
-                        clearance = clearance.min(segment_distance(&a.start, &a.end, &b.start, &b.end) - a.radius - b.radius);
-                    }
-                }
-                ((i, j), clearance)
-            })
-            .collect()
-    }
-
     /// Per link, an upper bound on how far any capsule axis point of the link moves when the
     /// joints change by `dq` (rad): `sum_j reach_j |dq_j|` over the joints before it, since a
     /// rotation by `t` about an axis moves a point at distance `r` by at most `r t`.

@@ -24,7 +24,7 @@ use crate::scenario::{Floor, Goal, Obstacle, Scenario, Tolerance};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// The paper's real-world robot, `designs/paper-real-world.json`.
 pub const COURSE_MODULES: [SlotOption; 5] = [
@@ -50,7 +50,7 @@ pub const COURSE_PATH_STEP_RAD: f64 = 0.01;
 /// across its second link (tool at (0.2, 0.2, 0)), which is a self-collision under both the exact
 /// and the capsule geometry. This is the arm upright (elbow up, tube pointing forward), clear of
 /// itself and the floor.
-pub const COURSE_HOME: [f64; 5] = [0.0, 1.2, -1.2, 1.5708, 0.0];
+pub const COURSE_HOME: [f64; 5] = [0.0, 1.2, -1.2, FRAC_PI_2, 0.0];
 
 /// One obstacle of the course: name, pose, shape. Sizes in metres.
 fn obstacle(name: &str, position: [f64; 3], shape: Shape) -> Obstacle {
@@ -86,9 +86,21 @@ pub fn course_obstacles() -> Vec<Obstacle> {
 /// Per region, three keyframes of joints 1 to 4 (rad): beside the obstacle, over it, beside it
 /// on the other side.
 const KEYFRAMES: [[[f64; 4]; 3]; 3] = [
-    [[1.2, 0.3, -0.9, 1.5708], [0.8, 0.9, -1.5, 1.5708], [0.4, 0.3, -0.9, 1.5708]],
-    [[0.2, 0.3, -0.9, 1.5708], [-0.2, 0.9, -1.5, 1.5708], [-0.6, 0.3, -0.9, 1.5708]],
-    [[-0.8, 0.3, -0.9, 1.5708], [-1.2, 0.9, -1.5, 1.5708], [-1.6, 0.3, -0.9, 1.5708]],
+    [
+        [1.2, 0.3, -0.9, FRAC_PI_2],
+        [0.8, 0.9, -1.5, FRAC_PI_2],
+        [0.4, 0.3, -0.9, FRAC_PI_2],
+    ],
+    [
+        [0.2, 0.3, -0.9, FRAC_PI_2],
+        [-0.2, 0.9, -1.5, FRAC_PI_2],
+        [-0.6, 0.3, -0.9, FRAC_PI_2],
+    ],
+    [
+        [-0.8, 0.3, -0.9, FRAC_PI_2],
+        [-1.2, 0.9, -1.5, FRAC_PI_2],
+        [-1.6, 0.3, -0.9, FRAC_PI_2],
+    ],
 ];
 
 /// The joint configurations (rad) the course's goals are the tool poses of, in goal order: the
@@ -219,319 +231,5 @@ pub fn course(seed: u64) -> Scenario {
         goals,
         home: Some(COURSE_HOME.to_vec()),
         provenance: Some(provenance("course", seed, &[("robot", "designs/paper-real-world.json".into())])),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Position IK on joints 1-4 by damped least squares with a finite-difference Jacobian.
-    fn ik(model: &Model, target: &Vector3<f64>, seed: &[f64]) -> Option<Vec<f64>> {
-        let mut q = seed.to_vec();
-        for _ in 0..200 {
-            let p = model.tool_pose(&q).translation.vector;
-            let e = target - p;
-            if e.norm() < 1e-10 {
-                return Some(q);
-            }
-            let mut jac = nalgebra::Matrix3x4::zeros();
-            for j in 0..4 {
-                let mut qq = q.clone();
-                qq[j] += 1e-7;
-                let d = (model.tool_pose(&qq).translation.vector - p) / 1e-7;
-                jac.set_column(j, &d);
-            }
-            let jjt = jac * jac.transpose() + nalgebra::Matrix3::identity() * 1e-4;
-            let dq = jac.transpose() * jjt.try_inverse()? * e;
-            for j in 0..4 {
-                q[j] += dq[j].clamp(-0.2, 0.2);
-            }
-        }
-        None
-    }
-
-    fn score(robot: &mut CapsuleRobot<'_>, q: &[f64], obstacles: &[Obstacle]) -> (f64, f64, f64) {
-        robot.set(q);
-        let exact = robot.exact();
-        (
-            robot.obstacle_clearance(obstacles, &exact),
-            robot.floor_clearance(FLOOR_HEIGHT_M, &exact),
-            robot.self_clearance(),
-        )
-    }
-
-    fn closest_point(obstacle: &Obstacle, p: &Vector3<f64>) -> Vector3<f64> {
-        let pose = &obstacle.world_from_shape;
-        let local = pose.inverse_transform_point(&nalgebra::Point3::from(*p)).coords;
-        let near = match &obstacle.shape {
-            Shape::Sphere { radius } => local.normalize() * *radius,
-            Shape::Box { half_extents } => Vector3::new(
-                local.x.clamp(-half_extents[0], half_extents[0]),
-                local.y.clamp(-half_extents[1], half_extents[1]),
-                local.z.clamp(-half_extents[2], half_extents[2]),
-            ),
-            Shape::Cylinder { radius, length } => {
-                let radial = local.xy().norm();
-                let scale = if radial > *radius { radius / radial } else { 1.0 };
-                Vector3::new(local.x * scale, local.y * scale, local.z.clamp(-length / 2.0, length / 2.0))
-            }
-            _ => local,
-        };
-        pose.transform_point(&nalgebra::Point3::from(near)).coords
-    }
-
-    #[test]
-    #[ignore = "exploration aid: searches keyframes"]
-    fn explore_keyframes() {
-        let model = modular_model(&COURSE_MODULES);
-        let mut robot = CapsuleRobot::new(&model);
-        let obstacles = course_obstacles();
-        let mut obstacles = obstacles;
-        if let Ok(b) = std::env::var("BOX") {
-            let b: [f64; 6] = serde_json::from_str(&b).expect("json");
-            obstacles[0] = obstacle(
-                "box",
-                [b[0], b[1], b[2]],
-                Shape::Box {
-                    half_extents: [b[3], b[4], b[5]],
-                },
-            );
-        }
-        // Per region: [cx, cy, half_width, top, z_low, offset]
-        let arches: Vec<[f64; 6]> = serde_json::from_str(&std::env::var("ARCHES").expect("ARCHES")).expect("json");
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let value = |s: (f64, f64, f64)| if s.1 <= 0.0 { -1.0 } else { s.0.min(s.2 + 0.03) };
-        let min_static: f64 = std::env::var("MIN_STATIC").ok().and_then(|v| v.parse().ok()).unwrap_or(0.065);
-        let mut candidates: Vec<Vec<(Vec<f64>, f64)>> = Vec::new();
-        for (region, arch) in arches.iter().enumerate() {
-            let [cx, cy, w, top, z_low, d] = *arch;
-            let phi = cy.atan2(cx);
-            let tangential = Vector3::new(-phi.sin(), phi.cos(), 0.0);
-            let side = top - z_low;
-            let quarter = PI / 2.0 * d;
-            let total = 2.0 * side + 2.0 * quarter + 2.0 * w;
-            let points: Vec<Vector3<f64>> = (0..COURSE_GOALS_PER_REGION)
-                .map(|i| {
-                    let mut l = total * i as f64 / (COURSE_GOALS_PER_REGION - 1) as f64;
-                    // (u along tangential, z)
-                    let (u, z) = if l <= side {
-                        (w + d, z_low + l)
-                    } else if {
-                        l -= side;
-                        l <= quarter
-                    } {
-                        let a = l / d;
-                        (w + d * a.cos(), top + d * a.sin())
-                    } else if {
-                        l -= quarter;
-                        l <= 2.0 * w
-                    } {
-                        (w - l, top + d)
-                    } else if {
-                        l -= 2.0 * w;
-                        l <= quarter
-                    } {
-                        let a = PI / 2.0 + l / d;
-                        (-w + d * a.cos(), top + d * a.sin())
-                    } else {
-                        l -= quarter;
-                        (-w - d, top - l)
-                    };
-                    Vector3::new(cx, cy, 0.0) + tangential * u + Vector3::z() * z
-                })
-                .collect();
-            let obstacle = &obstacles[region];
-            let mut list: Vec<Vec<(Vec<f64>, f64)>> = Vec::new();
-            for p in &points {
-                let mut found: Vec<(Vec<f64>, f64)> = Vec::new();
-                for _ in 0..1000 {
-                    let seed: Vec<f64> = (0..5).map(|j| if j < 4 { rng.random_range(-PI..PI) } else { 0.0 }).collect();
-                    if let Some(mut q) = ik(&model, p, &seed) {
-                        for v in q.iter_mut().take(4) {
-                            *v = (*v + PI).rem_euclid(2.0 * PI) - PI;
-                        }
-                        let near = closest_point(obstacle, &model.tool_pose(&q).translation.vector);
-                        q[4] = pointing_spin(&model, &q, &near);
-                        let sc = score(&mut robot, &q, &obstacles);
-                        if sc.1 > 0.0
-                            && sc.2 > 0.005
-                            && sc.0 >= min_static
-                            && !found.iter().any(|(f, _)| f.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-3))
-                        {
-                            found.push((q, sc.0));
-                        }
-                    }
-                }
-                println!("region {region}: point {p:?}: {} candidates", found.len());
-                list.push(found);
-            }
-            candidates.extend(list);
-            let _ = value;
-        }
-        // Beam search over the whole tour from home.
-        let unwrap = |q: &[f64], near: &[f64]| -> Vec<f64> {
-            q.iter()
-                .zip(near)
-                .map(|(v, n)| v + (2.0 * PI) * ((n - v) / (2.0 * PI)).round())
-                .collect()
-        };
-        let lambda: f64 = std::env::var("LAMBDA").ok().and_then(|v| v.parse().ok()).unwrap_or(0.01);
-        let width: usize = std::env::var("WIDTH").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
-        let threshold: f64 = std::env::var("THRESH").ok().and_then(|v| v.parse().ok()).unwrap_or(0.06);
-        let home_target: Vec<f64> = serde_json::from_str(&std::env::var("HOME_TARGET").expect("HOME_TARGET")).expect("json");
-        let mut beam: Vec<(f64, f64, Vec<Vec<f64>>)> = Vec::new();
-        for _ in 0..400 {
-            let seed: Vec<f64> = (0..5).map(|j| if j < 4 { rng.random_range(-PI..PI) } else { 0.0 }).collect();
-            if let Some(mut q) = ik(&model, &Vector3::new(home_target[0], home_target[1], home_target[2]), &seed) {
-                for v in q.iter_mut().take(4) {
-                    *v = ((*v + PI).rem_euclid(2.0 * PI) - PI) * 1000.0;
-                    *v = v.round() / 1000.0;
-                }
-                q[4] = 0.0;
-                let sc = score(&mut robot, &q, &obstacles);
-                if sc.1 > 0.0 && sc.2 > 0.005 && sc.0 > 0.1 {
-                    beam.push((f64::INFINITY, 0.0, vec![q]));
-                }
-            }
-        }
-        if let Ok(home) = std::env::var("HOME_Q") {
-            let q: Vec<f64> = serde_json::from_str(&home).expect("json");
-            println!("fixed home {q:?}: {:?}", score(&mut robot, &q, &obstacles));
-            beam = vec![(f64::INFINITY, 0.0, vec![q])];
-        }
-        println!("{} home candidates", beam.len());
-        for (index, list) in candidates.iter().enumerate() {
-            let mut next: Vec<(f64, f64, Vec<Vec<f64>>)> = Vec::new();
-            for (worst, travel, chain) in &beam {
-                let previous = chain.last().expect("nonempty");
-                for (q, _) in list {
-                    let u = unwrap(q, previous);
-                    if u.iter().any(|v| v.abs() > 2.0 * PI) {
-                        continue;
-                    }
-                    let jump: f64 = u
-                        .iter()
-                        .zip(previous)
-                        .take(4)
-                        .map(|(a, b)| (a - b).abs())
-                        .fold(0.0, f64::max)
-                        .powi(2);
-                    let path = path_clearance(&mut robot, previous, &u, &obstacles, 0.02);
-                    let w = worst.min(path);
-                    if w < threshold {
-                        continue;
-                    }
-                    let mut c = chain.clone();
-                    c.push(u);
-                    next.push((w, travel + jump, c));
-                }
-            }
-            next.sort_by(|a, b| (a.1 - b.0 / lambda).total_cmp(&(b.1 - a.0 / lambda)));
-            let mut kept: Vec<(f64, f64, Vec<Vec<f64>>)> = Vec::new();
-            for state in next {
-                let last = state.2.last().expect("nonempty");
-                if kept.iter().any(|k| k.2.last().expect("nonempty") == last) {
-                    continue;
-                }
-                kept.push(state);
-                if kept.len() == width {
-                    break;
-                }
-            }
-            let next = kept;
-            if next.is_empty() {
-                println!("dead end at goal {index}");
-                return;
-            }
-            beam = next;
-        }
-        let (worst, travel, chain) = &beam[0];
-        println!("tour worst path clearance {worst:.4} travel {travel:.2}");
-        println!("home {:?}", chain[0]);
-        let mut previous = chain[0].clone();
-        for (i, q) in chain.iter().skip(1).enumerate() {
-            let s = score(&mut robot, q, &obstacles);
-            let p = path_clearance(&mut robot, &previous, q, &obstacles, COURSE_PATH_STEP_RAD);
-            println!(
-                "            [{}], // {i}: static {:.3} path {:.3} self {:.3}",
-                q.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", "),
-                s.0,
-                p,
-                s.2
-            );
-            previous = q.clone();
-        }
-    }
-
-    fn path_clearance(robot: &mut CapsuleRobot<'_>, a: &[f64], b: &[f64], obstacles: &[Obstacle], step: f64) -> f64 {
-        let delta: Vec<f64> = b.iter().zip(a).map(|(b, a)| b - a).collect();
-        let largest = delta.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
-        let steps = (largest / step).ceil().max(1.0) as usize;
-        let half: Vec<f64> = delta.iter().map(|d| d / steps as f64 / 2.0).collect();
-        let slack = robot.motion_bounds(&half);
-        let mut worst = f64::INFINITY;
-        for i in 0..=steps {
-            let s = i as f64 / steps as f64;
-            let q: Vec<f64> = a.iter().zip(&delta).map(|(a, d)| a + d * s).collect();
-            robot.set(&q);
-            let floor = robot.floor_clearance(FLOOR_HEIGHT_M, &slack);
-            let v = if floor <= 0.0 {
-                -1.0
-            } else {
-                robot.obstacle_clearance(obstacles, &slack)
-            };
-            worst = worst.min(v);
-        }
-        worst
-    }
-
-    #[test]
-    #[ignore = "exploration aid: prints the tour"]
-    fn explore_course() {
-        let model = modular_model(&COURSE_MODULES);
-        let mut robot = CapsuleRobot::new(&model);
-        let obstacles = course_obstacles();
-        robot.set(&COURSE_HOME);
-        println!(
-            "home: tool {:?} obstacles {:.3} floor {:.3} self {:.3}",
-            robot.tool().translation.vector.as_slice(),
-            robot.obstacle_clearance(&obstacles, &robot.exact()),
-            robot.floor_clearance(FLOOR_HEIGHT_M, &robot.exact()),
-            robot.self_clearance()
-        );
-        for (i, q) in course_configurations().iter().enumerate() {
-            robot.set(q);
-            let tool = robot.tool();
-            let p = tool.translation.vector;
-            let z = tool.rotation * Vector3::z();
-            let per: Vec<String> = obstacles
-                .iter()
-                .map(|o| format!("{:.3}", robot.obstacle_clearance(std::slice::from_ref(o), &robot.exact())))
-                .collect();
-            println!(
-                "{i:2} q [{}] tool [{:.3}, {:.3}, {:.3}] z [{:.2}, {:.2}, {:.2}] obst {} floor {:.3} self {:.3}",
-                q.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", "),
-                p.x,
-                p.y,
-                p.z,
-                z.x,
-                z.y,
-                z.z,
-                per.join(" "),
-                robot.floor_clearance(FLOOR_HEIGHT_M, &robot.exact()),
-                robot.self_clearance()
-            );
-        }
-        println!("{:?}", course_margins());
-        let extra: Vec<Vec<f64>> = serde_json::from_str(&std::env::var("CONFIGS").unwrap_or("[]".into())).expect("json");
-        for q in extra {
-            robot.set(&q);
-            println!(
-                "{q:?}: tool {:?} pairs {:?}",
-                robot.tool().translation.vector.as_slice(),
-                robot.self_clearance_by_pair()
-            );
-        }
     }
 }
