@@ -204,9 +204,10 @@ fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
         let _ = writeln!(out, "  {i:>2} {:<16} {mass:<10} {shapes}", link.name);
     }
     let tool = model.tool_pose(&vec![0.0; model.dof()]);
-    // Adding 0.0 turns -0.0 into 0.0 so the printout does not show "-0.0000".
-    let rpy = proving_ground::frames::rpy_of(&tool.rotation).map(|v| v + 0.0);
-    let p = tool.translation.vector.map(|v| v + 0.0);
+    // Rounding noise below the printed precision would show as "-0.0000".
+    let clean = |v: f64| if v.abs() < 5e-5 { 0.0 } else { v };
+    let rpy = proving_ground::frames::rpy_of(&tool.rotation).map(clean);
+    let p = tool.translation.vector.map(clean);
     let _ = writeln!(
         out,
         "\ntool pose at q = 0: position [{:.4}, {:.4}, {:.4}] m, rpy [{:.4}, {:.4}, {:.4}] rad\n",
