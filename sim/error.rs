@@ -18,6 +18,9 @@ pub enum Error {
     /// The collision geometry could not be built.
     #[error(transparent)]
     Collide(#[from] crate::collide::CollideError),
+    /// The scenario file is unusable, or a generated one could not be written.
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),

@@ -1,14 +1,18 @@
 //! `validate-design`: reads a design or a URDF, describes the model, exports it, and checks the
-//! export against MuJoCo's own kinematics.
+//! export against MuJoCo's own kinematics; `validate-design generate` writes generated scenarios.
 
-use clap::Parser;
+use clap::{Parser, Subcommand, ValueEnum};
 use proving_ground::engine::{compare_kinematics, MujocoKinematics, ToolElement, MUJOCO_VERSION};
 use proving_ground::error::Error;
 use proving_ground::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
 use proving_ground::model::{JointKind, Model, Shape};
 use proving_ground::pipeline::{self, LoadOptions};
-use std::path::PathBuf;
+use proving_ground::scenario::{self, generate, Scenario, ScenarioError, Tolerance};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+/// Scenario loaded when `--scenario` is not given, relative to the current directory, if it exists.
+const DEFAULT_SCENARIO: &str = "scenarios/course.json";
 
 /// Position agreement demanded between our FK and MuJoCo's (m): both compute in f64 from the same
 /// numbers, so anything above rounding is a bug. Worst measured on designs/: ~1e-15.
@@ -20,6 +24,9 @@ Examples:
   validate-design designs/urdf/panda.urdf --tip panda_hand
   validate-design designs/ur5e.json --export-urdf ur5e.urdf --export-mjcf ur5e.xml
   validate-design robot.urdf --package-path ~/ws/src --strict
+  validate-design designs/paper-real-world.json --describe --scenario scenarios/workspace/pose.json
+  validate-design generate cluttered --all --out scenarios/cluttered --force
+  validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
 
 Exit codes:
   0  the model was built and MuJoCo agrees with our kinematics
@@ -31,10 +38,20 @@ Environment:
 
 /// Proves or disproves a robot manipulator design in simulation.
 #[derive(Debug, Parser)]
-#[command(name = "validate-design", version, about, after_help = AFTER_HELP)]
+#[command(
+    name = "validate-design",
+    version,
+    about,
+    after_help = AFTER_HELP,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
     /// Design JSON (free, economic, modular, preset) or URDF file.
-    design: PathBuf,
+    #[arg(required = true)]
+    design: Option<PathBuf>,
     /// URDF: first link of the chain [default: the root link].
     #[arg(long, value_name = "LINK")]
     base: Option<String>,
@@ -65,11 +82,78 @@ struct Cli {
     /// Print only the final line.
     #[arg(long)]
     quiet: bool,
+    /// Scenario JSON to load and check [default: scenarios/course.json if it exists].
+    #[arg(long, value_name = "FILE")]
+    scenario: Option<PathBuf>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Write a generated scenario (the paper's cluttered tasks, its workspace task, or the course
+    /// for its real-world robot); an existing file is only replaced with --force.
+    Generate(GenerateArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct GenerateArgs {
+    /// Which generator.
+    generator: Generator,
+    /// Generator seed [default: cluttered 2025 (master seed), workspace 1000, course 3].
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+    /// cluttered: the task number (its seed is derived from --seed and the task).
+    #[arg(long, value_name = "K", conflicts_with = "all")]
+    task: Option<usize>,
+    /// cluttered: write all 36 tasks as OUT/task-00.json .. task-35.json.
+    #[arg(long)]
+    all: bool,
+    /// workspace: number of poses [default: 1000].
+    #[arg(long, value_name = "N")]
+    count: Option<usize>,
+    /// workspace: box scale factor, 0.5 to 1.5 [default: 1].
+    #[arg(long, value_name = "S")]
+    scale: Option<f64>,
+    /// workspace: how goal orientations are judged [default: pose].
+    #[arg(long, value_name = "MODE")]
+    tolerance: Option<ToleranceArg>,
+    /// Output file (a folder with cluttered --all).
+    #[arg(long, value_name = "PATH")]
+    out: PathBuf,
+    /// Replace existing files.
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Generator {
+    /// The paper's cluttered benchmark tasks: 8 goals, 8 sphere obstacles.
+    Cluttered,
+    /// The paper's workspace task: poses uniform in a 0.8 x 1.0 x 0.8 m box.
+    Workspace,
+    /// The course for the paper's real-world robot: 3 obstacles, 36 goals.
+    Course,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ToleranceArg {
+    /// Position and orientation.
+    #[value(name = "pose")]
+    Pose,
+    /// Position and the tool z axis.
+    #[value(name = "z_symmetric")]
+    ZSymmetric,
+    /// Position only.
+    #[value(name = "position")]
+    Position,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(&cli) {
+    let result = match &cli.command {
+        Some(Command::Generate(args)) => generate_scenarios(args).map_err(Error::from),
+        None => run(&cli),
+    };
+    match result {
         Ok(code) => code,
         Err(error) => {
             eprintln!("error: {error}");
@@ -79,12 +163,13 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: &Cli) -> Result<ExitCode, Error> {
+    let design_path = cli.design.as_deref().expect("clap requires DESIGN without a subcommand");
     let opts = LoadOptions {
         base_link: cli.base.clone(),
         tip_link: cli.tip.clone(),
         package_paths: cli.package_paths.clone(),
     };
-    let loaded = pipeline::load(&cli.design, &opts)?;
+    let loaded = pipeline::load(design_path, &opts)?;
     let model = &loaded.model;
     for diagnostic in &model.diagnostics {
         eprintln!("{diagnostic}");
@@ -96,11 +181,20 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
             list,
         });
     }
+    let default_scenario = Path::new(DEFAULT_SCENARIO);
+    let scenario_path = cli
+        .scenario
+        .as_deref()
+        .or_else(|| default_scenario.is_file().then_some(default_scenario));
+    let scenario = scenario_path.map(pipeline::load_scenario).transpose()?;
     if !cli.quiet {
         print!("{}", describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
+        if let Some(scenario) = &scenario {
+            println!("{}", scenario_summary(scenario));
+        }
     }
 
-    let inputs = [cli.design.as_path()];
+    let inputs = [design_path];
     let mjcf = to_mjcf(model, &MjcfOptions::default())?;
     if let Some(path) = &cli.export_urdf {
         pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?, &inputs)?;
@@ -122,7 +216,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     }
 
     let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", cli.design.display()), &joint_names)?;
+    let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", design_path.display()), &joint_names)?;
     let agreement = compare_kinematics(model, &mujoco, ToolElement::Site("tool"), cli.mujoco_checks, cli.seed)?;
     let worst = agreement
         .max_position_error_m
@@ -145,6 +239,118 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         println!("worst at `{}`, q = {:?}", agreement.worst_element, agreement.worst_configuration);
         Ok(ExitCode::from(1))
     }
+}
+
+/// `scenario NAME: N obstacles, M goals, tolerance MODE` (modes with counts when they differ).
+fn scenario_summary(scenario: &Scenario) -> String {
+    let modes: Vec<(Tolerance, usize)> = [Tolerance::Pose, Tolerance::ZSymmetric, Tolerance::Position]
+        .into_iter()
+        .map(|t| (t, scenario.goals.iter().filter(|g| g.tolerance == t).count()))
+        .filter(|(_, count)| *count > 0)
+        .collect();
+    let tolerance = match modes.as_slice() {
+        [(only, _)] => only.name().to_string(),
+        several => several
+            .iter()
+            .map(|(t, count)| format!("{} ({count})", t.name()))
+            .collect::<Vec<_>>()
+            .join(", "),
+    };
+    format!(
+        "scenario {}: {} obstacles, {} goals, tolerance {tolerance}",
+        scenario.name,
+        scenario.obstacles.len(),
+        scenario.goals.len()
+    )
+}
+
+/// `validate-design generate ...`: builds the scenarios and writes them.
+fn generate_scenarios(args: &GenerateArgs) -> Result<ExitCode, ScenarioError> {
+    let name = args
+        .generator
+        .to_possible_value()
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default();
+    let not_for = |flag: &str, given: bool| -> Result<(), ScenarioError> {
+        if given {
+            return Err(ScenarioError::Parameter {
+                generator: name.clone(),
+                parameter: flag.into(),
+                message: format!("does not apply to the {name} generator"),
+            });
+        }
+        Ok(())
+    };
+    let workspace_flags = [
+        ("--count", args.count.is_some()),
+        ("--scale", args.scale.is_some()),
+        ("--tolerance", args.tolerance.is_some()),
+    ];
+    let cluttered_flags = [("--task", args.task.is_some()), ("--all", args.all)];
+    let outputs: Vec<(PathBuf, Scenario)> = match args.generator {
+        Generator::Cluttered => {
+            for (flag, given) in workspace_flags {
+                not_for(flag, given)?;
+            }
+            let seed = args.seed.unwrap_or(generate::CLUTTERED_MASTER_SEED);
+            match (args.task, args.all) {
+                (Some(task), _) => vec![(args.out.clone(), generate::cluttered(task, seed))],
+                (None, true) => (0..generate::CLUTTERED_TASKS)
+                    .map(|task| (args.out.join(format!("task-{task:02}.json")), generate::cluttered(task, seed)))
+                    .collect(),
+                (None, false) => {
+                    return Err(ScenarioError::Parameter {
+                        generator: name,
+                        parameter: "--task".into(),
+                        message: format!("is missing: give --task K or --all (tasks 0 to {})", generate::CLUTTERED_TASKS - 1),
+                    })
+                }
+            }
+        }
+        Generator::Workspace => {
+            for (flag, given) in cluttered_flags {
+                not_for(flag, given)?;
+            }
+            let tolerance = match args.tolerance.unwrap_or(ToleranceArg::Pose) {
+                ToleranceArg::Pose => Tolerance::Pose,
+                ToleranceArg::ZSymmetric => Tolerance::ZSymmetric,
+                ToleranceArg::Position => Tolerance::Position,
+            };
+            let scenario = generate::workspace(
+                args.count.unwrap_or(generate::WORKSPACE_GOALS),
+                args.scale.unwrap_or(1.0),
+                tolerance,
+                args.seed.unwrap_or(generate::WORKSPACE_SEED),
+            )?;
+            vec![(args.out.clone(), scenario)]
+        }
+        Generator::Course => {
+            for (flag, given) in workspace_flags.into_iter().chain(cluttered_flags) {
+                not_for(flag, given)?;
+            }
+            vec![(args.out.clone(), generate::course(args.seed.unwrap_or(generate::COURSE_SEED)))]
+        }
+    };
+    // Refuse before writing anything, so a run without --force never leaves half a set behind.
+    if !args.force {
+        if let Some((path, _)) = outputs.iter().find(|(path, _)| path.exists()) {
+            return Err(ScenarioError::Write {
+                path: path.clone(),
+                source: std::io::Error::new(std::io::ErrorKind::AlreadyExists, "the file exists; pass --force to replace it"),
+            });
+        }
+    }
+    for (path, scenario) in &outputs {
+        scenario::save(scenario, path, args.force)?;
+        println!(
+            "wrote {} ({}: {} obstacles, {} goals)",
+            path.display(),
+            scenario.name,
+            scenario.obstacles.len(),
+            scenario.goals.len()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn describe(model: &Model, hardware_cost: Option<f64>) -> String {

@@ -81,6 +81,14 @@ pub fn load_model(path: &Path, opts: &LoadOptions) -> Result<Model, Error> {
     Ok(load(path, opts)?.model)
 }
 
+/// Reads and validates a scenario file.
+///
+/// # Errors
+/// [`Error::Scenario`] naming the file and the field.
+pub fn load_scenario(path: &Path) -> Result<crate::scenario::Scenario, Error> {
+    Ok(crate::scenario::load(path)?)
+}
+
 /// Writes text to `path`, refusing to overwrite any of `inputs`.
 ///
 /// # Errors

@@ -7,7 +7,7 @@ pub mod generate;
 mod write;
 
 pub use file::{load, parse, ORIENTATION_TOLERANCE};
-pub use write::to_json;
+pub use write::{save, to_json};
 
 use crate::model::Shape;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};

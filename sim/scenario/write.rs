@@ -6,9 +6,11 @@
 //! `preserve_order` feature.
 
 use super::file::{default_goal_name, default_obstacle_name};
-use super::{Scenario, Tolerance};
+use super::{Scenario, ScenarioError, Tolerance};
 use crate::model::Shape;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use std::io::Write;
+use std::path::Path;
 
 /// One JSON value under construction: scalars already formatted.
 enum Node {
@@ -212,11 +214,41 @@ pub fn to_json(scenario: &Scenario) -> String {
     out
 }
 
+/// Writes [`to_json`] of `scenario` to `path`, creating missing parent folders. An existing file
+/// is replaced only when `overwrite` is true.
+///
+/// # Errors
+/// [`ScenarioError::Write`] when the file exists (and `overwrite` is false) or cannot be written.
+pub fn save(scenario: &Scenario, path: &Path, overwrite: bool) -> Result<(), ScenarioError> {
+    let write_error = |source: std::io::Error| ScenarioError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(write_error)?;
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true);
+    if overwrite {
+        options.create(true).truncate(true);
+    } else {
+        // Atomic refusal: no window between checking and creating the file.
+        options.create_new(true);
+    }
+    let mut file = options.open(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::AlreadyExists {
+            write_error(std::io::Error::new(e.kind(), "the file exists; pass --force to replace it"))
+        } else {
+            write_error(e)
+        }
+    })?;
+    file.write_all(to_json(scenario).as_bytes()).map_err(write_error)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::parse;
     use super::*;
-    use std::path::Path;
 
     #[test]
     fn round_trip_is_exact_and_layout_is_fixed() {

@@ -21,7 +21,7 @@ struct LinkCapsule {
     start: Vector3<f64>,
     end: Vector3<f64>,
     radius: f64,
-    /// One of the paper's capsules (used for self-collision), not an added bounding sphere.
+    /// One of the paper's capsules, not a bounding sphere added for an uncovered collider.
     paper: bool,
 }
 
@@ -35,13 +35,28 @@ struct WorldCapsule {
     paper: bool,
 }
 
+/// An exact collider of a link as a parry shape, for the exact self-collision check.
+struct ExactPart {
+    link: usize,
+    /// Pose of the parry shape in the link frame (parry's cylinders run along y, ours along z).
+    link_from_part: Isometry3<f64>,
+    shape: Box<dyn parry3d_f64::shape::Shape>,
+}
+
+impl std::fmt::Debug for ExactPart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ExactPart {{ link: {}, link_from_part: {:?} }}", self.link, self.link_from_part)
+    }
+}
+
 /// A model's conservative capsule geometry, posed at one configuration at a time.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(crate) struct CapsuleRobot<'a> {
     model: &'a Model,
     ws: KinematicsWorkspace,
     capsules: Vec<LinkCapsule>,
     world: Vec<WorldCapsule>,
+    exact: Vec<ExactPart>,
     self_pairs: Vec<(usize, usize)>,
     reach: Vec<Vec<f64>>,
 }
@@ -122,11 +137,26 @@ impl<'a> CapsuleRobot<'a> {
             })
             .collect();
 
+        let exact = model
+            .links
+            .iter()
+            .enumerate()
+            .flat_map(|(link, l)| l.colliders.iter().map(move |c| (link, c)))
+            .map(|(link, collider)| {
+                let (shape_from_part, shape) = parry_shape(&collider.shape);
+                ExactPart {
+                    link,
+                    link_from_part: collider.link_from_shape * shape_from_part,
+                    shape,
+                }
+            })
+            .collect();
         let mut robot = CapsuleRobot {
             model,
             ws: model.workspace(),
             world: Vec::with_capacity(capsules.len()),
             capsules,
+            exact,
             self_pairs,
             reach,
         };
@@ -151,11 +181,6 @@ impl<'a> CapsuleRobot<'a> {
                 paper: c.paper,
             });
         }
-    }
-
-    /// World pose of the tool at the current configuration.
-    pub(crate) fn tool(&self) -> Isometry3<f64> {
-        self.ws.tool_in_world
     }
 
     /// Smallest distance between the robot's capsules and spheres and any obstacle (m; negative
@@ -198,6 +223,26 @@ impl<'a> CapsuleRobot<'a> {
         clearance
     }
 
+    /// Smallest distance between the exact colliders (tubes, housings) of two links that may
+    /// collide (m; 0 when they touch or overlap), by parry3d; the same pairs as
+    /// [`CapsuleRobot::self_clearance`]. The capsules do not cover the joint module housings, and
+    /// bounding spheres around the housings would make links that are always close (2 and 5 of
+    /// the paper robot, 0.14 m apart through two 0.1 m modules) collide in every configuration.
+    pub(crate) fn exact_self_clearance(&self) -> f64 {
+        let pose = |part: &ExactPart| crate::frames::parry_pose(&(self.ws.link_in_world[part.link] * part.link_from_part));
+        let mut clearance = f64::INFINITY;
+        for &(i, j) in &self.self_pairs {
+            for a in self.exact.iter().filter(|p| p.link == i) {
+                for b in self.exact.iter().filter(|p| p.link == j) {
+                    let distance = parry3d_f64::query::distance(&pose(a), a.shape.as_ref(), &pose(b), b.shape.as_ref())
+                        .map_or(f64::NEG_INFINITY, |d| d.distance);
+                    clearance = clearance.min(distance);
+                }
+            }
+        }
+        clearance
+    }
+
     /// Per link, an upper bound on how far any capsule axis point of the link moves when the
     /// joints change by `dq` (rad): `sum_j reach_j |dq_j|` over the joints before it, since a
     /// rotation by `t` about an axis moves a point at distance `r` by at most `r t`.
@@ -205,6 +250,28 @@ impl<'a> CapsuleRobot<'a> {
         (0..self.model.links.len())
             .map(|link| self.reach.iter().zip(dq).map(|(r, d)| r[link] * d.abs()).sum())
             .collect()
+    }
+}
+
+/// A model shape as a parry shape, with the pose of the parry shape in the model shape's frame.
+/// Meshes become their bounding sphere (catalog robots have none).
+fn parry_shape(shape: &Shape) -> (Isometry3<f64>, Box<dyn parry3d_f64::shape::Shape>) {
+    use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
+    // parry's cylinders and capsules run along y; turning y onto z lays them along our z.
+    let y_to_z = Isometry3::rotation(Vector3::x() * std::f64::consts::FRAC_PI_2);
+    match shape {
+        Shape::Sphere { radius } => (Isometry3::identity(), Box::new(Ball::new(*radius))),
+        Shape::Cylinder { radius, length } => (y_to_z, Box::new(Cylinder::new(length / 2.0, *radius))),
+        Shape::Capsule { radius, length } => (y_to_z, Box::new(Capsule::new_y(length / 2.0, *radius))),
+        Shape::Box { half_extents } => (
+            Isometry3::identity(),
+            Box::new(Cuboid::new(parry3d_f64::math::Vector::new(
+                half_extents[0],
+                half_extents[1],
+                half_extents[2],
+            ))),
+        ),
+        Shape::Mesh(_) => (Isometry3::identity(), Box::new(Ball::new(shape.bounding_radius()))),
     }
 }
 
@@ -352,7 +419,11 @@ mod tests {
         let text = r#"{"mode": "modular", "modules": ["direct", "L-short", "direct", "direct", "I-long"]}"#;
         let model = from_design(&design::parse(text, Path::new("paper.json")).expect("valid"));
         let robot = CapsuleRobot::new(&model);
-        let housings = robot.capsules.iter().filter(|c| !c.paper).count();
+        let housings = robot
+            .capsules
+            .iter()
+            .filter(|c| c.start == c.end && c.radius > PAPER_CAPSULE_RADIUS_M)
+            .count();
         assert_eq!(housings, 5, "one joint module housing per joint; the tubes are inside the capsules");
         assert_eq!(robot.self_pairs, vec![(1, 3), (1, 4), (1, 5), (2, 5)]);
         // Joint 1 reaches the tool end of the 0.4 m tube through hops 0.1, |(0.2, 0, 0.1)|, 0.1, 0.1.

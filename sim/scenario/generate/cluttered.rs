@@ -8,7 +8,7 @@
 //! (the paper "discards all that intersect with any goals").
 
 use super::clearance::CapsuleRobot;
-use super::{modular_model, provenance, unit, FLOOR_HEIGHT_M};
+use super::{dh_tool_pose, modular_model, provenance, unit, FLOOR_HEIGHT_M};
 use crate::design::catalog::SlotOption;
 use crate::model::PAPER_CAPSULE_RADIUS_M;
 use crate::scenario::{Floor, Goal, Obstacle, Scenario, Tolerance};
@@ -136,19 +136,23 @@ fn goals_of(modules: &[SlotOption], rng: &mut ChaCha8Rng) -> Option<(ClutteredWi
     for _ in 0..ATTEMPTS_PER_ROBOT {
         // Uniform over the circle per joint; the modules' +-2 pi limits hold every angle twice.
         let q: Vec<f64> = (0..model.dof()).map(|_| rng.random_range(-PI..PI)).collect();
-        robot.set(&q);
-        let tool = robot.tool();
+        let tool = dh_tool_pose(modules, &q);
         let position = tool.translation.vector;
         let distance = position.norm();
         // A goal must lie within the maximum distance, keep its neighbourhood out of the base
         // keep-out and above the floor, and come from a pose of the robot that is neither in
-        // self-collision nor through the floor (capsule model).
-        let usable = distance <= CLUTTERED_MAX_DISTANCE_M
+        // self-collision (paper capsules and exact colliders) nor through the floor.
+        let placed = distance <= CLUTTERED_MAX_DISTANCE_M
             && distance - GOAL_NEIGHBOURHOOD_M >= BASE_KEEP_OUT_RADIUS_M
-            && position.z - GOAL_NEIGHBOURHOOD_M >= FLOOR_HEIGHT_M
-            && robot.floor_clearance(FLOOR_HEIGHT_M, &robot.exact()) > 0.0
-            && robot.self_clearance() > 0.0;
-        if !usable {
+            && position.z - GOAL_NEIGHBOURHOOD_M >= FLOOR_HEIGHT_M;
+        if !placed {
+            continue;
+        }
+        robot.set(&q);
+        let clear = robot.floor_clearance(FLOOR_HEIGHT_M, &robot.exact()) > 0.0
+            && robot.self_clearance() > 0.0
+            && robot.exact_self_clearance() > 0.0;
+        if !clear {
             continue;
         }
         goals.push(Goal {

@@ -26,7 +26,7 @@ pub use workspace::{workspace, WORKSPACE_BOX_CENTRE_M, WORKSPACE_BOX_SIZE_M, WOR
 use super::Provenance;
 use crate::design::catalog::SlotOption;
 use crate::model::Model;
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -66,6 +66,23 @@ fn uniform_rotation<R: Rng>(rng: &mut R) -> UnitQuaternion<f64> {
 fn unit(q: Quaternion<f64>) -> UnitQuaternion<f64> {
     let q = super::file::unit_quaternion(q).into_inner();
     super::file::unit_quaternion(Quaternion::new(q.w + 0.0, q.i + 0.0, q.j + 0.0, q.k + 0.0))
+}
+
+/// Tool pose of the modular robot made of `modules` at joint angles `q` (rad), base at the
+/// origin: the standard DH product `prod Rot_z(q_i) Trans_z(d_i) Trans_x(a_i) Rot_x(alpha_i)` of
+/// robots.md. Goals are computed with it rather than with the model stage's forward kinematics so
+/// that the committed files do not move when that code is reorganised or sped up; the two agree
+/// to rounding (tests/scenario.rs).
+fn dh_tool_pose(modules: &[SlotOption], q: &[f64]) -> Isometry3<f64> {
+    let mut pose = Isometry3::identity();
+    for (module, &angle) in modules.iter().zip(q) {
+        let [d, a, alpha] = module.dh();
+        pose = pose
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle)
+            * Translation3::new(a, 0.0, d)
+            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), alpha);
+    }
+    pose
 }
 
 /// The model of a modular design made of `modules` (base at the origin, no tool offset).
