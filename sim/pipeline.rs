@@ -2,7 +2,7 @@
 
 use crate::error::Error;
 use crate::model::{self, Model, UrdfOptions};
-use crate::{design, export};
+use crate::{collide, design, export};
 use std::path::{Path, PathBuf};
 
 /// How to read the robot a run is about.
@@ -112,4 +112,20 @@ pub fn write_output(path: &Path, text: &str, inputs: &[&Path]) -> Result<(), Err
 /// [`Error::Export`].
 pub fn mjcf_of(model: &Model) -> Result<String, Error> {
     Ok(export::to_mjcf(model, &export::MjcfOptions::default())?)
+}
+
+/// The exact collision world of a placed model in a scenario, with the model's structurally
+/// overlapping self pairs excluded (each with its reason, see [`collide::structural_overlaps`])
+/// plus `extra` exclusions (e.g. from an SRDF).
+///
+/// # Errors
+/// [`Error::Collide`] when the geometry cannot be built or an exclusion names an unknown link.
+pub fn collision_world(
+    placed: &Model,
+    scenario: &crate::scenario::Scenario,
+    extra: &[collide::ExcludedPair],
+) -> Result<collide::CollisionWorld, Error> {
+    let mut excluded_pairs = collide::structural_overlaps(placed, &collide::StructuralOptions::default())?;
+    excluded_pairs.extend_from_slice(extra);
+    Ok(collide::world(placed, scenario, &collide::CollideOptions { excluded_pairs })?)
 }

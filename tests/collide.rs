@@ -495,6 +495,7 @@ fn approximate_distances_equal_parry_capsules() {
         let everything = QueryOptions {
             margin: 100.0,
             hulls: true,
+            exact_depth: true,
         };
         for sample in 0..100 {
             let q = model.random_configuration(&mut rng);
@@ -582,7 +583,16 @@ fn capsule_against_a_box_is_measured_by_parry_and_against_the_floor_in_closed_fo
     let mut ws = model.workspace();
     model.forward(&[0.3], &mut ws);
     let mut out = Distances::new();
-    approximate_distances(&world, &ws.link_in_world, &QueryOptions { margin: 10.0, hulls: true }, &mut out);
+    approximate_distances(
+        &world,
+        &ws.link_in_world,
+        &QueryOptions {
+            margin: 10.0,
+            hulls: true,
+            exact_depth: true,
+        },
+        &mut out,
+    );
     let to = |body: Body| out.within_margin.iter().find(|p| p.b.body == body).expect("reported").distance;
     assert!((to(Body::Obstacle(0)) - (0.5 - 0.06 - 0.3)).abs() < 1e-9, "{out:?}");
     assert!((to(Body::Floor) - (0.5 - 0.06 + 0.1)).abs() < 1e-15, "{out:?}");
@@ -710,6 +720,7 @@ fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
     let margin = QueryOptions {
         margin: near_margin,
         hulls: true,
+        exact_depth: true,
     };
     let (mut contacts, mut near) = (Distances::new(), Distances::new());
     let mut ws = model.workspace();
@@ -1128,7 +1139,11 @@ fn sphere_in_the_opening_of_a_u_is_free_but_its_hull_collides() {
                 out.findings
             ),
         }
-        let quiet = QueryOptions { margin: 0.0, hulls: false };
+        let quiet = QueryOptions {
+            margin: 0.0,
+            hulls: false,
+            exact_depth: true,
+        };
         distances(&world, &[Isometry3::identity()], &quiet, &mut out);
         assert!(out.findings.is_empty() && out.hull_calls == 0);
     }
@@ -1219,6 +1234,7 @@ fn panda_meshes_build_and_branch_and_bound_matches_an_exhaustive_margin() {
     let everything = QueryOptions {
         margin: 100.0,
         hulls: false,
+        exact_depth: true,
     };
     for sample in 0..20 {
         let q = model.random_configuration(&mut rng);
@@ -1311,8 +1327,66 @@ fn structural_overlaps_are_found_by_sampling_and_only_those() {
             ("link3".to_string(), "link5".to_string())
         ]
     );
-    // UR5e's wrist tubes touch in most configurations but not all: they stay checked.
-    assert!(names(&load("designs/ur5e.json")).is_empty());
+    // UR5e's wrist tubes (0.12 m across, 0.0997 m apart along the wrist) overlap in most
+    // configurations and touch end to end (within 1e-17 m) in the rest.
+    // Its links 3 and 6 overlap in about 16% of configurations: checked.
+    assert_eq!(names(&load("designs/ur5e.json")), [("link4".to_string(), "link6".to_string())]);
     let reason = &structural_overlaps(&paper, &StructuralOptions::default()).expect("builds")[0].reason;
     assert!(reason.contains("in contact at all 256 sampled configurations"), "{reason}");
+}
+
+#[test]
+fn estimated_depths_keep_every_verdict_and_are_never_shallower() {
+    let (mut estimated, mut exact) = (Distances::new(), Distances::new());
+    let (mut overlaps, mut deeper) = (0, 0);
+    for name in ["ur5e.json", "modular-elbow.json", "abb-irb-2600.json", "free-redundant-7dof.json"] {
+        let model = design(name);
+        let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+        let obstacles: Vec<Obstacle> = (0..8)
+            .map(|k| {
+                let pose = random_pose(&mut rng, 0.8);
+                let shape = match k % 4 {
+                    0 => Shape::Sphere { radius: 0.1 },
+                    1 => Shape::Box {
+                        half_extents: [0.1, 0.05, 0.2],
+                    },
+                    2 => Shape::Cylinder { radius: 0.06, length: 0.3 },
+                    _ => Shape::Capsule { radius: 0.05, length: 0.2 },
+                };
+                obstacle(&format!("o{k}"), pose, shape)
+            })
+            .collect();
+        let world = collide::world(&model, &scenario(obstacles, Some(-0.1)), &CollideOptions::default()).expect("valid");
+        let mut ws = model.workspace();
+        for sample in 0..300 {
+            model.forward(&model.random_configuration(&mut rng), &mut ws);
+            let all = |exact_depth| QueryOptions {
+                margin: 100.0,
+                hulls: false,
+                exact_depth,
+            };
+            distances(&world, &ws.link_in_world, &all(true), &mut exact);
+            distances(&world, &ws.link_in_world, &all(false), &mut estimated);
+            assert_eq!(exact.within_margin.len(), estimated.within_margin.len(), "{name} sample {sample}");
+            for (x, e) in exact.within_margin.iter().zip(&estimated.within_margin) {
+                let context = format!("{name} sample {sample}: {} vs {}", x.distance, e.distance);
+                assert_eq!((x.a.body, x.b.body), (e.a.body, e.b.body), "{context}");
+                // Touching within rounding (UR5e's links 4 and 6 by construction), GJK's overlap
+                // test may call it either way.
+                if x.distance.abs() < 1e-9 {
+                    continue;
+                }
+                assert_eq!(x.distance > 0.0, e.distance > 0.0, "{context}");
+                if x.distance > 0.0 {
+                    assert_eq!(x.distance, e.distance, "{context}");
+                } else {
+                    overlaps += 1;
+                    assert!(e.distance <= x.distance + 1e-9, "{context}");
+                    deeper += usize::from(e.distance < x.distance - 1e-6);
+                }
+            }
+        }
+    }
+    // Enough overlaps of the kinds EPA would measure, and the estimate really used on them.
+    assert!(overlaps > 500 && deeper > 100, "{overlaps} overlaps, {deeper} estimated deeper");
 }

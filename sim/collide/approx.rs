@@ -70,7 +70,7 @@ pub fn approximate_distances(world: &CollisionWorld, link_in_world: &[Isometry3<
                     // exact model's narrow phase measures the same capsule as a `Capsule` shape.
                     None => {
                         let pose = parry_pose(&link_in_world[capsule.link]);
-                        let measured = measure_shapes(&pose, &capsule.geometry, &obstacle.world_from_shape, &obstacle.geometry);
+                        let measured = measure_shapes(&pose, &capsule.geometry, &obstacle.world_from_shape, &obstacle.geometry, true);
                         let closest = Closest {
                             distance: measured.distance,
                             point_a: vector_from_parry(measured.point_a),

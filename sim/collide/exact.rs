@@ -98,7 +98,7 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
             continue;
         }
         *narrow_phase_calls += 1;
-        let (distance, hull_measured) = measure(world, index, scratch, findings, hulls);
+        let (distance, hull_measured) = measure(world, index, scratch, findings, hulls, query.exact_depth);
         closest = closest.min(distance);
         *hull_calls += usize::from(hull_measured);
     }
@@ -128,6 +128,7 @@ fn measure(
     scratch: &mut super::Scratch,
     findings: &mut Vec<CollisionFinding>,
     with_hulls: bool,
+    exact_depth: bool,
 ) -> (f64, bool) {
     let candidate = &world.candidates[index];
     let a = &world.colliders[candidate.a];
@@ -159,12 +160,12 @@ fn measure(
             (&world.obstacles[k].world_from_shape, &world.obstacles[k].geometry, part)
         }
     };
-    let measured = measure_shapes(pose_a, &a.geometry, pose_b, b);
+    let measured = measure_shapes(pose_a, &a.geometry, pose_b, b, exact_depth);
     let with_hulls = with_hulls && (a.geometry.is_mesh() || b.is_mesh());
     if with_hulls {
         let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);
         let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
-        let hull_distance = measure_convex(pose_a, &**hull_a, pose_b, &**hull_b).distance;
+        let hull_distance = measure_convex(pose_a, &**hull_a, pose_b, &**hull_b, true).distance;
         if hull_distance <= 0.0 && measured.distance > 0.0 {
             findings.push(CollisionFinding::HullDisagreement {
                 pair: candidate.pair,

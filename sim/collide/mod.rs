@@ -100,7 +100,7 @@ pub use approx::approximate_distances;
 pub use compare::compare;
 pub use exact::distances;
 pub use pairs::{CheckedPair, ExcludedPair};
-pub use structural::{structural_overlaps, StructuralOptions};
+pub use structural::{structural_overlaps, StructuralOptions, TOUCHING_M};
 pub use world::{world, CollisionWorld};
 
 use nalgebra::Vector3;
@@ -122,11 +122,21 @@ pub struct QueryOptions {
     pub margin: f64,
     /// Measure mesh hulls and report [`CollisionFinding::HullDisagreement`]; default `true`.
     pub hulls: bool,
+    /// Measure the depth of overlapping curved or boxy pairs (cylinders, boxes, capsules against
+    /// them) exactly, by EPA; default `true`. When `false`, such an overlap reports the signed
+    /// distance of the two shapes' bounding capsules instead: negative like the true depth, at
+    /// least as deep, and found in closed form (EPA on two cylinders costs about 13 us). For loops
+    /// that only need the sign and a direction, such as collision-aware IK's loss gradient.
+    pub exact_depth: bool,
 }
 
 impl Default for QueryOptions {
     fn default() -> Self {
-        Self { margin: 0.0, hulls: true }
+        Self {
+            margin: 0.0,
+            hulls: true,
+            exact_depth: true,
+        }
     }
 }
 

@@ -12,6 +12,9 @@ use crate::model::Model;
 use crate::scenario::Scenario;
 use rand::SeedableRng;
 
+/// Signed distance up to which a pair counts as in contact while sampling (m).
+pub const TOUCHING_M: f64 = 1e-9;
+
 /// Sampling settings for [`structural_overlaps`].
 #[derive(Debug, Clone)]
 pub struct StructuralOptions {
@@ -47,7 +50,13 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<Ve
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
     let mut ws = model.workspace();
     let mut out = Distances::new();
-    let query = QueryOptions { margin: 0.0, hulls: false };
+    let query = QueryOptions {
+        // Touching counts as contact: tubes that meet end to end are at +-1e-17 m, and which
+        // side of zero rounding lands on says nothing about the design.
+        margin: TOUCHING_M,
+        hulls: false,
+        exact_depth: true,
+    };
     for _ in 0..opts.samples {
         model.forward(&model.random_configuration(&mut rng), &mut ws);
         distances(&world, &ws.link_in_world, &query, &mut out);

@@ -136,10 +136,10 @@ impl<'a> Ik<'a> {
             iterations += self.solver.solve(goal, &mut q, self.opts.max_iterations, done, &mut rng);
             let mut clearance = None;
             if let Some(checker) = self.checker.as_mut() {
-                let mut measured = checker.clearance(&q);
+                let mut measured = checker.clearance(&q, false);
                 if measured.exact_m <= 0.0 || !is_reached(&goal_error(goal, &self.model.tool_pose(&q))) {
                     refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, &mut rng);
-                    measured = checker.clearance(&q);
+                    measured = checker.clearance(&q, false);
                 }
                 clearance = Some(measured);
             }
@@ -159,6 +159,17 @@ impl<'a> Ik<'a> {
                 }
             } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
                 closest = Some(solution);
+            }
+        }
+        // Overlap depths were estimated while searching; the solutions kept get exact ones.
+        if let Some(checker) = self.checker.as_mut() {
+            for solution in found.iter_mut().chain(closest.iter_mut()) {
+                if solution.clearance.is_some_and(|c| c.exact_m <= 0.0) {
+                    let exact = checker.clearance(&solution.q, true);
+                    // Touching within rounding, GJK's overlap test and EPA may disagree on the sign.
+                    solution.reached = solution.pose_reached && exact.exact_m > 0.0;
+                    solution.clearance = Some(exact);
+                }
             }
         }
         found.sort_by(|a, b| b.reached.cmp(&a.reached).then(rank(&a.error).total_cmp(&rank(&b.error))));

@@ -52,10 +52,15 @@ impl<'a> Checker<'a> {
         }
     }
 
-    /// Exact and approximate clearance at `q`.
-    pub(crate) fn clearance(&mut self, q: &[f64]) -> Clearance {
+    /// Exact and approximate clearance at `q`; with `exact_depth` false an overlap's depth is the
+    /// bounding capsules' estimate (the sign, which decides the verdict, is exact either way).
+    pub(crate) fn clearance(&mut self, q: &[f64], exact_depth: bool) -> Clearance {
         self.model.forward(q, &mut self.ws);
-        let query = QueryOptions { margin: 0.0, hulls: false };
+        let query = QueryOptions {
+            margin: 0.0,
+            hulls: false,
+            exact_depth,
+        };
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
         collide::approximate_distances(self.world, &self.ws.link_in_world, &query, &mut self.approximate);
         let smallest = |d: &Distances| d.closest.map_or(f64::INFINITY, |c| c.distance);
@@ -71,6 +76,8 @@ impl<'a> Checker<'a> {
         let query = QueryOptions {
             margin: COLLISION_THRESHOLD_M,
             hulls: false,
+            // The loss only needs a depth's sign and direction: bounding capsules, not EPA.
+            exact_depth: false,
         };
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
         self.gradient.fill(0.0);
