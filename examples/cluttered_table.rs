@@ -7,9 +7,10 @@
 //! ignoring obstacles), or blocked (some design reaches the pose, but every solution found collides).
 //! The last column is each task's own catalog robot (the one whose joint angles made the goals).
 
+use proving_ground::collide::{self, structural_overlaps, CollideOptions, StructuralOptions};
 use proving_ground::ik::{solve_goals, GoalSolutions, IkOptions};
 use proving_ground::model::{self, Model};
-use proving_ground::pipeline::{collision_world, load_model, LoadOptions};
+use proving_ground::pipeline::{load_model, LoadOptions};
 use proving_ground::scenario::{generate, load as load_scenario, Scenario};
 use rayon::prelude::*;
 use std::path::Path;
@@ -33,10 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
 
     let started = Instant::now();
     // results[design][task]
-    let results: Vec<Vec<Vec<GoalSolutions>>> = models
-        .par_iter()
-        .map(|model| tasks.iter().map(|task| solve(model, task)).collect::<Result<Vec<_>, _>>())
-        .collect::<Result<_, _>>()?;
+    let results: Vec<Vec<Vec<GoalSolutions>>> = models.par_iter().map(|model| solve_all(model, &tasks)).collect::<Result<_, _>>()?;
     let elapsed = started.elapsed();
 
     let witnesses: Vec<Vec<GoalSolutions>> = (0..generate::CLUTTERED_TASKS)
@@ -46,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             let names: Vec<String> = witness.modules.iter().map(|m| format!("\"{}\"", m.name())).collect();
             let text = format!(r#"{{"mode": "modular", "modules": [{}]}}"#, names.join(", "));
             let robot = model::from_design(&proving_ground::design::parse(&text, Path::new("witness.json"))?);
-            solve(&robot, &tasks[t])
+            Ok::<_, Box<dyn std::error::Error + Send + Sync>>(solve_all(&robot, std::slice::from_ref(&tasks[t]))?.remove(0))
         })
         .collect::<Result<_, _>>()?;
 
@@ -125,8 +123,18 @@ fn kinematically_reached(model: &Model, task: &Scenario) -> usize {
         .count()
 }
 
-fn solve(model: &Model, task: &Scenario) -> Result<Vec<GoalSolutions>, Box<dyn std::error::Error + Send + Sync>> {
-    let placed = model.placed(&task.world_from_base);
-    let world = collision_world(&placed, task, &[])?;
-    Ok(solve_goals(&placed, task, Some(&world), &IkOptions::default()))
+fn solve_all(model: &Model, tasks: &[Scenario]) -> Result<Vec<Vec<GoalSolutions>>, Box<dyn std::error::Error + Send + Sync>> {
+    // Self pairs do not depend on where the robot stands: sampled once per design.
+    let excluded_pairs = structural_overlaps(model, &StructuralOptions::default())?;
+    tasks
+        .iter()
+        .map(|task| {
+            let placed = model.placed(&task.world_from_base);
+            let opts = CollideOptions {
+                excluded_pairs: excluded_pairs.clone(),
+            };
+            let world = collide::world(&placed, task, &opts)?;
+            Ok(solve_goals(&placed, task, Some(&world), &IkOptions::default()))
+        })
+        .collect()
 }

@@ -38,4 +38,5 @@ pub mod frames;
 pub mod ik;
 pub mod model;
 pub mod pipeline;
+pub mod plan;
 pub mod scenario;

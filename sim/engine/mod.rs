@@ -4,9 +4,11 @@
 
 mod crosscheck;
 mod mujoco;
+mod run;
 
 pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
+pub use run::{ContactInterval, ContactRecorder, EngineRun, Gains, GoalHold, RunOptions};
 
 use std::path::PathBuf;
 

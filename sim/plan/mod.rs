@@ -1,0 +1,10 @@
+//! Consumes a model, a scenario and its IK solutions. Produces the trajectory through the
+//! course: one reached configuration per goal in course order, joined by straight joint-space
+//! segments certified collision-free, and its time parameterisation for the engines.
+
+mod timing;
+
+pub use timing::{
+    Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
+    DEFAULT_VELOCITY_RAD_S,
+};
