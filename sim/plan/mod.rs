@@ -2,7 +2,10 @@
 //! course: one reached configuration per goal in course order, joined by straight joint-space
 //! segments certified collision-free, and its time parameterisation for the engines.
 
+mod certify;
 mod timing;
+
+pub use certify::{CertifyOptions, MotionBounds, SegmentCheck, SegmentChecker, SegmentPoint, MAX_STEPS, TOUCH_TOLERANCE_M};
 
 pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
