@@ -21,6 +21,9 @@ pub enum Error {
     /// The scenario file is unusable, or a generated one could not be written.
     #[error(transparent)]
     Scenario(#[from] crate::scenario::ScenarioError),
+    /// The scenario does not fit the robot (its home configuration).
+    #[error(transparent)]
+    Plan(#[from] crate::plan::PlanError),
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),

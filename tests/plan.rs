@@ -238,3 +238,122 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
     }
     assert!(queries < 5000, "{queries} queries for the tour");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Trajectory
+
+use proving_ground::ik::{solve_goals, IkOptions};
+use proving_ground::plan::{home_configuration, nearest_equivalent, plan, GoalStep, PlanError, TrajectoryOptions};
+use proving_ground::scenario::{Goal, Tolerance};
+
+/// The wand with its tool at the rod's tip.
+fn wand_with_tip() -> Model {
+    let mut model = wand();
+    model.last_from_tool = Isometry3::translation(WAND_LENGTH_M, 0.0, 0.0);
+    model
+}
+
+fn position_goal(name: &str, x: f64, y: f64) -> Goal {
+    Goal {
+        name: name.into(),
+        position: Vector3::new(x, y, 0.0),
+        rotation: UnitQuaternion::identity(),
+        tolerance: Tolerance::Position,
+    }
+}
+
+#[test]
+fn the_paper_robot_tours_the_course_with_every_segment_certified() {
+    let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
+    let scenario = generate::course(generate::COURSE_SEED);
+    let placed = model.placed(&scenario.world_from_base);
+    let world = collision_world(&placed, &scenario, &[]).expect("builds");
+    let solutions = solve_goals(&placed, &scenario, Some(&world), &IkOptions::default());
+    let trajectory = plan(&placed, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
+    assert_eq!(trajectory.home, generate::COURSE_HOME.to_vec());
+    assert_eq!(
+        trajectory.reached(),
+        36,
+        "{:?}",
+        trajectory
+            .steps
+            .iter()
+            .filter(|s| !matches!(s, GoalStep::Reached { .. }))
+            .collect::<Vec<_>>()
+    );
+    for step in &trajectory.steps {
+        let GoalStep::Reached { segment, q, goal, .. } = step else {
+            unreachable!()
+        };
+        assert!(segment.free && segment.certified_clearance_m > 0.0, "goal {goal}: {segment:?}");
+        let error = proving_ground::ik::goal_error(&scenario.goals[*goal], &placed.tool_pose(q));
+        assert!(
+            error.position_m < 1e-3 && error.orientation_rad < 1f64.to_radians(),
+            "goal {goal}: {error:?}"
+        );
+    }
+    // The timed reference rests at every goal, in course order.
+    let holds = trajectory.timed.holds();
+    assert_eq!(holds.iter().map(|h| h.goal).collect::<Vec<_>>(), (0..36).collect::<Vec<_>>());
+    assert!(
+        trajectory.tool_path_m > 1.0 && trajectory.joint_length > 1.0,
+        "{} {}",
+        trajectory.tool_path_m,
+        trajectory.joint_length
+    );
+}
+
+#[test]
+fn a_blocked_goal_names_the_pair_and_the_tour_goes_on_from_the_last_reached_configuration() {
+    let model = wand_with_tip();
+    // Goal "left" needs +90 degrees (its other turn, -270, is beyond the -3 rad limit) and a pin
+    // at +45 degrees stands in the way; goal "right" at -90 degrees is clear from home.
+    let mut scenario = with_obstacles(vec![ball("pin", Vector3::new(0.5 * 0.5f64.sqrt(), 0.5 * 0.5f64.sqrt(), 0.0), 0.01)]);
+    scenario.goals = vec![position_goal("left", 0.0, 1.0), position_goal("right", 0.0, -1.0)];
+    let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
+    let solutions = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
+    assert!(solutions.iter().all(|s| s.reached()), "IK reaches both goals: {solutions:?}");
+    let trajectory = plan(&model, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
+    let GoalStep::Blocked { tried, stop, .. } = &trajectory.steps[0] else {
+        panic!("left must be blocked: {:?}", trajectory.steps[0])
+    };
+    assert_eq!(*tried, 1);
+    let stop = stop.as_ref().expect("the blocking pair");
+    assert_eq!((stop.a.as_str(), stop.b.as_str()), ("rod", "pin"));
+    assert!(stop.q[0] > 0.0 && stop.q[0] < std::f64::consts::FRAC_PI_4, "{stop:?}");
+    let GoalStep::Reached { q, segment, .. } = &trajectory.steps[1] else {
+        panic!("right must be reached: {:?}", trajectory.steps[1])
+    };
+    // From home (0), not from the blocked goal.
+    assert!((q[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-3 && segment.free, "{q:?}");
+    assert_eq!(trajectory.timed.holds().len(), 1);
+}
+
+#[test]
+fn home_defaults_to_zero_or_mid_range_and_a_wrong_home_is_an_error() {
+    let mut model = wand();
+    let mut scenario = with_obstacles(vec![]);
+    assert_eq!(home_configuration(&model, &scenario).expect("default"), [0.0]);
+    model.joints[0].limits = Some([0.5, 1.5]);
+    assert_eq!(home_configuration(&model, &scenario).expect("mid-range"), [1.0]);
+    scenario.home = Some(vec![1.0, 2.0]);
+    let error = home_configuration(&model, &scenario).expect_err("two values");
+    assert!(matches!(error, PlanError::HomeLength { found: 2, dof: 1, .. }), "{error}");
+    scenario.home = Some(vec![2.0]);
+    let message = home_configuration(&model, &scenario).expect_err("outside").to_string();
+    assert!(
+        message.contains("home[0]") && message.contains("turn") && message.contains("[0.5, 1.5]"),
+        "{message}"
+    );
+}
+
+#[test]
+fn equivalent_angles_are_the_nearest_whole_turn_within_limits() {
+    let mut model = wand();
+    model.joints[0].limits = Some([-7.0, 7.0]);
+    let near = nearest_equivalent(&model, &[0.1], &[6.0]);
+    assert!((near[0] - (0.1 + std::f64::consts::TAU)).abs() < 1e-12, "{near:?}");
+    // Beyond the limits the angle stays as it is.
+    model.joints[0].limits = Some([-3.0, 3.0]);
+    assert_eq!(nearest_equivalent(&model, &[0.1], &[6.0]), [0.1]);
+}

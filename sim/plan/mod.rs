@@ -4,6 +4,7 @@
 
 mod certify;
 mod timing;
+mod trajectory;
 
 pub use certify::{CertifyOptions, MotionBounds, SegmentCheck, SegmentChecker, SegmentPoint, MAX_STEPS, TOUCH_TOLERANCE_M};
 
@@ -11,3 +12,4 @@ pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
     DEFAULT_VELOCITY_RAD_S,
 };
+pub use trajectory::{home_configuration, nearest_equivalent, plan, GoalStep, PlanError, Trajectory, TrajectoryOptions};
