@@ -12,4 +12,4 @@ pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
     DEFAULT_VELOCITY_RAD_S,
 };
-pub use trajectory::{home_configuration, nearest_equivalent, plan, GoalStep, PlanError, Trajectory, TrajectoryOptions};
+pub use trajectory::{home_configuration, Attempt, nearest_equivalent, plan, GoalStep, PlanError, Trajectory, TrajectoryOptions};

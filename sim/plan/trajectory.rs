@@ -87,6 +87,9 @@ pub enum GoalStep {
         tried: usize,
         /// Where the nearest solution's segment stops: the pair and the configuration.
         stop: Option<SegmentPoint>,
+        /// The nearest solution's segment that was tried, from the previous configuration:
+        /// the motion the paper's heuristic would have made. The engines replay it too.
+        attempt: Option<Attempt>,
     },
 }
 
@@ -97,6 +100,17 @@ impl GoalStep {
             GoalStep::Reached { goal, .. } | GoalStep::Blocked { goal, .. } => *goal,
         }
     }
+}
+
+/// A segment that was tried and is not free.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Attempt {
+    /// Start configuration (the previous reached one).
+    pub from: Vec<f64>,
+    /// The solution it heads for.
+    pub to: Vec<f64>,
+    /// Its continuous check.
+    pub segment: SegmentCheck,
 }
 
 /// The planned trajectory.
@@ -215,6 +229,7 @@ pub fn plan(
     for (index, goal) in scenario.goals.iter().enumerate() {
         let mut tried: Vec<Vec<f64>> = Vec::new();
         let mut stop: Option<SegmentPoint> = None;
+        let mut attempt: Option<Attempt> = None;
         let mut step = None;
         let given = solutions.get(index).map(|s| s.solutions.as_slice()).unwrap_or_default();
         for resolved in [false, true] {
@@ -245,8 +260,13 @@ pub fn plan(
                     });
                     break;
                 }
-                if stop.is_none() {
-                    stop = segment.touch.or(segment.closest);
+                if attempt.is_none() {
+                    stop = segment.touch.clone().or(segment.closest.clone());
+                    attempt = Some(Attempt {
+                        from: previous.clone(),
+                        to: q.clone(),
+                        segment,
+                    });
                 }
             }
             if step.is_some() {
@@ -257,6 +277,7 @@ pub fn plan(
             goal: index,
             tried: tried.len(),
             stop,
+            attempt,
         });
         if let GoalStep::Reached { q, .. } = &step {
             previous.clone_from(q);
