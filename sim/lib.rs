@@ -39,4 +39,5 @@ pub mod ik;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
+pub mod report;
 pub mod scenario;

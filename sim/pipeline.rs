@@ -129,3 +129,168 @@ pub fn collision_world(
     excluded_pairs.extend_from_slice(extra);
     Ok(collide::world(placed, scenario, &collide::CollideOptions { excluded_pairs })?)
 }
+
+/// Which physics engines a validation runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Engines {
+    /// rapier (multibody, f32).
+    pub rapier: bool,
+    /// MuJoCo (the official library).
+    pub mujoco: bool,
+}
+
+impl Default for Engines {
+    fn default() -> Self {
+        Self {
+            rapier: true,
+            mujoco: true,
+        }
+    }
+}
+
+/// Settings of a whole validation run; every field's default is the documented one.
+#[derive(Debug, Clone, Default)]
+pub struct ValidateOptions {
+    /// IK settings (seeds, seed, budgets).
+    pub ik: crate::ik::IkOptions,
+    /// The continuous check's threshold (collision margin).
+    pub certify: crate::plan::CertifyOptions,
+    /// Engines to run.
+    pub engines: Engines,
+    /// Engine step, gravity and contact depth tolerance.
+    pub engine: crate::engine::RunOptions,
+    /// Controller gain settings (also the hold tolerances).
+    pub gains: crate::engine::GainOptions,
+    /// Extra self pairs to exclude (e.g. from an SRDF), with reasons.
+    pub excluded_pairs: Vec<collide::ExcludedPair>,
+}
+
+/// One engine's runs on a validation's trajectory.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EngineRuns {
+    /// Following the timed trajectory with motors, gravity on.
+    pub dynamic: crate::engine::EngineRun,
+    /// Positions set along the replay segments (see [`crate::plan::replay_segments`]).
+    pub replay: crate::engine::EngineRun,
+}
+
+/// Everything a validation produced, stage by stage.
+#[derive(Debug, Clone)]
+pub struct Validation {
+    /// The model, placed at the scenario's base pose.
+    pub model: Model,
+    /// The design, for design files.
+    pub design: Option<design::Design>,
+    /// The scenario.
+    pub scenario: crate::scenario::Scenario,
+    /// Checked pairs and excluded pairs (with reasons), by name.
+    pub pairs: Vec<collide::CheckedPair>,
+    /// Excluded pairs with their reasons.
+    pub excluded: Vec<collide::ExcludedPair>,
+    /// IK solutions per goal.
+    pub solutions: Vec<crate::ik::GoalSolutions>,
+    /// The trajectory through the goals.
+    pub trajectory: crate::plan::Trajectory,
+    /// Segments replayed in the engines, with their certified checks.
+    pub replayed: Vec<crate::plan::ReplaySegment>,
+    /// rapier's runs, when run.
+    pub rapier: Option<EngineRuns>,
+    /// MuJoCo's runs, when run.
+    pub mujoco: Option<EngineRuns>,
+    /// Gravity torques along the trajectory against ratings (MuJoCo and ours), when MuJoCo runs.
+    pub static_load: Option<crate::engine::StaticLoad>,
+    /// Gains both engines used.
+    pub gains: crate::engine::Gains,
+    /// The paper's loss terms per goal at the chosen configuration (the trajectory's, else IK's
+    /// best); `None` for a goal with no configuration at all.
+    pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
+    /// The options the run used.
+    pub options: ValidateOptions,
+}
+
+/// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
+/// certified continuous check, the engines' dynamic runs and kinematic replays (rapier and
+/// MuJoCo in parallel), and the static load.
+///
+/// # Errors
+/// [`Error::Collide`] for geometry that cannot be built, [`Error::Plan`] for a scenario home that
+/// does not fit the robot, [`Error::Engine`] when an engine refuses the model.
+pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &ValidateOptions) -> Result<Validation, Error> {
+    let model = loaded.model.placed(&scenario.world_from_base);
+    let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
+    let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &opts.ik);
+    let trajectory_options = crate::plan::TrajectoryOptions {
+        certify: opts.certify,
+        ik: opts.ik.clone(),
+        timing: None,
+    };
+    let trajectory = crate::plan::plan(&model, &scenario, &world, &solutions, &trajectory_options)?;
+    let replayed = crate::plan::replay_segments(&trajectory);
+    let loss_terms = scenario
+        .goals
+        .iter()
+        .enumerate()
+        .map(|(index, goal)| {
+            let chosen = match trajectory.steps.get(index) {
+                Some(crate::plan::GoalStep::Reached { q, .. }) => Some(q.as_slice()),
+                _ => solutions.get(index).and_then(|g| g.solutions.first()).map(|s| s.q.as_slice()),
+            };
+            chosen.map(|q| crate::ik::paper_loss_terms(&model, &world, goal, q))
+        })
+        .collect();
+    let samples = crate::plan::replay_samples(&replayed);
+    let gain_options = crate::engine::GainOptions {
+        gravity_m_s2: opts.engine.gravity_m_s2,
+        ..opts.gains.clone()
+    };
+    let gains = crate::engine::gains(&model, &trajectory.timed, &gain_options);
+    let run_rapier = || -> Result<Option<EngineRuns>, crate::engine::EngineError> {
+        if !opts.engines.rapier {
+            return Ok(None);
+        }
+        Ok(Some(EngineRuns {
+            dynamic: crate::engine::run_rapier(&model, &scenario, &world, &trajectory.timed, &gains, &opts.engine)?,
+            replay: crate::engine::replay_rapier(&model, &scenario, &world, &samples, &opts.engine)?,
+        }))
+    };
+    let run_mujoco = || -> Result<(Option<EngineRuns>, Option<crate::engine::StaticLoad>), crate::engine::EngineError> {
+        if !opts.engines.mujoco {
+            return Ok((None, None));
+        }
+        let runs = EngineRuns {
+            dynamic: crate::engine::run_mujoco(&model, &scenario, &world, &trajectory.timed, &gains, &opts.engine)?,
+            replay: crate::engine::replay_mujoco(&model, &scenario, &world, &samples, &opts.engine)?,
+        };
+        // Along the trajectory only: a blocked goal's attempt is not a motion the robot makes.
+        let mut configurations = vec![trajectory.home.clone()];
+        configurations.extend(
+            samples
+                .iter()
+                .filter(|(clock, _)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned))
+                .map(|(_, q)| q.clone()),
+        );
+        let load = crate::engine::static_load(&model, &configurations, opts.engine.gravity_m_s2)?;
+        Ok((Some(runs), Some(load)))
+    };
+    // The engines are independent and each deterministic: running them side by side changes
+    // no number.
+    let (rapier, mujoco) = rayon::join(run_rapier, run_mujoco);
+    let rapier = rapier?;
+    let (mujoco, static_load) = mujoco?;
+    Ok(Validation {
+        pairs: world.pairs().to_vec(),
+        excluded: world.excluded().to_vec(),
+        model,
+        design: loaded.design,
+        scenario,
+        solutions,
+        trajectory,
+        replayed,
+        rapier,
+        mujoco,
+        static_load,
+        gains,
+        loss_terms,
+        options: opts.clone(),
+    })
+}

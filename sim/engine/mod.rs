@@ -3,11 +3,19 @@
 //! the independent oracles for our own. Fails with [`EngineError`] when an engine refuses a model.
 
 mod crosscheck;
+mod gains;
+mod load;
 mod mujoco;
+mod mujoco_run;
+mod rapier;
 mod run;
 
 pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
+pub use gains::{gains, GainOptions};
+pub use load::{static_load, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
+pub use mujoco_run::{replay_mujoco, run_mujoco};
+pub use rapier::{replay_rapier, run_rapier};
 pub use run::{ContactInterval, ContactRecorder, EngineRun, Gains, GoalHold, RunOptions};
 
 use std::path::PathBuf;
@@ -41,6 +49,35 @@ pub enum EngineError {
         /// Version pinned.
         expected: &'static str,
     },
+    /// The model could not be written as MJCF for an engine run.
+    #[error("robot `{robot}`: cannot export the model for MuJoCo: {source}")]
+    Export {
+        /// Robot name.
+        robot: String,
+        /// The exporter's error.
+        #[source]
+        source: crate::export::ExportError,
+    },
+    /// A run's integration step is not a positive number of seconds.
+    #[error("the integration step must be positive and finite, got {timestep_s} s")]
+    InvalidTimestep {
+        /// The step given (s).
+        timestep_s: f64,
+    },
+    /// A configuration handed to an engine does not have one value per joint.
+    #[error("robot `{robot}`: {context} {index} has {found} joint values, expected {expected}")]
+    ConfigurationLength {
+        /// Robot name.
+        robot: String,
+        /// What the configuration is (`sample`, `path waypoint`).
+        context: &'static str,
+        /// Its index.
+        index: usize,
+        /// Values given.
+        found: usize,
+        /// Joints of the robot.
+        expected: usize,
+    },
     /// A file could not be read.
     #[error("cannot read {path}: {source}")]
     Read {
@@ -49,5 +86,13 @@ pub enum EngineError {
         /// The I/O error.
         #[source]
         source: std::io::Error,
+    },
+    /// rapier could not be given the model or the run's inputs.
+    #[error("rapier cannot run `{model}`: {message}")]
+    Rapier {
+        /// Model name.
+        model: String,
+        /// What is wrong, naming the joint, link, collider or value.
+        message: String,
     },
 }

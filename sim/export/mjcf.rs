@@ -7,6 +7,12 @@
 //! the model loader understood works. One position actuator per joint, and contact exclusions for
 //! the body pairs one joint connects.
 //!
+//! For a physics run, [`MjcfOptions`] also adds the world around the robot: static geoms in the
+//! world body (a scenario's obstacles, named as given), a floor plane `floor`, contact
+//! exclusions for further body pairs (the pairs a collision world does not check), gravity and
+//! the integrator. MuJoCo collides cylinders approximately (see the README, "Collision
+//! checking"); the geometry written is still the exact one.
+//!
 //! Numbers are written with `{}` (shortest text that parses back to the same f64) and angles in
 //! radians, declared in `<compiler>`. MuJoCo re-centres and re-orients mesh geoms at their
 //! centroid and collides with their convex hull; the body frames and sites stay as written.
@@ -22,6 +28,10 @@ const WORLD_BODY: &str = "world";
 const DEFAULT_KP: f64 = 100.0;
 /// Velocity gain used when [`MjcfOptions::kv`] is `None` (N m s/rad for hinges, N s/m for slides).
 const DEFAULT_KV: f64 = 10.0;
+/// Name of the floor plane geom.
+const FLOOR_GEOM: &str = "floor";
+/// Prefix of the mesh assets of world colliders (`mesh_world_<k>`, `k` the collider's index).
+const WORLD_MESH_PREFIX: &str = "mesh_world_";
 
 /// Options for [`to_mjcf`].
 #[derive(Debug, Clone)]
@@ -36,6 +46,19 @@ pub struct MjcfOptions {
     pub kv: Option<Vec<f64>>,
     /// Write one `<position>` actuator per joint; default `true`.
     pub include_actuators: bool,
+    /// Static geoms in the world body, each at `link_from_shape` in the world, named by its
+    /// `label` (a scenario's obstacles); default none.
+    pub world_colliders: Vec<Collider>,
+    /// Height (m) of a floor plane geom `floor` covering everything below it; default `None`.
+    pub floor_height: Option<f64>,
+    /// Body pairs (body names) whose contacts MuJoCo ignores, beyond the pairs one joint
+    /// connects (always excluded); default none. A pair given twice is written once.
+    pub excluded_body_pairs: Vec<(String, String)>,
+    /// Gravity along world -z (m/s^2); default 9.81.
+    pub gravity_m_s2: f64,
+    /// MuJoCo `integrator` option (`Euler`, `implicitfast`, `implicit`, `RK4`); default `None`:
+    /// not written, MuJoCo's default (Euler).
+    pub integrator: Option<String>,
 }
 
 impl Default for MjcfOptions {
@@ -45,6 +68,11 @@ impl Default for MjcfOptions {
             kp: None,
             kv: None,
             include_actuators: true,
+            world_colliders: Vec::new(),
+            floor_height: None,
+            excluded_body_pairs: Vec::new(),
+            gravity_m_s2: 9.81,
+            integrator: None,
         }
     }
 }
@@ -62,7 +90,8 @@ impl Default for MjcfOptions {
 /// [`ExportError::MissingInertial`] for a moving link without mass properties,
 /// [`ExportError::GainCount`] when `opts.kp` or `opts.kv` does not have one value per joint,
 /// [`ExportError::DuplicateName`] when two bodies or two joints would share a name (including a
-/// link other than the base called `world`).
+/// link other than the base called `world`), or two geoms (a world collider named like a link
+/// geom, another world collider, or `floor`).
 pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError> {
     check_chain(model)?;
     // Without an inertial MuJoCo would derive the mass from the geoms at water density, or
@@ -83,14 +112,36 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     let reserved = (!base_is_world).then_some(WORLD_BODY);
     check_unique(model, "MJCF", "body", reserved.into_iter().chain(body_names))?;
     check_unique(model, "MJCF", "joint", model.joints.iter().map(|j| j.name.as_str()))?;
+    let link_geoms: Vec<String> = model
+        .links
+        .iter()
+        .flat_map(|link| (0..link.colliders.len()).map(move |k| format!("{}/{k}", link.name)))
+        .collect();
+    let world_geoms = opts.world_colliders.iter().map(|c| c.label.as_str());
+    let floor = opts.floor_height.map(|_| FLOOR_GEOM);
+    check_unique(
+        model,
+        "MJCF",
+        "geom",
+        link_geoms.iter().map(String::as_str).chain(world_geoms).chain(floor),
+    )?;
 
     let mut out = String::new();
     line(&mut out, 0, &format!(r#"<mujoco model="{}">"#, escape(&model.name)));
     line(&mut out, 1, r#"<compiler angle="radian" autolimits="true"/>"#);
     let timestep = opts.timestep;
-    line(&mut out, 1, &format!(r#"<option timestep="{timestep}" gravity="0 0 -9.81"/>"#));
-    write_assets(&mut out, model);
-    write_bodies(&mut out, model, base_is_world);
+    let gravity = -opts.gravity_m_s2;
+    let integrator = match &opts.integrator {
+        Some(name) => format!(r#" integrator="{}""#, escape(name)),
+        None => String::new(),
+    };
+    line(
+        &mut out,
+        1,
+        &format!(r#"<option timestep="{timestep}" gravity="0 0 {gravity}"{integrator}/>"#),
+    );
+    write_assets(&mut out, model, &opts.world_colliders);
+    write_bodies(&mut out, model, base_is_world, opts);
     if opts.include_actuators && !model.joints.is_empty() {
         line(&mut out, 1, "<actuator>");
         for ((joint, kp), kv) in model.joints.iter().zip(&kp).zip(&kv) {
@@ -100,11 +151,22 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         }
         line(&mut out, 1, "</actuator>");
     }
-    let pairs = model.adjacent_link_pairs();
+    // Adjacent pairs first, then the extra ones not already written (either order).
+    let mut pairs: Vec<(&str, &str)> = model
+        .adjacent_link_pairs()
+        .into_iter()
+        .map(|(a, b)| (model.links[a].name.as_str(), model.links[b].name.as_str()))
+        .collect();
+    for (a, b) in &opts.excluded_body_pairs {
+        let (a, b) = (a.as_str(), b.as_str());
+        if !pairs.iter().any(|&(x, y)| (x, y) == (a, b) || (x, y) == (b, a)) {
+            pairs.push((a, b));
+        }
+    }
     if !pairs.is_empty() {
         line(&mut out, 1, "<contact>");
         for (a, b) in pairs {
-            let (body1, body2) = (escape(&model.links[a].name), escape(&model.links[b].name));
+            let (body1, body2) = (escape(a), escape(b));
             line(&mut out, 2, &format!(r#"<exclude body1="{body1}" body2="{body2}"/>"#));
         }
         line(&mut out, 1, "</contact>");
@@ -127,21 +189,31 @@ fn gains(model: &Model, gain: &'static str, given: Option<&[f64]>, default: f64)
     }
 }
 
-fn write_assets(out: &mut String, model: &Model) {
+fn write_assets(out: &mut String, model: &Model, world_colliders: &[Collider]) {
+    let mesh_asset = |name: String, collider: &Collider| {
+        let Shape::Mesh(mesh) = &collider.shape else {
+            return None;
+        };
+        let vertex = numbers(mesh.vertices.iter().flatten().copied());
+        let face = mesh.triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
+        let name = escape(&name);
+        Some(format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#))
+    };
     let meshes: Vec<String> = model
         .links
         .iter()
         .flat_map(|link| {
-            link.colliders.iter().enumerate().filter_map(|(k, collider)| {
-                let Shape::Mesh(mesh) = &collider.shape else {
-                    return None;
-                };
-                let vertex = numbers(mesh.vertices.iter().flatten().copied());
-                let face = mesh.triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
-                let name = escape(&mesh_name(&link.name, k));
-                Some(format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#))
-            })
+            link.colliders
+                .iter()
+                .enumerate()
+                .filter_map(|(k, collider)| mesh_asset(mesh_name(&link.name, k), collider))
         })
+        .chain(
+            world_colliders
+                .iter()
+                .enumerate()
+                .filter_map(|(k, collider)| mesh_asset(format!("{WORLD_MESH_PREFIX}{k}"), collider)),
+        )
         .collect();
     if meshes.is_empty() {
         return;
@@ -155,8 +227,20 @@ fn write_assets(out: &mut String, model: &Model) {
 
 /// The bodies, nested: each link's body is opened inside its parent's and all are closed at the
 /// end, innermost first.
-fn write_bodies(out: &mut String, model: &Model, base_is_world: bool) {
+fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &MjcfOptions) {
     line(out, 1, "<worldbody>");
+    // The world's own geoms come first, outside any base frame: their poses are world poses.
+    if let Some(height) = opts.floor_height {
+        line(
+            out,
+            2,
+            &format!(r#"<geom name="{FLOOR_GEOM}" type="plane" pos="0 0 {height}" size="0 0 1"/>"#),
+        );
+    }
+    for (k, collider) in opts.world_colliders.iter().enumerate() {
+        let text = geom_text(&collider.label, &format!("{WORLD_MESH_PREFIX}{k}"), collider);
+        line(out, 2, &text);
+    }
     let mut depth = 2;
     let mut closing = Vec::with_capacity(model.links.len());
     for (i, link) in model.links.iter().enumerate() {
@@ -214,6 +298,11 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool) {
 }
 
 fn geom(link: &str, k: usize, collider: &Collider) -> String {
+    geom_text(&format!("{link}/{k}"), &mesh_name(link, k), collider)
+}
+
+/// A `<geom>` named `name` at the collider's pose; a mesh refers to the asset `mesh`.
+fn geom_text(name: &str, mesh: &str, collider: &Collider) -> String {
     let shape = match &collider.shape {
         Shape::Sphere { radius } => format!(r#"type="sphere" size="{radius}""#),
         Shape::Cylinder { radius, length } => {
@@ -221,9 +310,9 @@ fn geom(link: &str, k: usize, collider: &Collider) -> String {
         }
         Shape::Capsule { radius, length } => format!(r#"type="capsule" size="{radius} {}""#, length / 2.0),
         Shape::Box { half_extents } => format!(r#"type="box" size="{}""#, numbers(*half_extents)),
-        Shape::Mesh(_) => format!(r#"type="mesh" mesh="{}""#, escape(&mesh_name(link, k))),
+        Shape::Mesh(_) => format!(r#"type="mesh" mesh="{}""#, escape(mesh)),
     };
-    let name = escape(&format!("{link}/{k}"));
+    let name = escape(name);
     format!(r#"<geom name="{name}" {shape} {}/>"#, pose(&collider.link_from_shape))
 }
 
@@ -469,6 +558,56 @@ mod tests {
         let error = to_mjcf(&model, &MjcfOptions::default()).expect_err("two world bodies");
         assert!(
             matches!(&error, ExportError::DuplicateName { kind: "body", name, .. } if name == "world"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn world_geoms_floor_exclusions_gravity_and_integrator_are_written() {
+        let model = modular_model();
+        let opts = MjcfOptions {
+            world_colliders: vec![Collider {
+                link_from_shape: Isometry3::translation(0.5, 0.0, 0.25),
+                shape: Shape::Box {
+                    half_extents: [0.1, 0.2, 0.25],
+                },
+                label: "shelf".into(),
+            }],
+            floor_height: Some(-0.01),
+            excluded_body_pairs: vec![("link3".into(), "link1".into()), ("link1".into(), "link2".into())],
+            gravity_m_s2: 3.5,
+            integrator: Some("implicitfast".into()),
+            ..MjcfOptions::default()
+        };
+        let text = to_mjcf(&model, &opts).expect("exports");
+        assert!(
+            text.contains(r#"<option timestep="0.001" gravity="0 0 -3.5" integrator="implicitfast"/>"#),
+            "{text}"
+        );
+        assert!(
+            text.contains(r#"<geom name="floor" type="plane" pos="0 0 -0.01" size="0 0 1"/>"#),
+            "{text}"
+        );
+        assert!(
+            text.contains(r#"<geom name="shelf" type="box" size="0.1 0.2 0.25" pos="0.5 0 0.25" quat="1 0 0 0"/>"#),
+            "{text}"
+        );
+        assert!(text.contains(r#"<exclude body1="link3" body2="link1"/>"#), "{text}");
+        // link1-link2 is adjacent and already excluded: written once.
+        assert_eq!(text.matches("<exclude ").count(), model.dof() + 1, "{text}");
+
+        let opts = MjcfOptions {
+            floor_height: Some(0.0),
+            world_colliders: vec![Collider {
+                link_from_shape: Isometry3::identity(),
+                shape: Shape::Sphere { radius: 0.1 },
+                label: "floor".into(),
+            }],
+            ..MjcfOptions::default()
+        };
+        let error = to_mjcf(&model, &opts).expect_err("two geoms named floor");
+        assert!(
+            matches!(&error, ExportError::DuplicateName { kind: "geom", name, .. } if name == "floor"),
             "{error}"
         );
     }

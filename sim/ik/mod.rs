@@ -4,9 +4,11 @@
 
 mod dls;
 mod error;
+mod loss;
 mod refine;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
+pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;

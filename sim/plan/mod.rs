@@ -3,13 +3,15 @@
 //! segments certified collision-free, and its time parameterisation for the engines.
 
 mod certify;
+mod replay;
 mod timing;
 mod trajectory;
 
 pub use certify::{CertifyOptions, MotionBounds, SegmentCheck, SegmentChecker, SegmentPoint, MAX_STEPS, TOUCH_TOLERANCE_M};
 
+pub use replay::{replay_samples, replay_segments, ReplaySegment, REPLAY_STEP};
 pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
     DEFAULT_VELOCITY_RAD_S,
 };
-pub use trajectory::{home_configuration, Attempt, nearest_equivalent, plan, GoalStep, PlanError, Trajectory, TrajectoryOptions};
+pub use trajectory::{home_configuration, nearest_equivalent, plan, Attempt, GoalStep, PlanError, Trajectory, TrajectoryOptions};

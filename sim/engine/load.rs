@@ -1,0 +1,92 @@
+//! The static load check: the gravity torque every joint must hold along a trajectory, from
+//! MuJoCo and from our own statics ([`Model::gravity_torques`]), against each joint's rating.
+
+use super::mujoco_run::{check_lengths, Loaded};
+use super::{EngineError, RunOptions};
+use crate::model::Model;
+use serde::Serialize;
+
+/// The static gravity load of every joint along a trajectory, against its rating.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StaticLoad {
+    /// Gravity used (m/s^2, along world -z).
+    pub gravity_m_s2: f64,
+    /// Per joint, chain order.
+    pub joints: Vec<JointLoad>,
+    /// Largest disagreement between MuJoCo's gravity torque (`qfrc_bias` at rest) and ours
+    /// ([`Model::gravity_torques`]) over all samples and joints, relative to the largest
+    /// torque magnitude of that sample; above 1e-9 it is a finding (a bug on one side).
+    pub max_relative_disagreement: f64,
+}
+
+/// The static gravity load of one joint.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JointLoad {
+    /// Joint name.
+    pub joint: String,
+    /// Largest gravity torque magnitude over the samples, MuJoCo's (N m or N).
+    pub peak_torque: f64,
+    /// Index of the sample where it occurs (the first, on a tie); 0 without samples.
+    pub sample: usize,
+    /// The joint's rating (`Joint::max_effort`: catalog 60 N m, URDF `effort`), if known.
+    pub rated: Option<f64>,
+    /// The peak exceeds the rating.
+    pub over: bool,
+}
+
+/// Gravity torque of every joint at each of `samples` (rad or m) held at rest, from MuJoCo
+/// (`qfrc_bias` with zero velocity, after `mj_forward`) and cross-checked against
+/// [`Model::gravity_torques`]; gravity `gravity_m_s2` (m/s^2) along world -z. `model` should
+/// be placed as in the run (the base orientation decides where gravity points).
+///
+/// # Errors
+/// [`EngineError::Export`], [`EngineError::MujocoLoad`], [`EngineError::Version`], and
+/// [`EngineError::ConfigurationLength`] for a sample of the wrong length.
+pub fn static_load(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Result<StaticLoad, EngineError> {
+    check_lengths(model, "sample", samples.iter().map(Vec::len))?;
+    let opts = RunOptions {
+        gravity_m_s2,
+        ..RunOptions::default()
+    };
+    let loaded = Loaded::new(model, None, None, None, &opts)?;
+    let mut data = loaded.model.make_data();
+    let mut joints: Vec<JointLoad> = model
+        .joints
+        .iter()
+        .map(|joint| JointLoad {
+            joint: joint.name.clone(),
+            peak_torque: 0.0,
+            sample: 0,
+            rated: joint.max_effort,
+            over: false,
+        })
+        .collect();
+    let mut max_relative_disagreement = 0.0_f64;
+    for (index, q) in samples.iter().enumerate() {
+        loaded.set_configuration(&mut data, q);
+        data.qvel_mut().fill(0.0);
+        data.forward();
+        let mujoco: Vec<f64> = loaded.dof_address.iter().map(|&d| data.qfrc_bias()[d]).collect();
+        let ours = model.gravity_torques(q, gravity_m_s2);
+        let scale = mujoco.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+        for (j, load) in joints.iter_mut().enumerate() {
+            let difference = (mujoco[j] - ours[j]).abs();
+            // A sample with no load at all (zero gravity) has nothing to disagree about.
+            if scale > 0.0 {
+                max_relative_disagreement = max_relative_disagreement.max(difference / scale);
+            }
+            if mujoco[j].abs() > load.peak_torque {
+                load.peak_torque = mujoco[j].abs();
+                load.sample = index;
+            }
+        }
+    }
+    for load in &mut joints {
+        load.over = load.rated.is_some_and(|rated| load.peak_torque > rated);
+    }
+    Ok(StaticLoad {
+        gravity_m_s2,
+        joints,
+        max_relative_disagreement,
+    })
+}

@@ -1,0 +1,79 @@
+//! The segments the engines replay kinematically, beside the certified check: the planned
+//! segments and, for each blocked goal, the segment that was tried (the motion the paper's
+//! heuristic would have made), each with its certified verdict.
+//!
+//! The replay clock is by segment, not by time: segment `k` occupies `[k, k + 1)` and a sample at
+//! `k + s` is the configuration at path parameter `s` of segment `k`, so an engine's contact
+//! maps back to its segment and to where on it. Samples are spaced at most [`REPLAY_STEP`] apart
+//! in every joint: the engines are sampled checkers, unlike the certified one.
+
+use super::certify::SegmentCheck;
+use super::trajectory::{GoalStep, Trajectory};
+use serde::Serialize;
+
+/// Largest joint change between replay samples (rad or m).
+pub const REPLAY_STEP: f64 = 0.005;
+
+/// One segment to replay.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReplaySegment {
+    /// Goal the segment heads for.
+    pub goal: usize,
+    /// Part of the trajectory (certified free) or a blocked goal's attempt.
+    pub planned: bool,
+    /// Start configuration.
+    pub from: Vec<f64>,
+    /// End configuration.
+    pub to: Vec<f64>,
+    /// The certified check of the segment.
+    pub certified: SegmentCheck,
+}
+
+/// The segments of `trajectory` to replay, in goal order.
+pub fn replay_segments(trajectory: &Trajectory) -> Vec<ReplaySegment> {
+    let mut previous = trajectory.home.clone();
+    let mut segments = Vec::new();
+    for step in &trajectory.steps {
+        match step {
+            GoalStep::Reached { goal, q, segment, .. } => {
+                segments.push(ReplaySegment {
+                    goal: *goal,
+                    planned: true,
+                    from: previous.clone(),
+                    to: q.clone(),
+                    certified: segment.clone(),
+                });
+                previous.clone_from(q);
+            }
+            GoalStep::Blocked {
+                goal,
+                attempt: Some(attempt),
+                ..
+            } => segments.push(ReplaySegment {
+                goal: *goal,
+                planned: false,
+                from: attempt.from.clone(),
+                to: attempt.to.clone(),
+                certified: attempt.segment.clone(),
+            }),
+            GoalStep::Blocked { attempt: None, .. } => {}
+        }
+    }
+    segments
+}
+
+/// Samples `(replay clock, configuration)` of `segments`; both ends of every segment included
+/// (the end at `k + 1 - 1e-9`, so it still maps to segment `k`).
+pub fn replay_samples(segments: &[ReplaySegment]) -> Vec<(f64, Vec<f64>)> {
+    let mut samples = Vec::new();
+    for (k, segment) in segments.iter().enumerate() {
+        let largest = segment.from.iter().zip(&segment.to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
+        let count = ((largest / REPLAY_STEP).ceil() as usize).max(1);
+        for i in 0..=count {
+            let s = i as f64 / count as f64;
+            let q = segment.from.iter().zip(&segment.to).map(|(a, b)| a + s * (b - a)).collect();
+            samples.push((k as f64 + s.min(1.0 - 1e-9), q));
+        }
+    }
+    samples
+}

@@ -1,0 +1,412 @@
+//! Findings: everything a user should know about a run, each with a kind, a severity, a message
+//! and its numbers; and the verdict they make.
+//!
+//! The three checkers are compared on the replayed segments (see `plan::replay_segments`): the
+//! certified parry3d check is the authority, so a contact an engine reports on a segment parry
+//! certified free, or a blocked segment an engine replays without contact, is a disagreement to
+//! review (severity `warn`), not a failure. Known sources: MuJoCo collides cylinders through its
+//! general convex solver (a few micrometres off) and meshes as hulls; the engines are sampled
+//! checkers (every 0.005 rad), so a contact thinner than a sample step can escape them.
+
+use super::Report;
+use crate::engine::ContactInterval;
+use crate::pipeline::{EngineRuns, Validation};
+use crate::plan::GoalStep;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// How much a finding weighs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Severity {
+    /// Context, no action needed.
+    Info,
+    /// Worth a look; does not fail the design.
+    Warn,
+    /// Fails the design.
+    Fail,
+}
+
+/// What a finding is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FindingKind {
+    /// IK found no collision-free configuration within the thresholds.
+    GoalUnreachable,
+    /// Collision-free configurations exist but no certified segment connects one.
+    GoalBlocked,
+    /// The home configuration is in collision.
+    HomeInCollision,
+    /// An engine's dynamic run touched something while following the certified trajectory.
+    EngineContact,
+    /// An engine did not hold a goal within the hold tolerance after the dwell.
+    GoalNotHeld,
+    /// The two engines disagree on holding a goal.
+    EnginesDisagree,
+    /// An engine's replay reports a contact on a segment the certified check found free.
+    ReplayContactNotPredicted,
+    /// The certified check found a segment in contact that an engine's replay did not.
+    ReplayContactMissed,
+    /// The certified check and an engine's replay both found a blocked segment in contact.
+    ReplayContactConfirmed,
+    /// A joint's static gravity torque along the trajectory exceeds its rating.
+    StaticOverload,
+    /// Our gravity torques and MuJoCo's disagree (a model bug on one side).
+    GravityModelMismatch,
+    /// A joint's peak effort in a dynamic run exceeds its rating (the controller's stiffness
+    /// during motion, not the static load).
+    EffortOverRating,
+    /// The paper's capsule model calls a configuration colliding that is free in exact geometry.
+    ConservativeApproximation,
+    /// The paper's capsule model calls a configuration free that collides in exact geometry.
+    UnsafeApproximation,
+}
+
+/// One finding.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Finding {
+    /// Kind.
+    pub kind: FindingKind,
+    /// Severity.
+    pub severity: Severity,
+    /// The goal concerned, if one.
+    pub goal: Option<usize>,
+    /// The engine concerned, if one.
+    pub engine: Option<&'static str>,
+    /// One line for a human.
+    pub message: String,
+    /// The numbers behind it, by name with their unit in the name.
+    pub values: BTreeMap<&'static str, f64>,
+}
+
+fn finding(
+    kind: FindingKind,
+    severity: Severity,
+    goal: Option<usize>,
+    engine: Option<&'static str>,
+    message: String,
+    values: &[(&'static str, f64)],
+) -> Finding {
+    Finding {
+        kind,
+        severity,
+        goal,
+        engine,
+        message,
+        values: values.iter().copied().collect(),
+    }
+}
+
+/// Every finding of a validation, in a fixed order.
+pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &EngineRuns)], hold: (f64, f64)) -> Vec<Finding> {
+    let mut out = Vec::new();
+    let trajectory = &validation.trajectory;
+    if let Some(home) = &trajectory.home_clearance {
+        if home.distance_m <= validation.options.certify.threshold_m {
+            out.push(finding(
+                FindingKind::HomeInCollision,
+                Severity::Fail,
+                None,
+                None,
+                format!("home configuration: {} and {} in contact", home.a, home.b),
+                &[("distance_m", home.distance_m)],
+            ));
+        }
+    }
+    goal_findings(validation, &mut out);
+    for (name, runs) in engines {
+        engine_findings(validation, name, runs, hold, &mut out);
+    }
+    if let [(a, first), (b, second)] = engines {
+        for hold_a in &first.dynamic.holds {
+            let Some(hold_b) = second.dynamic.holds.iter().find(|h| h.goal == hold_a.goal) else {
+                continue;
+            };
+            let held = |h: &crate::engine::GoalHold| h.position_error_m <= hold.0 && h.orientation_error_rad <= hold.1;
+            if held(hold_a) != held(hold_b) {
+                out.push(finding(
+                    FindingKind::EnginesDisagree,
+                    Severity::Warn,
+                    Some(hold_a.goal),
+                    None,
+                    format!(
+                        "goal {}: {a} {} it ({:.2} mm, {:.3} deg), {b} {} it ({:.2} mm, {:.3} deg)",
+                        hold_a.goal,
+                        if held(hold_a) { "holds" } else { "misses" },
+                        hold_a.position_error_m * 1e3,
+                        hold_a.orientation_error_rad.to_degrees(),
+                        if held(hold_b) { "holds" } else { "misses" },
+                        hold_b.position_error_m * 1e3,
+                        hold_b.orientation_error_rad.to_degrees(),
+                    ),
+                    &[
+                        ("first_position_m", hold_a.position_error_m),
+                        ("second_position_m", hold_b.position_error_m),
+                    ],
+                ));
+            }
+        }
+    }
+    if let Some(load) = &validation.static_load {
+        for (index, joint) in load.joints.iter().enumerate() {
+            if joint.over {
+                out.push(finding(
+                    FindingKind::StaticOverload,
+                    Severity::Fail,
+                    None,
+                    None,
+                    format!(
+                        "joint {} ({}): gravity alone needs {:.1} N m, rated {:.1} N m",
+                        index + 1,
+                        joint.joint,
+                        joint.peak_torque,
+                        joint.rated.unwrap_or(f64::NAN)
+                    ),
+                    &[("peak_torque", joint.peak_torque), ("rated", joint.rated.unwrap_or(f64::NAN))],
+                ));
+            }
+        }
+        if load.max_relative_disagreement > 1e-9 {
+            out.push(finding(
+                FindingKind::GravityModelMismatch,
+                Severity::Warn,
+                None,
+                None,
+                format!(
+                    "our gravity torques and MuJoCo's differ by {:.2e} (relative)",
+                    load.max_relative_disagreement
+                ),
+                &[("relative", load.max_relative_disagreement)],
+            ));
+        }
+    }
+    out
+}
+
+fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
+    for (index, step) in validation.trajectory.steps.iter().enumerate() {
+        let solutions = validation.solutions.get(index).map(|g| g.solutions.as_slice()).unwrap_or_default();
+        let best = solutions.first();
+        if let Some(best) = best {
+            if let Some(c) = best.clearance {
+                let margin = 0.0;
+                if c.approximate_m <= margin && c.exact_m > margin {
+                    out.push(finding(
+                        FindingKind::ConservativeApproximation,
+                        Severity::Info,
+                        Some(index),
+                        None,
+                        format!(
+                            "goal {index}: the paper's capsules collide ({:.1} mm), exact geometry is free ({:.1} mm)",
+                            c.approximate_m * 1e3,
+                            c.exact_m * 1e3
+                        ),
+                        &[("approximate_m", c.approximate_m), ("exact_m", c.exact_m)],
+                    ));
+                } else if c.approximate_m > margin && c.exact_m <= margin && best.pose_reached {
+                    out.push(finding(
+                        FindingKind::UnsafeApproximation,
+                        Severity::Warn,
+                        Some(index),
+                        None,
+                        format!(
+                            "goal {index}: the paper's capsules are free ({:.1} mm), exact geometry collides ({:.1} mm)",
+                            c.approximate_m * 1e3,
+                            c.exact_m * 1e3
+                        ),
+                        &[("approximate_m", c.approximate_m), ("exact_m", c.exact_m)],
+                    ));
+                }
+            }
+        }
+        match step {
+            GoalStep::Reached { .. } => {}
+            GoalStep::Blocked { tried: 0, .. } => {
+                let (position, orientation, clearance) = best.map_or((f64::NAN, f64::NAN, f64::NAN), |s| {
+                    (
+                        s.error.position_m,
+                        s.error.orientation_rad,
+                        s.clearance.map_or(f64::NAN, |c| c.exact_m),
+                    )
+                });
+                let why = match best {
+                    Some(s) if s.pose_reached => format!("every solution found collides (best clearance {:.1} mm)", clearance * 1e3),
+                    _ => format!("closest miss {:.2} mm, {:.2} deg", position * 1e3, orientation.to_degrees()),
+                };
+                out.push(finding(
+                    FindingKind::GoalUnreachable,
+                    Severity::Fail,
+                    Some(index),
+                    None,
+                    format!("goal {index} ({}): not reached: {why}", validation.scenario.goals[index].name),
+                    &[
+                        ("position_m", position),
+                        ("orientation_rad", orientation),
+                        ("clearance_m", clearance),
+                    ],
+                ));
+            }
+            GoalStep::Blocked { tried, stop, .. } => {
+                let (pair, distance) = stop
+                    .as_ref()
+                    .map_or((String::from("?"), f64::NAN), |s| (format!("{} and {}", s.a, s.b), s.distance_m));
+                out.push(finding(
+                    FindingKind::GoalBlocked,
+                    Severity::Fail,
+                    Some(index),
+                    None,
+                    format!(
+                        "goal {index} ({}): none of {tried} collision-free solutions is connected by a free segment; the nearest stops where {pair} touch",
+                        validation.scenario.goals[index].name
+                    ),
+                    &[("distance_m", distance), ("tried", *tried as f64)],
+                ));
+            }
+        }
+    }
+}
+
+/// The replay segment a contact interval's clock values fall in.
+fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
+    (contact.start_s.max(0.0) as usize)..=(contact.end_s.max(0.0) as usize)
+}
+
+fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRuns, hold: (f64, f64), out: &mut Vec<Finding>) {
+    for contact in &runs.dynamic.contacts {
+        out.push(finding(
+            FindingKind::EngineContact,
+            Severity::Fail,
+            None,
+            Some(name),
+            format!(
+                "{name}: {} and {} in contact from {:.3} s to {:.3} s, {:.2} mm deep",
+                contact.a,
+                contact.b,
+                contact.start_s,
+                contact.end_s,
+                contact.max_depth_m * 1e3
+            ),
+            &[
+                ("start_s", contact.start_s),
+                ("end_s", contact.end_s),
+                ("depth_m", contact.max_depth_m),
+            ],
+        ));
+    }
+    for h in &runs.dynamic.holds {
+        if h.position_error_m > hold.0 || h.orientation_error_rad > hold.1 {
+            out.push(finding(
+                FindingKind::GoalNotHeld,
+                Severity::Fail,
+                Some(h.goal),
+                Some(name),
+                format!(
+                    "{name}: goal {} held {:.2} mm / {:.3} deg from the reference after the dwell",
+                    h.goal,
+                    h.position_error_m * 1e3,
+                    h.orientation_error_rad.to_degrees()
+                ),
+                &[("position_m", h.position_error_m), ("orientation_rad", h.orientation_error_rad)],
+            ));
+        }
+    }
+    for (joint, (peak, model_joint)) in runs.dynamic.peak_effort.iter().zip(&validation.model.joints).enumerate() {
+        if let Some(rated) = model_joint.max_effort {
+            if *peak > rated {
+                out.push(finding(
+                    FindingKind::EffortOverRating,
+                    Severity::Info,
+                    None,
+                    Some(name),
+                    format!(
+                        "{name}: joint {} ({}) peaks at {peak:.1} N m in motion, rated {rated:.1} N m",
+                        joint + 1,
+                        model_joint.name
+                    ),
+                    &[("peak", *peak), ("rated", rated)],
+                ));
+            }
+        }
+    }
+    // Replay against the certified check, segment by segment.
+    for (k, segment) in validation.replayed.iter().enumerate() {
+        let contacts: Vec<&ContactInterval> = runs.replay.contacts.iter().filter(|c| segments_of(c).contains(&k)).collect();
+        let parry_contact = !segment.certified.free;
+        match (parry_contact, contacts.first()) {
+            (false, Some(contact)) => out.push(finding(
+                FindingKind::ReplayContactNotPredicted,
+                Severity::Warn,
+                Some(segment.goal),
+                Some(name),
+                format!(
+                    "{name} replay: {} and {} in contact ({:.3} mm) on the segment to goal {} that parry3d certified free",
+                    contact.a,
+                    contact.b,
+                    contact.max_depth_m * 1e3,
+                    segment.goal
+                ),
+                &[("clock", contact.start_s), ("depth_m", contact.max_depth_m)],
+            )),
+            (true, None) => out.push(finding(
+                FindingKind::ReplayContactMissed,
+                Severity::Warn,
+                Some(segment.goal),
+                Some(name),
+                format!(
+                    "{name} replay: no contact on the segment to goal {} where parry3d finds one",
+                    segment.goal
+                ),
+                &[],
+            )),
+            (true, Some(contact)) => out.push(finding(
+                FindingKind::ReplayContactConfirmed,
+                Severity::Info,
+                Some(segment.goal),
+                Some(name),
+                format!(
+                    "{name} replay confirms the contact on the segment to goal {}: {} and {}, {:.2} mm deep",
+                    segment.goal,
+                    contact.a,
+                    contact.b,
+                    contact.max_depth_m * 1e3
+                ),
+                &[("clock", contact.start_s), ("depth_m", contact.max_depth_m)],
+            )),
+            (false, None) => {}
+        }
+    }
+}
+
+/// Passed when no finding fails; the reasons count the failing findings by kind.
+pub(super) fn verdict(findings: &[Finding]) -> super::Verdict {
+    let mut counts: BTreeMap<FindingKind, usize> = BTreeMap::new();
+    for f in findings.iter().filter(|f| f.severity == Severity::Fail) {
+        *counts.entry(f.kind).or_default() += 1;
+    }
+    let reasons = counts
+        .iter()
+        .map(|(kind, count)| {
+            let what = match kind {
+                FindingKind::GoalUnreachable => "goals not reached by IK",
+                FindingKind::GoalBlocked => "goals blocked (no collision-free segment)",
+                FindingKind::HomeInCollision => "home configuration in collision",
+                FindingKind::EngineContact => "contacts in the engines' dynamic runs",
+                FindingKind::GoalNotHeld => "goals not held by an engine",
+                FindingKind::StaticOverload => "joints over their rated torque under gravity",
+                _ => "other failures",
+            };
+            format!("{count} {what}")
+        })
+        .collect::<Vec<_>>();
+    super::Verdict {
+        passed: reasons.is_empty(),
+        reasons,
+    }
+}
+
+impl Report {
+    /// Findings of at least `severity`.
+    pub fn findings_at_least(&self, severity: Severity) -> impl Iterator<Item = &Finding> {
+        self.findings.iter().filter(move |f| f.severity >= severity)
+    }
+}

@@ -1,0 +1,398 @@
+//! Consumes a [`Validation`] (every stage's output). Produces the [`Report`]: the criteria it
+//! applied, per-goal and trajectory results, each engine's runs, the static load, the paper's
+//! loss, the findings and the verdict. Never fails: a failing design is a verdict.
+
+mod findings;
+mod loss;
+mod render;
+
+pub use findings::{Finding, FindingKind, Severity};
+pub use loss::PaperLoss;
+pub use render::render;
+
+use crate::collide::ExcludedPair;
+use crate::engine::{ContactInterval, StaticLoad};
+use crate::ik::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use crate::pipeline::Validation;
+use crate::plan::{GoalStep, SegmentPoint};
+use crate::scenario::{Provenance, Tolerance};
+use serde::Serialize;
+
+/// Version of the report's layout; bumped whenever a field changes meaning or moves.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The report of one design on one scenario.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// What "reached", "free" and "held" meant in this run.
+    pub criteria: Criteria,
+    /// The robot.
+    pub design: DesignSummary,
+    /// The scenario.
+    pub scenario: ScenarioSummary,
+    /// Per goal, course order.
+    pub goals: Vec<GoalReport>,
+    /// The trajectory through the goals.
+    pub trajectory: TrajectoryReport,
+    /// Per engine run.
+    pub engines: Vec<EngineReport>,
+    /// Gravity torques along the trajectory against the ratings (needs MuJoCo).
+    pub static_load: Option<StaticLoad>,
+    /// The paper's objective for this design on this scenario.
+    pub paper_loss: PaperLoss,
+    /// Everything noteworthy, failing or not.
+    pub findings: Vec<Finding>,
+    /// The verdict and its reasons.
+    pub verdict: Verdict,
+}
+
+/// The criteria a verdict was reached under.
+#[derive(Debug, Clone, Serialize)]
+pub struct Criteria {
+    /// A goal is reached below this position error (m).
+    pub position_m: f64,
+    /// ... and below this orientation error (deg), judged per the goal's tolerance mode.
+    pub orientation_deg: f64,
+    /// Clearance every configuration and every trajectory segment must keep (m).
+    pub collision_margin_m: f64,
+    /// The geometry collisions are judged on.
+    pub geometry: &'static str,
+    /// Link pairs not checked, with the reason for each.
+    pub excluded_pairs: Vec<ExcludedPair>,
+    /// An engine holds a goal when the tool is within this of the reference at the end of the
+    /// dwell (m).
+    pub hold_position_m: f64,
+    /// ... and within this angle (deg).
+    pub hold_orientation_deg: f64,
+    /// Engine contacts shallower than this are not counted (m).
+    pub engine_contact_depth_m: f64,
+    /// IK starts per goal and the seed of the random ones.
+    pub ik_seeds: usize,
+    /// Seed of IK's random starts.
+    pub seed: u64,
+    /// Engines run.
+    pub engines: Vec<&'static str>,
+}
+
+/// The robot a report is about.
+#[derive(Debug, Clone, Serialize)]
+pub struct DesignSummary {
+    /// Name.
+    pub name: String,
+    /// `free`, `economic`, `modular`, `preset` or `urdf`.
+    pub mode: String,
+    /// Joints.
+    pub dof: usize,
+    /// DH rows of a design (d, a, alpha, limits), or none for a URDF.
+    pub parameters: Option<serde_json::Value>,
+    /// The paper's hardware cost `sum |a| + sum |d|` (m), for designs.
+    pub hardware_cost_m: Option<f64>,
+}
+
+/// The scenario a report is about.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioSummary {
+    /// Name.
+    pub name: String,
+    /// How it was generated, if it was.
+    pub provenance: Option<Provenance>,
+    /// Goals.
+    pub goals: usize,
+    /// Obstacles.
+    pub obstacles: usize,
+    /// Whether a floor is present.
+    pub floor: bool,
+}
+
+/// One goal's results.
+#[derive(Debug, Clone, Serialize)]
+pub struct GoalReport {
+    /// Index in the scenario.
+    pub index: usize,
+    /// Name.
+    pub name: String,
+    /// Tolerance mode it is judged by.
+    pub tolerance: Tolerance,
+    /// IK found a collision-free solution within the thresholds.
+    pub reached: bool,
+    /// Distinct solutions IK found that reach the pose (colliding or not).
+    pub solutions_found: usize,
+    /// Of those, collision-free.
+    pub solutions_free: usize,
+    /// The configuration the trajectory goes to (or IK's best, when none connects).
+    pub chosen: Option<Vec<f64>>,
+    /// Position error of the chosen configuration (m).
+    pub position_error_m: Option<f64>,
+    /// Orientation error of the chosen configuration (deg).
+    pub orientation_error_deg: Option<f64>,
+    /// Exact clearance of the chosen configuration (m).
+    pub exact_clearance_m: Option<f64>,
+    /// The paper's capsule model's clearance of the chosen configuration (m).
+    pub approximate_clearance_m: Option<f64>,
+    /// The trajectory reaches it by a certified segment.
+    pub on_trajectory: bool,
+    /// Engines that held it within the hold tolerance.
+    pub held_by: Vec<&'static str>,
+}
+
+/// The trajectory's results.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrajectoryReport {
+    /// Start configuration.
+    pub home: Vec<f64>,
+    /// Clearance at home (m).
+    pub home_clearance_m: Option<f64>,
+    /// Goals reached by a certified segment.
+    pub reached: usize,
+    /// Goals blocked.
+    pub blocked: usize,
+    /// Per goal in order: the certified segment or the blocked attempt.
+    pub segments: Vec<SegmentReport>,
+    /// The smallest certified clearance over the trajectory (m).
+    pub certified_clearance_m: Option<f64>,
+    /// Joint-space length (rad and m summed).
+    pub joint_length: f64,
+    /// Tool path length (m).
+    pub tool_path_m: f64,
+    /// Duration of the timed trajectory (s).
+    pub duration_s: f64,
+}
+
+/// One segment of the trajectory, or a blocked goal's attempt.
+#[derive(Debug, Clone, Serialize)]
+pub struct SegmentReport {
+    /// Goal it heads for.
+    pub goal: usize,
+    /// On the trajectory (certified free) or blocked.
+    pub planned: bool,
+    /// Certified lower bound on its clearance (m), up to where it stopped.
+    pub certified_clearance_m: Option<f64>,
+    /// Closest approach measured, with the pair.
+    pub closest: Option<SegmentPoint>,
+    /// Where a blocked attempt stops: pair and configuration.
+    pub stop: Option<SegmentPoint>,
+    /// Collision queries of the continuous check.
+    pub queries: usize,
+}
+
+/// One engine's results.
+#[derive(Debug, Clone, Serialize)]
+pub struct EngineReport {
+    /// `rapier` or `mujoco`.
+    pub engine: &'static str,
+    /// Goals held / goals on the trajectory.
+    pub goals_held: usize,
+    /// Largest hold errors over the goals (m, deg).
+    pub worst_hold_position_m: f64,
+    /// Largest hold orientation error (deg).
+    pub worst_hold_orientation_deg: f64,
+    /// Largest tool deviation from the reference while moving (m).
+    pub max_tracking_position_m: f64,
+    /// Contacts in the dynamic run.
+    pub contacts: Vec<ContactInterval>,
+    /// Contacts in the kinematic replay (replay clock: segment k is [k, k + 1)).
+    pub replay_contacts: Vec<ContactInterval>,
+    /// Peak effort per joint in the dynamic run (N m or N).
+    pub peak_effort: Vec<f64>,
+    /// Rating per joint, when known (N m or N).
+    pub rated_effort: Vec<Option<f64>>,
+}
+
+/// Passed or failed, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Verdict {
+    /// The design passes the scenario.
+    pub passed: bool,
+    /// One line per failing finding kind, with counts; empty when passed.
+    pub reasons: Vec<String>,
+}
+
+/// Builds the report of a validation.
+pub fn build(validation: &Validation) -> Report {
+    let opts = &validation.options;
+    let engines: Vec<_> = [("rapier", &validation.rapier), ("mujoco", &validation.mujoco)]
+        .into_iter()
+        .filter_map(|(name, runs)| runs.as_ref().map(|runs| (name, runs)))
+        .collect();
+    let hold = (opts.gains.position_tolerance_m, opts.gains.orientation_tolerance_rad);
+    let criteria = Criteria {
+        position_m: REACHED_POSITION_M,
+        orientation_deg: REACHED_ORIENTATION_RAD.to_degrees(),
+        collision_margin_m: opts.certify.threshold_m,
+        geometry: "exact (parry3d-f64: the model's spheres, boxes, cylinders, capsules and triangle meshes as they are)",
+        excluded_pairs: validation.excluded.clone(),
+        hold_position_m: hold.0,
+        hold_orientation_deg: hold.1.to_degrees(),
+        engine_contact_depth_m: opts.engine.contact_depth_m,
+        ik_seeds: opts.ik.seeds,
+        seed: opts.ik.seed,
+        engines: engines.iter().map(|(name, _)| *name).collect(),
+    };
+    let goals = goal_reports(validation, &engines, hold);
+    let trajectory = trajectory_report(validation);
+    let engine_reports = engines
+        .iter()
+        .map(|(name, runs)| {
+            let held = runs
+                .dynamic
+                .holds
+                .iter()
+                .filter(|h| h.position_error_m <= hold.0 && h.orientation_error_rad <= hold.1)
+                .count();
+            EngineReport {
+                engine: name,
+                goals_held: held,
+                worst_hold_position_m: runs.dynamic.holds.iter().map(|h| h.position_error_m).fold(0.0, f64::max),
+                worst_hold_orientation_deg: runs
+                    .dynamic
+                    .holds
+                    .iter()
+                    .map(|h| h.orientation_error_rad)
+                    .fold(0.0, f64::max)
+                    .to_degrees(),
+                max_tracking_position_m: runs.dynamic.max_tool_position_error_m,
+                contacts: runs.dynamic.contacts.clone(),
+                replay_contacts: runs.replay.contacts.clone(),
+                peak_effort: runs.dynamic.peak_effort.clone(),
+                rated_effort: validation.model.joints.iter().map(|j| j.max_effort).collect(),
+            }
+        })
+        .collect();
+    let findings = findings::collect(validation, &engines, hold);
+    let verdict = findings::verdict(&findings);
+    Report {
+        schema_version: SCHEMA_VERSION,
+        criteria,
+        design: design_summary(validation),
+        scenario: ScenarioSummary {
+            name: validation.scenario.name.clone(),
+            provenance: validation.scenario.provenance.clone(),
+            goals: validation.scenario.goals.len(),
+            obstacles: validation.scenario.obstacles.len(),
+            floor: validation.scenario.floor.is_some(),
+        },
+        goals,
+        trajectory,
+        engines: engine_reports,
+        static_load: validation.static_load.clone(),
+        paper_loss: loss::paper_loss(validation),
+        findings,
+        verdict,
+    }
+}
+
+fn design_summary(validation: &Validation) -> DesignSummary {
+    let model = &validation.model;
+    match &validation.design {
+        Some(design) => DesignSummary {
+            name: design.name.clone(),
+            mode: serde_json::to_value(design.mode)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default(),
+            dof: model.dof(),
+            parameters: serde_json::to_value(&design.joints).ok(),
+            hardware_cost_m: Some(design.hardware_cost()),
+        },
+        None => DesignSummary {
+            name: model.name.clone(),
+            mode: "urdf".into(),
+            dof: model.dof(),
+            parameters: None,
+            hardware_cost_m: None,
+        },
+    }
+}
+
+fn goal_reports(validation: &Validation, engines: &[(&'static str, &crate::pipeline::EngineRuns)], hold: (f64, f64)) -> Vec<GoalReport> {
+    validation
+        .scenario
+        .goals
+        .iter()
+        .enumerate()
+        .map(|(index, goal)| {
+            let found = validation.solutions.get(index).map(|g| g.solutions.as_slice()).unwrap_or_default();
+            let step = validation.trajectory.steps.get(index);
+            let on_trajectory = matches!(step, Some(GoalStep::Reached { .. }));
+            let chosen = match step {
+                Some(GoalStep::Reached { q, .. }) => Some(q.clone()),
+                _ => found.first().map(|s| s.q.clone()),
+            };
+            let solution = chosen.as_ref().and_then(|q| {
+                found
+                    .iter()
+                    .find(|s| crate::plan::nearest_equivalent(&validation.model, &s.q, q) == *q || s.q == *q)
+            });
+            let error = chosen.as_ref().map(|q| crate::ik::goal_error(goal, &validation.model.tool_pose(q)));
+            let held_by = engines
+                .iter()
+                .filter(|(_, runs)| {
+                    runs.dynamic
+                        .holds
+                        .iter()
+                        .any(|h| h.goal == index && h.position_error_m <= hold.0 && h.orientation_error_rad <= hold.1)
+                })
+                .map(|(name, _)| *name)
+                .collect();
+            GoalReport {
+                index,
+                name: goal.name.clone(),
+                tolerance: goal.tolerance,
+                reached: found.first().is_some_and(|s| s.reached),
+                solutions_found: found.iter().filter(|s| s.pose_reached).count(),
+                solutions_free: found.iter().filter(|s| s.reached).count(),
+                position_error_m: error.map(|e| e.position_m),
+                orientation_error_deg: error.map(|e| e.orientation_rad.to_degrees()),
+                exact_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.exact_m)),
+                approximate_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.approximate_m)),
+                chosen,
+                on_trajectory,
+                held_by,
+            }
+        })
+        .collect()
+}
+
+fn trajectory_report(validation: &Validation) -> TrajectoryReport {
+    let trajectory = &validation.trajectory;
+    let segments: Vec<SegmentReport> = trajectory
+        .steps
+        .iter()
+        .map(|step| match step {
+            GoalStep::Reached { goal, segment, .. } => SegmentReport {
+                goal: *goal,
+                planned: true,
+                certified_clearance_m: Some(segment.certified_clearance_m),
+                closest: segment.closest.clone(),
+                stop: None,
+                queries: segment.queries,
+            },
+            GoalStep::Blocked { goal, stop, attempt, .. } => SegmentReport {
+                goal: *goal,
+                planned: false,
+                certified_clearance_m: attempt.as_ref().map(|a| a.segment.certified_clearance_m),
+                closest: attempt.as_ref().and_then(|a| a.segment.closest.clone()),
+                stop: stop.clone(),
+                queries: attempt.as_ref().map_or(0, |a| a.segment.queries),
+            },
+        })
+        .collect();
+    let certified = segments
+        .iter()
+        .filter(|s| s.planned)
+        .filter_map(|s| s.certified_clearance_m)
+        .reduce(f64::min);
+    TrajectoryReport {
+        home: trajectory.home.clone(),
+        home_clearance_m: trajectory.home_clearance.as_ref().map(|c| c.distance_m),
+        reached: trajectory.reached(),
+        blocked: trajectory.steps.len() - trajectory.reached(),
+        segments,
+        certified_clearance_m: certified,
+        joint_length: trajectory.joint_length,
+        tool_path_m: trajectory.tool_path_m,
+        duration_s: trajectory.timed.duration_s(),
+    }
+}

@@ -1,0 +1,171 @@
+//! The readable summary of a report, as `validate-design` prints it.
+
+use super::{Report, Severity};
+use std::fmt::Write;
+
+fn mm(value: Option<f64>) -> String {
+    value.map_or_else(|| "-".into(), |v| format!("{:.1}", v * 1e3))
+}
+
+/// The report as text: one line per goal, the trajectory, the engines, the static load, the
+/// findings that matter and the verdict line.
+pub fn render(report: &Report) -> String {
+    let mut out = String::new();
+    let design = &report.design;
+    let _ = writeln!(
+        out,
+        "design {} ({}, {} joints{}) on scenario {} ({} goals, {} obstacles{})",
+        design.name,
+        design.mode,
+        design.dof,
+        design
+            .hardware_cost_m
+            .map(|c| format!(", hardware cost {c:.2} m"))
+            .unwrap_or_default(),
+        report.scenario.name,
+        report.scenario.goals,
+        report.scenario.obstacles,
+        if report.scenario.floor { ", floor" } else { "" }
+    );
+    let c = &report.criteria;
+    let _ = writeln!(
+        out,
+        "criteria: reached < {} mm and < {} deg, collision-free with margin {} mm in exact geometry ({} pairs excluded), held within {} mm / {} deg, engines: {}",
+        c.position_m * 1e3,
+        c.orientation_deg,
+        c.collision_margin_m * 1e3,
+        c.excluded_pairs.len(),
+        c.hold_position_m * 1e3,
+        c.hold_orientation_deg,
+        if c.engines.is_empty() { "none".to_string() } else { c.engines.join(", ") }
+    );
+
+    let _ = writeln!(
+        out,
+        "\ngoal                      reached  pos mm  ori deg  clear mm  capsule mm  held by"
+    );
+    for goal in &report.goals {
+        let status = if goal.on_trajectory {
+            "yes"
+        } else if goal.reached {
+            "blocked"
+        } else {
+            "no"
+        };
+        let _ = writeln!(
+            out,
+            "{:<3} {:<21} {:<8} {:>6}  {:>7}  {:>8}  {:>10}  {}",
+            goal.index,
+            truncate(&goal.name, 21),
+            status,
+            goal.position_error_m.map_or_else(|| "-".into(), |v| format!("{:.2}", v * 1e3)),
+            goal.orientation_error_deg.map_or_else(|| "-".into(), |v| format!("{v:.2}")),
+            mm(goal.exact_clearance_m),
+            mm(goal.approximate_clearance_m),
+            if goal.held_by.is_empty() {
+                "-".to_string()
+            } else {
+                goal.held_by.join(", ")
+            }
+        );
+    }
+
+    let t = &report.trajectory;
+    let _ = writeln!(
+        out,
+        "\ntrajectory: {} of {} goals by certified segments, {} blocked; certified clearance {} mm; {:.2} rad in joint space, tool path {:.2} m, {:.1} s",
+        t.reached,
+        t.reached + t.blocked,
+        t.blocked,
+        mm(t.certified_clearance_m),
+        t.joint_length,
+        t.tool_path_m,
+        t.duration_s
+    );
+    if let Some(closest) = t
+        .segments
+        .iter()
+        .filter(|s| s.planned)
+        .filter_map(|s| s.closest.as_ref().map(|c| (s.goal, c)))
+        .min_by(|a, b| a.1.distance_m.total_cmp(&b.1.distance_m))
+    {
+        let _ = writeln!(
+            out,
+            "  closest approach {:.1} mm ({} and {}) on the segment to goal {}",
+            closest.1.distance_m * 1e3,
+            closest.1.a,
+            closest.1.b,
+            closest.0
+        );
+    }
+    for segment in t.segments.iter().filter(|s| !s.planned) {
+        if let Some(stop) = &segment.stop {
+            let _ = writeln!(
+                out,
+                "  goal {} blocked: {} and {} touch at s = {:.3} of the nearest solution's segment",
+                segment.goal, stop.a, stop.b, stop.s
+            );
+        }
+    }
+
+    for engine in &report.engines {
+        let _ = writeln!(
+            out,
+            "{}: {} goals held (worst {:.3} mm, {:.3} deg), {} contacts, {} in the kinematic replay, peak effort {}",
+            engine.engine,
+            engine.goals_held,
+            engine.worst_hold_position_m * 1e3,
+            engine.worst_hold_orientation_deg,
+            engine.contacts.len(),
+            engine.replay_contacts.len(),
+            engine
+                .peak_effort
+                .iter()
+                .zip(&engine.rated_effort)
+                .map(|(p, r)| r.map_or_else(|| format!("{p:.0}"), |r| format!("{p:.0}/{r:.0}")))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    if let Some(load) = &report.static_load {
+        let _ = writeln!(
+            out,
+            "static load (N m, peak gravity torque / rating): {}",
+            load.joints
+                .iter()
+                .map(|j| j.rated.map_or_else(
+                    || format!("{:.1}", j.peak_torque),
+                    |r| format!("{:.1}/{r:.0}{}", j.peak_torque, if j.over { "!" } else { "" })
+                ))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    if let Some(total) = report.paper_loss.total {
+        let _ = writeln!(out, "paper loss {total:.4}");
+    }
+
+    let notable: Vec<_> = report.findings_at_least(Severity::Warn).collect();
+    if !notable.is_empty() {
+        let _ = writeln!(out, "\nfindings:");
+        for f in notable {
+            let tag = if f.severity == Severity::Fail { "FAIL" } else { "warn" };
+            let _ = writeln!(out, "  {tag} {}", f.message);
+        }
+    }
+    let verdict = &report.verdict;
+    if verdict.passed {
+        let _ = writeln!(out, "\nverdict: PASS");
+    } else {
+        let _ = writeln!(out, "\nverdict: FAIL: {}", verdict.reasons.join("; "));
+    }
+    out
+}
+
+fn truncate(text: &str, width: usize) -> String {
+    if text.chars().count() <= width {
+        text.to_string()
+    } else {
+        text.chars().take(width - 1).chain(std::iter::once('~')).collect()
+    }
+}
