@@ -48,6 +48,12 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// The report could not be serialised (a bug: every field is plain data).
+    #[error("cannot write the report as JSON: {message}")]
+    Report {
+        /// serde_json's message.
+        message: String,
+    },
     /// Warnings were found and `--strict` was given.
     #[error("{count} warning(s) and --strict was given:\n{list}")]
     Strict {

@@ -82,9 +82,56 @@ struct Cli {
     /// Print only the final line.
     #[arg(long)]
     quiet: bool,
-    /// Scenario JSON to load and check [default: scenarios/course.json if it exists].
+    /// Scenario JSON to validate the design on [default: scenarios/course.json, or the same
+    /// course built in when that file is not in the current directory].
     #[arg(long, value_name = "FILE")]
     scenario: Option<PathBuf>,
+    /// Build, export and check the model against MuJoCo's kinematics only; run no scenario.
+    #[arg(long)]
+    kinematics_only: bool,
+    /// Write the machine-readable report (JSON) to FILE (never over an input file).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Physics engines to run the trajectory in.
+    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
+    engines: EnginesArg,
+    /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
+    #[arg(long, value_name = "K", default_value_t = 4)]
+    ik_seeds: usize,
+    /// Judge every goal by this tolerance mode instead of the scenario's.
+    #[arg(long, value_name = "MODE")]
+    tolerance: Option<ToleranceArg>,
+    /// Clearance (m) every configuration and trajectory segment must keep [default: 0].
+    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    margin: f64,
+    /// Worker threads [default: the number of cores]; the report is the same for any number.
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+}
+
+/// `--engines`: `rapier,mujoco`, `rapier`, `mujoco` or `none`.
+#[derive(Debug, Clone, Copy)]
+struct EnginesArg(pipeline::Engines);
+
+impl std::str::FromStr for EnginesArg {
+    type Err = String;
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let mut engines = pipeline::Engines {
+            rapier: false,
+            mujoco: false,
+        };
+        if text == "none" {
+            return Ok(Self(engines));
+        }
+        for name in text.split(',') {
+            match name.trim() {
+                "rapier" => engines.rapier = true,
+                "mujoco" => engines.mujoco = true,
+                other => return Err(format!("unknown engine `{other}`; expected rapier,mujoco, rapier, mujoco or none")),
+            }
+        }
+        Ok(Self(engines))
+    }
 }
 
 #[derive(Debug, Subcommand)]
@@ -147,6 +194,16 @@ enum ToleranceArg {
     Position,
 }
 
+impl From<ToleranceArg> for Tolerance {
+    fn from(arg: ToleranceArg) -> Self {
+        match arg {
+            ToleranceArg::Pose => Tolerance::Pose,
+            ToleranceArg::ZSymmetric => Tolerance::ZSymmetric,
+            ToleranceArg::Position => Tolerance::Position,
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -170,7 +227,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         package_paths: cli.package_paths.clone(),
     };
     let loaded = pipeline::load(design_path, &opts)?;
-    let model = &loaded.model;
+    let model = &loaded.model.clone();
     for diagnostic in &model.diagnostics {
         eprintln!("{diagnostic}");
     }
@@ -181,20 +238,28 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
             list,
         });
     }
-    let default_scenario = Path::new(DEFAULT_SCENARIO);
-    let scenario_path = cli
-        .scenario
-        .as_deref()
-        .or_else(|| default_scenario.is_file().then_some(default_scenario));
-    let scenario = scenario_path.map(pipeline::load_scenario).transpose()?;
-    if !cli.quiet {
-        print!("{}", describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
-        if let Some(scenario) = &scenario {
-            println!("{}", scenario_summary(scenario));
+    if let Some(threads) = cli.threads {
+        // Only the first call configures the global pool; a second is harmless.
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build_global();
+    }
+    let mut scenario = match &cli.scenario {
+        Some(path) => pipeline::load_scenario(path)?,
+        None if Path::new(DEFAULT_SCENARIO).is_file() => pipeline::load_scenario(Path::new(DEFAULT_SCENARIO))?,
+        // The committed course is this generator's output, byte for byte (tests/scenario.rs).
+        None => generate::course(generate::COURSE_SEED),
+    };
+    if let Some(tolerance) = cli.tolerance {
+        for goal in &mut scenario.goals {
+            goal.tolerance = tolerance.into();
         }
     }
+    if !cli.quiet && (cli.describe || cli.kinematics_only) {
+        print!("{}", describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
+        println!("{}", scenario_summary(&scenario));
+    }
 
-    let inputs = [design_path];
+    let mut inputs = vec![design_path];
+    inputs.extend(cli.scenario.as_deref());
     let mjcf = to_mjcf(model, &MjcfOptions::default())?;
     if let Some(path) = &cli.export_urdf {
         pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?, &inputs)?;
@@ -208,37 +273,77 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
             println!("wrote MJCF {}", path.display());
         }
     }
-    if cli.describe || cli.mujoco_checks == 0 {
+    if cli.describe {
         if cli.quiet {
             println!("{}: {} joints, model built", model.name, model.dof());
         }
         return Ok(ExitCode::SUCCESS);
     }
 
-    let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-    let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", design_path.display()), &joint_names)?;
-    let agreement = compare_kinematics(model, &mujoco, ToolElement::Site("tool"), cli.mujoco_checks, cli.seed)?;
-    let worst = agreement
-        .max_position_error_m
-        .max(agreement.max_angle_error_rad)
-        .max(agreement.max_jacobian_error.unwrap_or(0.0));
-    let passed = worst <= MUJOCO_AGREEMENT_M;
-    println!(
-        "MuJoCo {MUJOCO_VERSION} vs our kinematics on the MJCF export, {} configurations (seed {}): \
-         max position error {:.1e} m, max angle error {:.1e} rad, max Jacobian error {:.1e}: {}",
-        agreement.configurations,
-        cli.seed,
-        agreement.max_position_error_m,
-        agreement.max_angle_error_rad,
-        agreement.max_jacobian_error.unwrap_or(0.0),
-        if passed { "agree" } else { "DISAGREE" }
-    );
-    if passed {
-        Ok(ExitCode::SUCCESS)
-    } else {
-        println!("worst at `{}`, q = {:?}", agreement.worst_element, agreement.worst_configuration);
-        Ok(ExitCode::from(1))
+    if cli.mujoco_checks > 0 {
+        let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+        let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", design_path.display()), &joint_names)?;
+        let agreement = compare_kinematics(model, &mujoco, ToolElement::Site("tool"), cli.mujoco_checks, cli.seed)?;
+        let worst = agreement
+            .max_position_error_m
+            .max(agreement.max_angle_error_rad)
+            .max(agreement.max_jacobian_error.unwrap_or(0.0));
+        let passed = worst <= MUJOCO_AGREEMENT_M;
+        if !cli.quiet || !passed {
+            println!(
+                "MuJoCo {MUJOCO_VERSION} vs our kinematics on the MJCF export, {} configurations (seed {}): \
+                 max position error {:.1e} m, max angle error {:.1e} rad, max Jacobian error {:.1e}: {}",
+                agreement.configurations,
+                cli.seed,
+                agreement.max_position_error_m,
+                agreement.max_angle_error_rad,
+                agreement.max_jacobian_error.unwrap_or(0.0),
+                if passed { "agree" } else { "DISAGREE" }
+            );
+        }
+        if !passed {
+            println!("worst at `{}`, q = {:?}", agreement.worst_element, agreement.worst_configuration);
+            return Ok(ExitCode::from(1));
+        }
     }
+    if cli.kinematics_only {
+        return Ok(ExitCode::SUCCESS);
+    }
+
+    let opts = pipeline::ValidateOptions {
+        ik: proving_ground::ik::IkOptions {
+            seeds: cli.ik_seeds.max(1),
+            seed: cli.seed,
+            ..Default::default()
+        },
+        certify: proving_ground::plan::CertifyOptions { threshold_m: cli.margin },
+        engines: cli.engines.0,
+        ..Default::default()
+    };
+    let validation = pipeline::validate(loaded, scenario, &opts)?;
+    let report = proving_ground::report::build(&validation);
+    if let Some(path) = &cli.json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Report { message: e.to_string() })?;
+        pipeline::write_output(path, &(text + "\n"), &inputs)?;
+    }
+    if cli.quiet {
+        let verdict = &report.verdict;
+        println!(
+            "{}",
+            if verdict.passed {
+                "verdict: PASS".to_string()
+            } else {
+                format!("verdict: FAIL: {}", verdict.reasons.join("; "))
+            }
+        );
+    } else {
+        print!("{}", proving_ground::report::render(&report));
+    }
+    Ok(if report.verdict.passed {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }
 
 /// `scenario NAME: N obstacles, M goals, tolerance MODE` (modes with counts when they differ).

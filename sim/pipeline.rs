@@ -243,13 +243,22 @@ pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &Vali
         gravity_m_s2: opts.engine.gravity_m_s2,
         ..opts.gains.clone()
     };
-    let gains = crate::engine::gains(&model, &trajectory.timed, &gain_options);
+    // With no goal reached the engines still get a path: home, standing still, zero duration.
+    let still;
+    let timed = if trajectory.timed.segments.is_empty() {
+        let limits = crate::plan::TimingLimits::of(&model);
+        still = crate::plan::TimedPath::through(&[trajectory.home.clone(), trajectory.home.clone()], &[None], &limits);
+        &still
+    } else {
+        &trajectory.timed
+    };
+    let gains = crate::engine::gains(&model, timed, &gain_options);
     let run_rapier = || -> Result<Option<EngineRuns>, crate::engine::EngineError> {
         if !opts.engines.rapier {
             return Ok(None);
         }
         Ok(Some(EngineRuns {
-            dynamic: crate::engine::run_rapier(&model, &scenario, &world, &trajectory.timed, &gains, &opts.engine)?,
+            dynamic: crate::engine::run_rapier(&model, &scenario, &world, timed, &gains, &opts.engine)?,
             replay: crate::engine::replay_rapier(&model, &scenario, &world, &samples, &opts.engine)?,
         }))
     };
@@ -258,7 +267,7 @@ pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &Vali
             return Ok((None, None));
         }
         let runs = EngineRuns {
-            dynamic: crate::engine::run_mujoco(&model, &scenario, &world, &trajectory.timed, &gains, &opts.engine)?,
+            dynamic: crate::engine::run_mujoco(&model, &scenario, &world, timed, &gains, &opts.engine)?,
             replay: crate::engine::replay_mujoco(&model, &scenario, &world, &samples, &opts.engine)?,
         };
         // Along the trajectory only: a blocked goal's attempt is not a motion the robot makes.

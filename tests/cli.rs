@@ -22,7 +22,7 @@ fn error_for(name: &str, extra: &[&str]) -> String {
 }
 
 #[test]
-fn main_command_describes_the_paper_robot_and_mujoco_agrees() {
+fn main_command_validates_the_paper_robot_on_the_course_and_passes() {
     let output = validate_design().arg("designs/paper-real-world.json").output().expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(
@@ -31,9 +31,17 @@ fn main_command_describes_the_paper_robot_and_mujoco_agrees() {
         "{stdout}\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    assert!(stdout.contains("paper-real-world (modular design, 5 joints)"), "{stdout}");
-    assert!(stdout.contains("c_h = sum|a| + sum|d| = 1.0000 m"), "{stdout}");
     assert!(stdout.contains("MuJoCo 3.17.0") && stdout.contains(": agree"), "{stdout}");
+    assert!(
+        stdout.contains("design paper-real-world (modular, 5 joints, hardware cost 1.00 m) on scenario course"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("trajectory: 36 of 36 goals by certified segments"), "{stdout}");
+    assert!(
+        stdout.contains("rapier: 36 goals held") && stdout.contains("mujoco: 36 goals held"),
+        "{stdout}"
+    );
+    assert!(stdout.trim_end().ends_with("verdict: PASS"), "{stdout}");
 }
 
 #[test]
@@ -48,7 +56,7 @@ fn panda_needs_a_tip_and_loads_with_one() {
 
     let output = validate_design()
         .arg(panda_urdf())
-        .args(["--tip", "panda_hand", "--mujoco-checks", "20"])
+        .args(["--tip", "panda_hand", "--mujoco-checks", "20", "--kinematics-only"])
         .output()
         .expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
@@ -266,6 +274,7 @@ fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the
 
     let output = validate_design()
         .arg(&urdf)
+        .arg("--kinematics-only")
         .env("ROS_PACKAGE_PATH", packages.path())
         .output()
         .expect("runs");
@@ -293,8 +302,65 @@ fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the
         .arg(&urdf)
         .arg("--package-path")
         .arg(packages.path())
+        .arg("--kinematics-only")
         .env_remove("ROS_PACKAGE_PATH")
         .output()
         .expect("runs");
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
+fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let json = dir.path().join("report.json");
+    let output = validate_design()
+        .args(["designs/ur5e.json", "--engines", "none", "--json"])
+        .arg(&json)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(1),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let verdict = stdout.lines().last().unwrap_or_default();
+    assert!(verdict.starts_with("verdict: FAIL: "), "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("json");
+    assert_eq!(report["schema_version"], 1);
+    assert_eq!(report["verdict"]["passed"], false);
+    assert!(report["verdict"]["reasons"].as_array().is_some_and(|r| !r.is_empty()));
+    assert_eq!(report["criteria"]["position_m"], 0.001);
+    // The course's home is the 5-joint paper robot's: the UR5e starts from its own.
+    assert!(
+        report["findings"]
+            .as_array()
+            .is_some_and(|f| f.iter().any(|f| f["kind"] == "home_replaced")),
+        "{report}"
+    );
+    assert!(report["engines"].as_array().is_some_and(Vec::is_empty));
+}
+
+#[test]
+fn bad_options_exit_2_naming_what_is_wrong() {
+    let output = validate_design()
+        .args(["designs/ur5e.json", "--engines", "bullet"])
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("unknown engine `bullet`"));
+
+    let dir = tempfile::tempdir().expect("temp dir");
+    let copy = dir.path().join("course.json");
+    std::fs::copy("scenarios/course.json", &copy).expect("copy");
+    let output = validate_design()
+        .args(["designs/paper-real-world.json", "--engines", "none", "--scenario"])
+        .arg(&copy)
+        .arg("--json")
+        .arg(&copy)
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("it is an input of this run"));
 }

@@ -14,4 +14,6 @@ pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,
     DEFAULT_VELOCITY_RAD_S,
 };
-pub use trajectory::{home_configuration, nearest_equivalent, plan, Attempt, GoalStep, PlanError, Trajectory, TrajectoryOptions};
+pub use trajectory::{
+    default_home, home_configuration, home_for, nearest_equivalent, plan, Attempt, GoalStep, PlanError, Trajectory, TrajectoryOptions,
+};

@@ -120,6 +120,8 @@ pub struct Trajectory {
     pub home: Vec<f64>,
     /// Clearance at home and its closest pair (a home in collision is a finding).
     pub home_clearance: Option<SegmentPoint>,
+    /// Why the scenario's home was not used, when it was not (the default home was).
+    pub home_replaced: Option<String>,
     /// One step per goal, course order.
     pub steps: Vec<GoalStep>,
     /// Joint-space length of the motion (rad and m summed as numbers).
@@ -137,21 +139,36 @@ impl Trajectory {
     }
 }
 
-/// The home configuration: the scenario's, else zero for each joint, or the middle of its range
-/// where zero is outside the limits.
+/// The design's own home: zero for each joint, or the middle of its range where zero is outside
+/// the limits.
+pub fn default_home(model: &Model) -> Vec<f64> {
+    model
+        .joints
+        .iter()
+        .map(|j| match j.limits {
+            Some([lo, hi]) if !(lo..=hi).contains(&0.0) => 0.5 * (lo + hi),
+            _ => 0.0,
+        })
+        .collect()
+}
+
+/// The home configuration: the scenario's, else [`default_home`]. A scenario home that does not
+/// fit the robot (written for another robot, e.g. the course's for the 5-joint paper robot) is
+/// replaced by the default home, and the reason returned: a scenario serves every design.
+pub fn home_for(model: &Model, scenario: &Scenario) -> (Vec<f64>, Option<PlanError>) {
+    match home_configuration(model, scenario) {
+        Ok(home) => (home, None),
+        Err(reason) => (default_home(model), Some(reason)),
+    }
+}
+
+/// The home configuration: the scenario's, else [`default_home`].
 ///
 /// # Errors
 /// [`PlanError`] when the scenario's home has the wrong length or leaves a joint's limits.
 pub fn home_configuration(model: &Model, scenario: &Scenario) -> Result<Vec<f64>, PlanError> {
     let Some(home) = &scenario.home else {
-        return Ok(model
-            .joints
-            .iter()
-            .map(|j| match j.limits {
-                Some([lo, hi]) if !(lo..=hi).contains(&0.0) => 0.5 * (lo + hi),
-                _ => 0.0,
-            })
-            .collect());
+        return Ok(default_home(model));
     };
     if home.len() != model.dof() {
         return Err(PlanError::HomeLength {
@@ -210,7 +227,8 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// IK `solutions` (scenario order, as [`crate::ik::solve_goals`] gives them) and the same `world`.
 ///
 /// # Errors
-/// [`PlanError`] for a home that does not fit the model.
+/// None today (a scenario home that does not fit is replaced, see [`home_for`]); the `Result`
+/// keeps room for inputs the planner cannot use.
 pub fn plan(
     model: &Model,
     scenario: &Scenario,
@@ -218,7 +236,7 @@ pub fn plan(
     solutions: &[GoalSolutions],
     opts: &TrajectoryOptions,
 ) -> Result<Trajectory, PlanError> {
-    let home = home_configuration(model, scenario)?;
+    let (home, home_replaced) = home_for(model, scenario);
     let mut checker = SegmentChecker::new(model, world, opts.certify);
     let home_clearance = checker.clearance(&home);
     let mut ik = Ik::with_collisions(model, world, opts.ik.clone());
@@ -293,6 +311,7 @@ pub fn plan(
     Ok(Trajectory {
         home,
         home_clearance,
+        home_replaced: home_replaced.map(|reason| reason.to_string()),
         steps,
         joint_length,
         tool_path_m,

@@ -37,6 +37,8 @@ pub enum FindingKind {
     GoalBlocked,
     /// The home configuration is in collision.
     HomeInCollision,
+    /// The scenario's home does not fit the robot; the design's default home was used.
+    HomeReplaced,
     /// An engine's dynamic run touched something while following the certified trajectory.
     EngineContact,
     /// An engine did not hold a goal within the hold tolerance after the dwell.
@@ -112,6 +114,16 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
                 &[("distance_m", home.distance_m)],
             ));
         }
+    }
+    if let Some(reason) = &trajectory.home_replaced {
+        out.push(finding(
+            FindingKind::HomeReplaced,
+            Severity::Info,
+            None,
+            None,
+            format!("{reason}: starting from the design's default home {:?}", trajectory.home),
+            &[],
+        ));
     }
     goal_findings(validation, &mut out);
     for (name, runs) in engines {

@@ -1,0 +1,136 @@
+//! End to end: the whole validation of a design on a scenario, and the report's verdict.
+
+mod common;
+
+use common::repo;
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use proving_ground::model::Shape;
+use proving_ground::pipeline::{load, validate, Engines, LoadOptions, ValidateOptions};
+use proving_ground::report::{self, FindingKind, Severity};
+use proving_ground::scenario::{generate, Goal, Obstacle, Scenario, Tolerance};
+use std::f64::consts::FRAC_PI_4;
+
+fn paper_robot() -> proving_ground::pipeline::Loaded {
+    load(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("shipped design loads")
+}
+
+#[test]
+fn the_paper_robot_passes_the_course_in_both_engines_with_no_contacts_and_every_goal_held() {
+    let validation = validate(paper_robot(), generate::course(generate::COURSE_SEED), &ValidateOptions::default()).expect("runs");
+    let report = report::build(&validation);
+    let fails: Vec<_> = report.findings_at_least(Severity::Warn).collect();
+    assert!(report.verdict.passed && fails.is_empty(), "{fails:#?}");
+    assert_eq!(report.trajectory.reached, 36);
+    assert!(report.trajectory.certified_clearance_m.is_some_and(|c| c > 0.0));
+    assert_eq!(report.engines.len(), 2);
+    for engine in &report.engines {
+        assert_eq!(engine.goals_held, 36, "{}", engine.engine);
+        assert!(
+            engine.contacts.is_empty() && engine.replay_contacts.is_empty(),
+            "{}: {:?}",
+            engine.engine,
+            engine.contacts
+        );
+        assert!(engine.worst_hold_position_m < 1e-3 && engine.worst_hold_orientation_deg < 1.0);
+    }
+    assert!(report.goals.iter().all(|g| g.held_by == ["rapier", "mujoco"]));
+    let load = report.static_load.as_ref().expect("MuJoCo ran");
+    assert!(
+        load.joints.iter().all(|j| !j.over) && load.max_relative_disagreement < 1e-9,
+        "{load:?}"
+    );
+}
+
+#[test]
+fn a_path_through_an_obstacle_is_caught_by_all_three_checkers_at_the_same_segment() {
+    // One joint turning a 0.6 m arm (0.3 m up) from 0 to the goal at +90 degrees (its other turn,
+    // -270, is beyond the -3 rad limit), and a ball in the way at 45 degrees.
+    let text = r#"{"name": "swing", "mode": "free", "joints": [{"d": 0.3, "a": 0.6, "alpha": 0, "limits": [-3, 3]}]}"#;
+    let design = proving_ground::design::parse(text, std::path::Path::new("swing.json")).expect("valid design");
+    let loaded = proving_ground::pipeline::Loaded {
+        model: proving_ground::model::from_design(&design),
+        design: Some(design),
+    };
+    let ball = Obstacle {
+        name: "ball".into(),
+        world_from_shape: Isometry3::translation(0.4 * FRAC_PI_4.cos(), 0.4 * FRAC_PI_4.sin(), 0.3),
+        shape: Shape::Sphere { radius: 0.05 },
+    };
+    let goal = Goal {
+        name: "left".into(),
+        position: Vector3::new(0.0, 0.6, 0.3),
+        rotation: UnitQuaternion::identity(),
+        tolerance: Tolerance::Position,
+    };
+    let scenario = Scenario {
+        name: "swing-past-a-ball".into(),
+        world_from_base: Isometry3::identity(),
+        floor: None,
+        obstacles: vec![ball],
+        goals: vec![goal],
+        home: None,
+        provenance: None,
+    };
+    let validation = validate(loaded, scenario, &ValidateOptions::default()).expect("runs");
+    let report = report::build(&validation);
+    assert!(!report.verdict.passed);
+    let blocked: Vec<_> = report.findings.iter().filter(|f| f.kind == FindingKind::GoalBlocked).collect();
+    assert_eq!(blocked.len(), 1, "{:#?}", report.findings);
+    // parry3d: the segment stops where link 1 (the arm) touches the ball, before 45 degrees.
+    let stop = report.trajectory.segments[0].stop.as_ref().expect("the certified check stops");
+    assert_eq!((stop.a.as_str(), stop.b.as_str()), ("link1", "ball"), "{stop:?}");
+    assert!(stop.q[0] > 0.0 && stop.q[0] < FRAC_PI_4, "{stop:?}");
+    // Both engines' kinematic replays find the same pair on the same (only) replayed segment.
+    for engine in ["rapier", "mujoco"] {
+        let confirmed: Vec<_> = report
+            .findings
+            .iter()
+            .filter(|f| f.kind == FindingKind::ReplayContactConfirmed && f.engine == Some(engine))
+            .collect();
+        assert_eq!(confirmed.len(), 1, "{engine}: {:#?}", report.findings);
+        assert_eq!(confirmed[0].goal, Some(0));
+        let contacts = &report.engines.iter().find(|e| e.engine == engine).expect("ran").replay_contacts;
+        assert!(!contacts.is_empty(), "{engine}");
+        for contact in contacts {
+            assert_eq!((contact.a.as_str(), contact.b.as_str()), ("link1", "ball"), "{engine}: {contact:?}");
+            // Replay clock: segment 0 is [0, 1); the contact begins near where parry stopped.
+            assert!(
+                contact.start_s < 1.0 && (contact.start_s - stop.s).abs() < 0.02,
+                "{engine}: {contact:?} vs {stop:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_report_is_the_same_with_one_engine_at_a_time_and_without_engines() {
+    let scenario = generate::cluttered(0, generate::CLUTTERED_MASTER_SEED);
+    let run = |engines: Engines| {
+        let opts = ValidateOptions {
+            engines,
+            ..Default::default()
+        };
+        let validation = validate(
+            load(&repo().join("designs/ur5e.json"), &LoadOptions::default()).expect("loads"),
+            scenario.clone(),
+            &opts,
+        )
+        .expect("runs");
+        report::build(&validation)
+    };
+    let none = run(Engines {
+        rapier: false,
+        mujoco: false,
+    });
+    assert!(none.engines.is_empty() && none.static_load.is_none());
+    let both = run(Engines::default());
+    // The engines change only their own sections: the goals, trajectory and loss are the same.
+    assert_eq!(
+        serde_json::to_string(&none.trajectory).expect("json"),
+        serde_json::to_string(&both.trajectory).expect("json")
+    );
+    assert_eq!(
+        none.goals.iter().map(|g| g.on_trajectory).collect::<Vec<_>>(),
+        both.goals.iter().map(|g| g.on_trajectory).collect::<Vec<_>>()
+    );
+}
