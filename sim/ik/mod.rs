@@ -224,14 +224,17 @@ fn rank(error: &GoalError) -> f64 {
 /// own seeded random starts. With a collision world, solutions are checked and refined with
 /// exact geometry.
 pub fn solve_goals(model: &Model, scenario: &Scenario, world: Option<&CollisionWorld>, opts: &IkOptions) -> Vec<GoalSolutions> {
-    let mut ik = match world {
+    use rayon::prelude::*;
+    // Each goal's starts are seeded by its index alone, so goals solve independently, on any
+    // number of threads, with the same result.
+    let make = || match world {
         Some(world) => Ik::with_collisions(model, world, opts.clone()),
         None => Ik::new(model, opts.clone()),
     };
     scenario
         .goals
-        .iter()
+        .par_iter()
         .enumerate()
-        .map(|(index, goal)| ik.solve(goal, index, None))
+        .map_init(make, |ik, (index, goal)| ik.solve(goal, index, None))
         .collect()
 }
