@@ -20,17 +20,24 @@ const MUJOCO_AGREEMENT_M: f64 = 1e-9;
 
 const AFTER_HELP: &str = "\
 Examples:
-  validate-design designs/paper-real-world.json
-  validate-design designs/urdf/panda.urdf --tip panda_hand
-  validate-design designs/ur5e.json --export-urdf ur5e.urdf --export-mjcf ur5e.xml
-  validate-design robot.urdf --package-path ~/ws/src --strict
-  validate-design designs/paper-real-world.json --describe --scenario scenarios/workspace/pose.json
+  validate-design designs/paper-real-world.json                 # the paper's robot on scenarios/course.json
+  validate-design designs/ur5e.json --scenario scenarios/cluttered/task-07.json --json ur5e-07.json
+  validate-design designs/modular-elbow.json --scenario scenarios/workspace/pose.json --engines none
+  validate-design designs/paper-real-world.json --engines mujoco --seed 3 --ik-seeds 8
+  validate-design designs/ur10e.json --tolerance position --margin 0.01 --threads 1 --quiet
+  validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --tip panda_hand
+  validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
+  validate-design robot.xml --kinematics-only --mujoco-checks 20
+  validate-design designs/ur5e.json --describe --export-urdf ur5e.urdf --export-mjcf ur5e.xml
   validate-design generate cluttered --all --out scenarios/cluttered --force
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
 
 Exit codes:
-  0  the model was built and MuJoCo agrees with our kinematics
-  1  MuJoCo disagrees with our kinematics by more than 1e-9 m / rad
+  0  the design passes the scenario (every goal reached by a certified collision-free segment,
+     held by every engine run, no contact, no joint over its rating under gravity); with
+     --describe or --kinematics-only: the model was built (and MuJoCo agrees with our kinematics)
+  1  the design fails: the verdict line lists the reasons (or MuJoCo disagrees with our
+     kinematics on the export by more than 1e-9 m / rad)
   2  bad input or usage: the message names the file and the field or line
 
 Environment:
@@ -49,7 +56,7 @@ Environment:
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
-    /// Design JSON (free, economic, modular, preset) or URDF file.
+    /// Design JSON (free, economic, modular, preset), URDF or MJCF file.
     #[arg(required = true)]
     design: Option<PathBuf>,
     /// URDF: first link of the chain [default: the root link].
@@ -70,8 +77,8 @@ struct Cli {
     /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips).
     #[arg(long, value_name = "N", default_value_t = 100)]
     mujoco_checks: usize,
-    /// Seed of the random configurations.
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    /// Seed of IK's random starts and of the kinematics check's random configurations.
+    #[arg(long, value_name = "N", default_value_t = 0)]
     seed: u64,
     /// Print only the joints, links and tool pose; run nothing else.
     #[arg(long)]
@@ -79,7 +86,7 @@ struct Cli {
     /// Treat warnings about the input as errors (exit 2).
     #[arg(long)]
     strict: bool,
-    /// Print only the final line.
+    /// Print only the verdict line (and nothing on stderr but errors).
     #[arg(long)]
     quiet: bool,
     /// Scenario JSON to validate the design on [default: scenarios/course.json, or the same
@@ -320,7 +327,16 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         engines: cli.engines.0,
         ..Default::default()
     };
-    let validation = pipeline::validate(loaded, scenario, &opts)?;
+    // A spinner on stderr; indicatif draws nothing when stderr is not a terminal.
+    let spinner = if cli.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new_spinner()
+    };
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let validation = pipeline::validate_with_progress(loaded, scenario, &opts, &|stage| spinner.set_message(stage.to_string()));
+    spinner.finish_and_clear();
+    let validation = validation?;
     let report = proving_ground::report::build(&validation);
     if let Some(path) = &cli.json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Report { message: e.to_string() })?;
@@ -464,6 +480,7 @@ fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
     let source = match &model.source {
         proving_ground::model::ModelSource::Design { mode } => format!("{mode} design"),
         proving_ground::model::ModelSource::Urdf { base_link, tip_link, .. } => format!("URDF, chain {base_link} -> {tip_link}"),
+        proving_ground::model::ModelSource::Mjcf { base_body, tip_body, .. } => format!("MJCF, chain {base_body} -> {tip_body}"),
     };
     let _ = writeln!(out, "{} ({source}, {} joints)", model.name, model.dof());
     if let Some(cost) = hardware_cost {

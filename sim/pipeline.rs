@@ -23,16 +23,19 @@ pub enum InputKind {
     Design,
     /// URDF.
     Urdf,
+    /// MJCF (`.xml`, `.mjcf`), loaded through MuJoCo.
+    Mjcf,
 }
 
 /// The kind of a robot description file.
 ///
 /// # Errors
-/// [`Error::UnknownInput`] for an extension other than `.json` or `.urdf`.
+/// [`Error::UnknownInput`] for an extension other than `.json`, `.urdf`, `.xml` or `.mjcf`.
 pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("json") => Ok(InputKind::Design),
         Some("urdf") => Ok(InputKind::Urdf),
+        Some("xml" | "mjcf") => Ok(InputKind::Mjcf),
         _ => Err(Error::UnknownInput { path: path.to_path_buf() }),
     }
 }
@@ -67,6 +70,23 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
             };
             Ok(Loaded {
                 model: model::from_urdf(path, &urdf)?,
+                design: None,
+            })
+        }
+        InputKind::Mjcf => {
+            // The chain of an MJCF file is its bodies with joints; the URDF chain options would
+            // be silently meaningless.
+            let urdf_only = [("--base", opts.base_link.is_some()), ("--tip", opts.tip_link.is_some())];
+            if let Some((flag, _)) = urdf_only.iter().find(|(_, given)| *given) {
+                return Err(model::ModelError::UnsupportedMjcf {
+                    path: path.to_path_buf(),
+                    element: (*flag).into(),
+                    problem: "is for URDF input; an MJCF chain runs from the base body to the last body with a joint".into(),
+                }
+                .into());
+            }
+            Ok(Loaded {
+                model: model::from_mjcf(path)?,
                 design: None,
             })
         }
@@ -216,9 +236,25 @@ pub struct Validation {
 /// [`Error::Collide`] for geometry that cannot be built, [`Error::Plan`] for a scenario home that
 /// does not fit the robot, [`Error::Engine`] when an engine refuses the model.
 pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &ValidateOptions) -> Result<Validation, Error> {
+    validate_with_progress(loaded, scenario, opts, &|_| {})
+}
+
+/// [`validate`], telling `progress` which stage starts (a short phrase, e.g. for a spinner).
+///
+/// # Errors
+/// As [`validate`].
+pub fn validate_with_progress(
+    loaded: Loaded,
+    scenario: crate::scenario::Scenario,
+    opts: &ValidateOptions,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Validation, Error> {
+    progress("building the collision world");
     let model = loaded.model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
+    progress(&format!("solving IK for {} goals", scenario.goals.len()));
     let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &opts.ik);
+    progress("planning the trajectory (certified continuous check)");
     let trajectory_options = crate::plan::TrajectoryOptions {
         certify: opts.certify,
         ik: opts.ik.clone(),
@@ -281,6 +317,7 @@ pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &Vali
         let load = crate::engine::static_load(&model, &configurations, opts.engine.gravity_m_s2)?;
         Ok((Some(runs), Some(load)))
     };
+    progress(&format!("running the engines ({:.1} s simulated)", timed.duration_s()));
     // The engines are independent and each deterministic: running them side by side changes
     // no number.
     let (rapier, mujoco) = rayon::join(run_rapier, run_mujoco);

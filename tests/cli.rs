@@ -364,3 +364,20 @@ fn bad_options_exit_2_naming_what_is_wrong() {
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("it is an input of this run"));
 }
+
+#[test]
+fn help_shows_every_option_in_an_example() {
+    let output = validate_design().arg("--help").output().expect("runs");
+    let help = String::from_utf8_lossy(&output.stdout);
+    let (options, examples) = help.split_once("Examples:").expect("examples section");
+    let names: Vec<&str> = options
+        .split_whitespace()
+        .filter(|word| word.starts_with("--") && word.len() > 2)
+        .map(|word| word.trim_end_matches(|c: char| !c.is_ascii_alphanumeric()))
+        .filter(|name| !["--help", "--version"].contains(name))
+        .collect();
+    assert!(names.len() >= 18, "{names:?}");
+    for name in names {
+        assert!(examples.contains(&format!("{name} ")) || examples.contains(&format!("{name}\n")), "no example uses {name}");
+    }
+}
