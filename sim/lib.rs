@@ -26,8 +26,14 @@
 //! ## Known limitations
 //! - URDF: `<visual>`, `<transmission>`, `<gazebo>`, `<safety_controller>`, `<calibration>` and
 //!   `<dynamics>` are ignored; links off the chain are held at their joints' zero position.
-//! - MJCF input: a serial chain of hinge and slide joints only; geoms of type sphere, capsule
-//!   (as a cylinder plus two spheres), cylinder, box and mesh are read.
+//! - MJCF input (loaded by MuJoCo): a serial chain of hinge and slide joints only (one joint per
+//!   body; free and ball joints, branching moving bodies, slide joints without `range` and a
+//!   joint `ref` other than 0 are errors). Jointless bodies are merged into the link above them.
+//!   Sphere, capsule, cylinder, box and mesh geoms are read exactly (meshes as MuJoCo's f32 copy);
+//!   an ellipsoid becomes its enclosing sphere (a warning); visual geoms (`contype` and
+//!   `conaffinity` 0) are skipped; planes and height fields are ignored on the base and errors
+//!   elsewhere. No velocity limits; ratings come from `actuatorfrcrange` or actuator
+//!   `forcerange`. The tool frame is the site `tool`, else the last moving body's frame.
 
 pub mod collide;
 pub mod design;

@@ -378,6 +378,9 @@ fn help_shows_every_option_in_an_example() {
         .collect();
     assert!(names.len() >= 18, "{names:?}");
     for name in names {
-        assert!(examples.contains(&format!("{name} ")) || examples.contains(&format!("{name}\n")), "no example uses {name}");
+        assert!(
+            examples.contains(&format!("{name} ")) || examples.contains(&format!("{name}\n")),
+            "no example uses {name}"
+        );
     }
 }

@@ -1378,7 +1378,8 @@ fn estimated_depths_keep_every_verdict_and_are_never_shallower() {
                 }
                 assert_eq!(x.distance > 0.0, e.distance > 0.0, "{context}");
                 if x.distance > 0.0 {
-                    assert_eq!(x.distance, e.distance, "{context}");
+                    // Unpolished GJK: never shorter than the certified gap, at most 1.3e-5 m longer.
+                    assert!(e.distance >= x.distance - 1e-10 && e.distance <= x.distance + 2e-5, "{context}");
                 } else {
                     overlaps += 1;
                     assert!(e.distance <= x.distance + 1e-9, "{context}");

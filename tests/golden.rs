@@ -30,7 +30,10 @@ fn designs() -> Vec<PathBuf> {
 }
 
 fn scenarios() -> Vec<(String, Scenario)> {
-    let mut scenarios = vec![("course".to_string(), load_scenario(&repo().join("scenarios/course.json")).expect("course loads"))];
+    let mut scenarios = vec![(
+        "course".to_string(),
+        load_scenario(&repo().join("scenarios/course.json")).expect("course loads"),
+    )];
     for task in CLUTTERED_TASKS {
         let path = repo().join(format!("scenarios/cluttered/task-{task:02}.json"));
         scenarios.push((format!("cluttered-{task:02}"), load_scenario(&path).expect("task loads")));
@@ -82,7 +85,7 @@ fn rounded(value: &mut Value, key: &str) {
     }
 }
 
-fn report_value(design: &PathBuf, scenario: &Scenario) -> Value {
+fn report_value(design: &std::path::Path, scenario: &Scenario) -> Value {
     let loaded = load(design, &LoadOptions::default()).expect("shipped design loads");
     let validation = validate(loaded, scenario.clone(), &ValidateOptions::default()).expect("runs");
     let mut value = serde_json::to_value(report::build(&validation)).expect("report serialises");
@@ -106,12 +109,18 @@ fn golden_reports_of_every_design_on_the_matrix() {
         settings.set_snapshot_suffix(name.clone());
         settings.set_prepend_module_to_snapshot(false);
         settings.set_sort_maps(true);
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| settings.bind(|| insta::assert_yaml_snapshot!("report", value))));
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            settings.bind(|| insta::assert_yaml_snapshot!("report", value))
+        }));
         if outcome.is_err() {
             failures.push(name);
         }
     }
-    assert!(failures.is_empty(), "{} snapshots differ (cargo insta review): {failures:?}", failures.len());
+    assert!(
+        failures.is_empty(),
+        "{} snapshots differ (cargo insta review): {failures:?}",
+        failures.len()
+    );
 }
 
 #[test]

@@ -102,7 +102,7 @@ pub(super) fn measure_convex(pose_a: &Pose, a: &dyn Shape, pose_b: &Pose, b: &dy
         contact.transform_by_mut(pose_a, pose_b);
         return Measured::from_contact(&contact);
     }
-    match Polished.contact(&pose_ab, a, b, UNBOUNDED_M) {
+    match (Polished { polish: exact_depth }).contact(&pose_ab, a, b, UNBOUNDED_M) {
         Ok(Some(mut contact)) => {
             contact.transform_by_mut(pose_a, pose_b);
             Measured::from_contact(&contact)
@@ -118,13 +118,13 @@ pub(super) fn measure_convex(pose_a: &Pose, a: &dyn Shape, pose_b: &Pose, b: &dy
 /// containment test on closed meshes.
 fn measure_mesh(pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Measured {
     let pose_ab = pose_a.inv_mul(pose_b);
-    let gap = Polished.distance(&pose_ab, &*a.shape, &*b.shape).map_or(0.0, |d| d.distance);
+    let gap = Polished::EXACT.distance(&pose_ab, &*a.shape, &*b.shape).map_or(0.0, |d| d.distance);
     let prediction = if gap > 0.0 {
         gap * (1.0 + PARRY_SLACK_RELATIVE) + PARRY_SLACK_M
     } else {
         0.0
     };
-    let Ok(Some(mut contact)) = Polished.contact(&pose_ab, &*a.shape, &*b.shape, prediction) else {
+    let Ok(Some(mut contact)) = Polished::EXACT.contact(&pose_ab, &*a.shape, &*b.shape, prediction) else {
         return touching(pose_a, pose_b);
     };
     contact.transform_by_mut(pose_a, pose_b);
@@ -165,7 +165,15 @@ fn touching(pose_a: &Pose, pose_b: &Pose) -> Measured {
 
 /// parry's default dispatcher, with separated support-map pairs polished and meshes traversed
 /// through this dispatcher, so each triangle's distance is polished too.
-pub(super) struct Polished;
+pub(super) struct Polished {
+    /// Polish separated support-map pairs (else GJK's answer stands, up to 1.3e-5 m long).
+    polish: bool,
+}
+
+impl Polished {
+    /// Every answer polished: the exact narrow phase.
+    pub(super) const EXACT: Self = Self { polish: true };
+}
 
 impl Polished {
     /// Whether GJK measures this pair (so it may stop early): support maps, neither a ball.
@@ -242,7 +250,7 @@ impl QueryDispatcher for Polished {
         let Some(mut contact) = support_map_contact(pos12, g1, g2, wider) else {
             return Ok(None);
         };
-        if contact.dist > 0.0 {
+        if contact.dist > 0.0 && self.polish {
             polish(pos12, g1, g2, &mut contact);
         }
         Ok((contact.dist <= prediction).then_some(contact))
@@ -419,7 +427,7 @@ mod tests {
         let pose_a = Pose::new(Vector::ZERO, Vector::new(0.0, 0.0, std::f64::consts::FRAC_PI_2));
         let pose_b = Pose::from_translation(Vector::new(0.01, 0.02, 0.3));
         let expected = 0.3 - 0.05 - 0.07;
-        let contact = Polished
+        let contact = Polished::EXACT
             .contact(&pose_a.inv_mul(&pose_b), &a, &b, UNBOUNDED_M)
             .expect("supported")
             .expect("unbounded");

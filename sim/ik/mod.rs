@@ -163,10 +163,11 @@ impl<'a> Ik<'a> {
                 closest = Some(solution);
             }
         }
-        // Overlap depths were estimated while searching; the solutions kept get exact ones.
+        // Clearances were estimated while searching (overlap depths from bounding capsules, gaps
+        // unpolished); the solutions kept are measured exactly.
         if let Some(checker) = self.checker.as_mut() {
             for solution in found.iter_mut().chain(closest.iter_mut()) {
-                if solution.clearance.is_some_and(|c| c.exact_m <= 0.0) {
+                if solution.clearance.is_some() {
                     let exact = checker.clearance(&solution.q, true);
                     // Touching within rounding, GJK's overlap test and EPA may disagree on the sign.
                     solution.reached = solution.pose_reached && exact.exact_m > 0.0;

@@ -4,6 +4,7 @@
 
 mod dynamics;
 mod from_design;
+mod from_mjcf;
 mod from_urdf;
 mod geometry;
 mod inertia;
@@ -12,6 +13,7 @@ mod mesh;
 mod trig;
 
 pub use from_design::from_design;
+pub use from_mjcf::{from_mjcf, TOOL_SITE};
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
 
@@ -64,6 +66,15 @@ pub enum ModelSource {
         base_link: String,
         /// Tip link of the chain.
         tip_link: String,
+    },
+    /// An MJCF file, loaded by MuJoCo.
+    Mjcf {
+        /// The file read.
+        path: PathBuf,
+        /// Body the chain hangs from (`world` when the first moving body is in `<worldbody>`).
+        base_body: String,
+        /// Last body carrying a joint.
+        tip_body: String,
     },
 }
 
@@ -265,6 +276,24 @@ pub enum ModelError {
         mesh: PathBuf,
         /// What the loader said.
         message: String,
+    },
+    /// MuJoCo could not load an MJCF file.
+    #[error("{path}: MuJoCo cannot load the MJCF: {message}")]
+    MjcfLoad {
+        /// The file.
+        path: PathBuf,
+        /// MuJoCo's message (it names the element and line where it can).
+        message: String,
+    },
+    /// An MJCF element the serial model cannot represent.
+    #[error("{path}: {element}: {problem}")]
+    UnsupportedMjcf {
+        /// The file.
+        path: PathBuf,
+        /// Body, joint, geom or site, by name.
+        element: String,
+        /// What is wrong and what is expected.
+        problem: String,
     },
     /// A moving link has no usable mass (and `--strict` or no fallback applies).
     #[error("{path}: link `{link}` is moved by joint `{joint}` but {problem}")]
