@@ -357,3 +357,27 @@ fn equivalent_angles_are_the_nearest_whole_turn_within_limits() {
     model.joints[0].limits = Some([-3.0, 3.0]);
     assert_eq!(nearest_equivalent(&model, &[0.1], &[6.0]), [0.1]);
 }
+
+#[test]
+fn a_default_home_in_collision_is_replaced_by_the_nearest_free_configuration_but_a_given_one_stays() {
+    let model = wand_with_tip();
+    // A ball on the rod at zero; the goal at +90 degrees is clear.
+    let mut scenario = with_obstacles(vec![ball("block", Vector3::new(0.5, 0.0, 0.0), 0.05)]);
+    scenario.goals = vec![position_goal("left", 0.0, 1.0)];
+    let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
+    let solutions = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
+    let trajectory = plan(&model, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
+    let reason = trajectory.home_replaced.as_deref().expect("replaced");
+    assert!(reason.contains("is in collision (rod and block"), "{reason}");
+    // The nearest free turn: the ball (0.05 m at 0.5 m) plus the rod's 2 mm and 1 cm to spare.
+    let home = trajectory.home[0];
+    assert!(home.abs() > (0.062f64 / 0.5).asin() && home.abs() < 0.3, "{home}");
+    assert!(trajectory.home_clearance.as_ref().is_some_and(|c| c.distance_m > 0.01));
+    assert_eq!(trajectory.reached(), 1);
+
+    scenario.home = Some(vec![0.0]);
+    let trajectory = plan(&model, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
+    assert!(trajectory.home_replaced.is_none() && trajectory.home == [0.0]);
+    assert!(trajectory.home_clearance.as_ref().is_some_and(|c| c.distance_m < 0.0));
+    assert_eq!(trajectory.reached(), 0);
+}

@@ -17,6 +17,11 @@ use crate::scenario::Scenario;
 use serde::Serialize;
 use std::f64::consts::TAU;
 
+/// Configurations tried for a collision-free home when the default one collides.
+const HOME_SAMPLES: usize = 1000;
+/// Clearance a replacement home keeps beyond the threshold (m), so the tour does not start grazing.
+const HOME_CLEARANCE_M: f64 = 0.01;
+
 /// Tool positions sampled per segment to measure the tool path length.
 const TOOL_PATH_SAMPLES: usize = 64;
 
@@ -120,7 +125,7 @@ pub struct Trajectory {
     pub home: Vec<f64>,
     /// Clearance at home and its closest pair (a home in collision is a finding).
     pub home_clearance: Option<SegmentPoint>,
-    /// Why the scenario's home was not used, when it was not (the default home was).
+    /// Why the scenario's home or the default home was not used, when it was not.
     pub home_replaced: Option<String>,
     /// One step per goal, course order.
     pub steps: Vec<GoalStep>,
@@ -219,6 +224,19 @@ pub fn nearest_equivalent(model: &Model, q: &[f64], near: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The configuration nearest `home` in joint space, among [`HOME_SAMPLES`] seeded uniform ones
+/// within the limits, that keeps [`HOME_CLEARANCE_M`] beyond the threshold; with its clearance.
+fn nearest_free(checker: &mut SegmentChecker, model: &Model, home: &[f64], threshold: f64, seed: u64) -> Option<(Vec<f64>, SegmentPoint)> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x484f_4d45);
+    let mut samples: Vec<Vec<f64>> = (0..HOME_SAMPLES).map(|_| model.random_configuration(&mut rng)).collect();
+    samples.sort_by(|a, b| distance(a, home).total_cmp(&distance(b, home)));
+    samples.into_iter().find_map(|q| {
+        let clearance = checker.clearance(&q)?;
+        (clearance.distance_m > threshold + HOME_CLEARANCE_M).then_some((q, clearance))
+    })
+}
+
 fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
 }
@@ -236,9 +254,29 @@ pub fn plan(
     solutions: &[GoalSolutions],
     opts: &TrajectoryOptions,
 ) -> Result<Trajectory, PlanError> {
-    let (home, home_replaced) = home_for(model, scenario);
+    let (mut home, replaced) = home_for(model, scenario);
+    let mut home_replaced = replaced.map(|reason| reason.to_string());
     let mut checker = SegmentChecker::new(model, world, opts.certify);
-    let home_clearance = checker.clearance(&home);
+    let mut home_clearance = checker.clearance(&home);
+    let threshold = opts.certify.threshold_m;
+    // A default home in collision (zero folds many modular arms onto themselves) would block every
+    // goal: start from the nearest collision-free configuration instead, and say so. A home the
+    // scenario gives is the user's and stays, colliding or not.
+    let default_used = scenario.home.is_none() || home_replaced.is_some();
+    if default_used && home_clearance.as_ref().is_some_and(|c| c.distance_m <= threshold) {
+        if let Some((free, clearance)) = nearest_free(&mut checker, model, &home, threshold, opts.ik.seed) {
+            let colliding = home_clearance
+                .as_ref()
+                .map(|c| format!("{} and {} at {:.1} mm", c.a, c.b, c.distance_m * 1e3));
+            let earlier = home_replaced.take().map(|reason| format!("{reason}; ")).unwrap_or_default();
+            home_replaced = Some(format!(
+                "{earlier}the default home {home:?} is in collision ({}); started from the nearest collision-free of {HOME_SAMPLES} seeded configurations",
+                colliding.unwrap_or_default()
+            ));
+            home = free;
+            home_clearance = Some(clearance);
+        }
+    }
     let mut ik = Ik::with_collisions(model, world, opts.ik.clone());
     let mut previous = home.clone();
     let mut steps = Vec::with_capacity(scenario.goals.len());
@@ -311,7 +349,7 @@ pub fn plan(
     Ok(Trajectory {
         home,
         home_clearance,
-        home_replaced: home_replaced.map(|reason| reason.to_string()),
+        home_replaced,
         steps,
         joint_length,
         tool_path_m,

@@ -37,7 +37,8 @@ pub enum FindingKind {
     GoalBlocked,
     /// The home configuration is in collision.
     HomeInCollision,
-    /// The scenario's home does not fit the robot; the design's default home was used.
+    /// The scenario's home does not fit the robot, or the default home collides: the tour starts
+    /// from the default home, or from the nearest collision-free configuration.
     HomeReplaced,
     /// An engine's dynamic run touched something while following the certified trajectory.
     EngineContact,
@@ -121,7 +122,10 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
             Severity::Info,
             None,
             None,
-            format!("{reason}: starting from the design's default home {:?}", trajectory.home),
+            format!(
+                "{reason}: home {:?}",
+                trajectory.home.iter().map(|q| (q * 1e4).round() / 1e4).collect::<Vec<_>>()
+            ),
             &[],
         ));
     }
