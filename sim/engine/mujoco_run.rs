@@ -182,6 +182,7 @@ impl Loaded {
     /// at least `min_depth_m` (and never negative: MuJoCo also lists contacts within a margin).
     fn record_contacts(&self, data: &MjData<&MjModel>, recorder: &mut ContactRecorder, time_s: f64, min_depth_m: f64) {
         recorder.begin_step();
+        let mut q: Option<Vec<f64>> = None;
         for contact in data.contact() {
             let depth = -contact.dist;
             if depth < min_depth_m.max(0.0) {
@@ -192,7 +193,8 @@ impl Loaded {
                 continue;
             };
             if let Some((a_name, b_name)) = self.checked.get(&order(a, b)) {
-                recorder.contact(a_name, b_name, time_s, depth);
+                let q = q.get_or_insert_with(|| self.qpos_address.iter().map(|&address| data.qpos()[address]).collect());
+                recorder.contact(a_name, b_name, time_s, depth, q);
             }
         }
         recorder.end_step();

@@ -47,6 +47,11 @@ pub struct ContactInterval {
     pub end_s: f64,
     /// Deepest penetration reported in the interval (m).
     pub max_depth_m: f64,
+    /// The engine's joint configuration at the deepest step.
+    pub q: Vec<f64>,
+    /// The exact (parry3d-f64) signed distance of the same pair at `q`, when the pipeline
+    /// checked it (m): positive means the engine reports a contact exact geometry does not have.
+    pub parry_distance_m: Option<f64>,
 }
 
 /// How well an engine held one goal: measured at the end of the goal's dwell.
@@ -112,12 +117,17 @@ impl ContactRecorder {
         self.seen.resize(self.open.len(), false);
     }
 
-    /// One contact of the current step; `a` and `b` are ordered by the caller (link first).
-    pub fn contact(&mut self, a: &str, b: &str, time_s: f64, depth_m: f64) {
+    /// One contact of the current step at joint configuration `q`; `a` and `b` are ordered by
+    /// the caller (link first).
+    pub fn contact(&mut self, a: &str, b: &str, time_s: f64, depth_m: f64, q: &[f64]) {
         if let Some(index) = self.open.iter().position(|c| c.a == a && c.b == b) {
             let interval = &mut self.open[index];
             interval.end_s = time_s;
-            interval.max_depth_m = interval.max_depth_m.max(depth_m);
+            if depth_m > interval.max_depth_m {
+                interval.max_depth_m = depth_m;
+                interval.q.clear();
+                interval.q.extend_from_slice(q);
+            }
             if index < self.seen.len() {
                 self.seen[index] = true;
             }
@@ -128,6 +138,8 @@ impl ContactRecorder {
                 start_s: time_s,
                 end_s: time_s,
                 max_depth_m: depth_m,
+                q: q.to_vec(),
+                parry_distance_m: None,
             });
             self.seen.push(true);
         }
@@ -178,7 +190,7 @@ mod tests {
         {
             recorder.begin_step();
             for (a, b) in pairs {
-                recorder.contact(a, b, step as f64, 0.001 * step as f64);
+                recorder.contact(a, b, step as f64, 0.001 * step as f64, &[step as f64]);
             }
             recorder.end_step();
         }

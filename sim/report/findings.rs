@@ -40,8 +40,12 @@ pub enum FindingKind {
     /// The scenario's home does not fit the robot, or the default home collides: the tour starts
     /// from the default home, or from the nearest collision-free configuration.
     HomeReplaced,
-    /// An engine's dynamic run touched something while following the certified trajectory.
+    /// An engine's dynamic run touched something while following the certified trajectory, and
+    /// exact geometry confirms the contact at the engine's configuration.
     EngineContact,
+    /// An engine's dynamic run reports a contact that exact geometry does not have at the
+    /// engine's own configuration (an engine's geometric approximation).
+    EngineContactNotConfirmed,
     /// An engine did not hold a goal within the hold tolerance after the dwell.
     GoalNotHeld,
     /// The two engines disagree on holding a goal.
@@ -289,13 +293,27 @@ fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
 
 fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRuns, hold: (f64, f64), out: &mut Vec<Finding>) {
     for contact in &runs.dynamic.contacts {
+        let exact = contact.parry_distance_m.unwrap_or(f64::NAN);
+        let (kind, severity, verdict) = if exact > 0.0 {
+            (
+                FindingKind::EngineContactNotConfirmed,
+                Severity::Warn,
+                format!("but {:.2} mm apart in exact geometry at the engine's configuration", exact * 1e3),
+            )
+        } else {
+            (
+                FindingKind::EngineContact,
+                Severity::Fail,
+                format!("exact geometry: {:.2} mm", exact * 1e3),
+            )
+        };
         out.push(finding(
-            FindingKind::EngineContact,
-            Severity::Fail,
+            kind,
+            severity,
             None,
             Some(name),
             format!(
-                "{name}: {} and {} in contact from {:.3} s to {:.3} s, {:.2} mm deep",
+                "{name}: {} and {} in contact from {:.3} s to {:.3} s, {:.2} mm deep, {verdict}",
                 contact.a,
                 contact.b,
                 contact.start_s,
@@ -306,6 +324,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 ("start_s", contact.start_s),
                 ("end_s", contact.end_s),
                 ("depth_m", contact.max_depth_m),
+                ("exact_distance_m", exact),
             ],
         ));
     }
@@ -355,13 +374,18 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 Some(segment.goal),
                 Some(name),
                 format!(
-                    "{name} replay: {} and {} in contact ({:.3} mm) on the segment to goal {} that parry3d certified free",
+                    "{name} replay: {} and {} in contact ({:.3} mm) on the segment to goal {} that parry3d certified free ({:.3} mm apart there)",
                     contact.a,
                     contact.b,
                     contact.max_depth_m * 1e3,
-                    segment.goal
+                    segment.goal,
+                    contact.parry_distance_m.unwrap_or(f64::NAN) * 1e3
                 ),
-                &[("clock", contact.start_s), ("depth_m", contact.max_depth_m)],
+                &[
+                    ("clock", contact.start_s),
+                    ("depth_m", contact.max_depth_m),
+                    ("exact_distance_m", contact.parry_distance_m.unwrap_or(f64::NAN)),
+                ],
             )),
             (true, None) => out.push(finding(
                 FindingKind::ReplayContactMissed,

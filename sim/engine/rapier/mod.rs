@@ -150,6 +150,7 @@ pub fn run_rapier(
     let mut qd_ref = vec![0.0; dof];
     let mut q = vec![0.0; dof];
     let mut qd = vec![0.0; dof];
+    let mut q_before = first.from.clone();
     for step in 1..=steps {
         let t = step as f64 * dt;
         path.sample(t, &mut q_ref, &mut qd_ref);
@@ -157,10 +158,13 @@ pub fn run_rapier(
             set_motor_targets(&mut scene.world, index, model, gains, &q_ref, &qd_ref);
         }
         scene.world.step_with_events(&scene.filter, &());
-        record_contacts(&scene, &mut recorder, t - dt, opts.contact_depth_m);
+        // The narrow phase ran on the state at the step's start: the joints read after the
+        // previous step.
+        record_contacts(&scene, &mut recorder, t - dt, opts.contact_depth_m, &q_before);
         if let Some(index) = multibody {
             read_joints(&scene.world, index, model, &mut q, &mut qd);
         }
+        q_before.copy_from_slice(&q);
 
         for j in 0..dof {
             run.max_joint_error[j] = run.max_joint_error[j].max((q[j] - q_ref[j]).abs());
@@ -220,7 +224,7 @@ pub fn replay_rapier(
             }
         }
         scene.world.detect_collisions(&scene.filter, &());
-        record_contacts(&scene, &mut recorder, *t, opts.contact_depth_m);
+        record_contacts(&scene, &mut recorder, *t, opts.contact_depth_m, q);
     }
     Ok(EngineRun {
         engine: "rapier",
@@ -318,7 +322,7 @@ fn tool_error(model: &Model, scene: &Scene, q_ref: &[f64], kinematics: &mut crat
 }
 
 /// Records every checked pair whose deepest contact penetrates deeper than `depth_m`.
-fn record_contacts(scene: &Scene, recorder: &mut ContactRecorder, time_s: f64, depth_m: f64) {
+fn record_contacts(scene: &Scene, recorder: &mut ContactRecorder, time_s: f64, depth_m: f64, q: &[f64]) {
     recorder.begin_step();
     for pair in scene.world.narrow_phase.contact_pairs() {
         let Some((_, contact)) = pair.find_deepest_contact() else {
@@ -333,7 +337,7 @@ fn record_contacts(scene: &Scene, recorder: &mut ContactRecorder, time_s: f64, d
             continue;
         };
         if let Some((a_name, b_name)) = filter_names(&scene.filter, a.user_data, b.user_data) {
-            recorder.contact(a_name, b_name, time_s, depth);
+            recorder.contact(a_name, b_name, time_s, depth, q);
         }
     }
     recorder.end_step();
