@@ -4,14 +4,20 @@
 //! that proposed them.
 //!
 //! ```text
-//! design JSON ─┐
-//! URDF ────────┼─> model::Model ──> export (URDF, MJCF) ──> MuJoCo / rapier
-//! MJCF ────────┘     FK, Jacobian, exact geometry, inertia
+//! design JSON ─┐                                                    ┌─> rapier (dynamic, replay)
+//! URDF ────────┼─> model::Model ─> collide + ik ─> plan ─> engine ──┤
+//! MJCF ────────┘   FK, Jacobian,   exact distances, trajectory,     └─> MuJoCo (dynamic, replay,
+//!                  geometry,       every IK solution certified segments,    static load)
+//!                  inertia   scenario ──┘          timing           └────────> report: findings,
+//!                                                                               verdict
 //! ```
 //!
 //! Stages, one module each: [`design`] (design files, catalog, presets), [`model`] (the kinematic
-//! model every later stage uses), [`export`] (URDF and MJCF writers), [`engine`] (MuJoCo as the
-//! kinematic oracle), [`pipeline`] (runs the stages in order).
+//! model every later stage uses), [`export`] (URDF and MJCF writers), [`scenario`] (courses and
+//! their generators), [`collide`] (exact and approximate distances), [`ik`] (every collision-free
+//! solution of a goal), [`plan`] (the trajectory, certified continuous checking, timing),
+//! [`engine`] (rapier and MuJoCo runs, the static load, MuJoCo as kinematic oracle), [`report`]
+//! (findings and the verdict), [`pipeline`] (runs the stages in order: [`pipeline::validate`]).
 //!
 //! ```no_run
 //! let model = proving_ground::pipeline::load_model(
@@ -34,6 +40,11 @@
 //!   `conaffinity` 0) are skipped; planes and height fields are ignored on the base and errors
 //!   elsewhere. No velocity limits; ratings come from `actuatorfrcrange` or actuator
 //!   `forcerange`. The tool frame is the site `tool`, else the last moving body's frame.
+//! - Trajectories are straight joint-space segments between goal configurations: a goal whose
+//!   every straight segment is blocked is reported blocked, not routed around (no planner).
+//! - rapier runs in f32 and its narrow phase on cylinders can be off by up to 1.25 cm: its
+//!   contacts are re-measured in exact geometry before they count. rapier 0.36 does not report a
+//!   multibody's motor impulses: its effort is the control law on the state after each step.
 
 pub mod collide;
 pub mod design;

@@ -144,6 +144,8 @@ pub struct TrajectoryReport {
     pub home: Vec<f64>,
     /// Clearance at home (m).
     pub home_clearance_m: Option<f64>,
+    /// Why the scenario's or the default home was replaced, when it was.
+    pub home_replaced: Option<String>,
     /// Goals reached by a certified segment.
     pub reached: usize,
     /// Goals blocked.
@@ -387,6 +389,7 @@ fn trajectory_report(validation: &Validation) -> TrajectoryReport {
     TrajectoryReport {
         home: trajectory.home.clone(),
         home_clearance_m: trajectory.home_clearance.as_ref().map(|c| c.distance_m),
+        home_replaced: trajectory.home_replaced.clone(),
         reached: trajectory.reached(),
         blocked: trajectory.steps.len() - trajectory.reached(),
         segments,
