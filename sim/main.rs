@@ -23,7 +23,7 @@ Examples:
   validate-design designs/paper-real-world.json                 # the paper's robot on scenarios/course.json
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-07.json --json ur5e-07.json
   validate-design designs/modular-elbow.json --scenario scenarios/workspace/pose.json --engines none
-  validate-design designs/paper-real-world.json --engines mujoco --seed 3 --ik-seeds 8
+  validate-design designs/paper-real-world.json --engines mujoco --seed 3 --ik-seeds 8 --contact-depth 0.0005
   validate-design designs/ur10e.json --tolerance position --margin 0.01 --threads 1 --quiet
   validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --tip panda_hand
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
@@ -111,6 +111,10 @@ struct Cli {
     /// Clearance (m) every configuration and trajectory segment must keep [default: 0].
     #[arg(long, value_name = "M", default_value_t = 0.0)]
     margin: f64,
+    /// Engine contacts shallower than M metres are not counted (a tolerance for the engines'
+    /// own geometric approximations).
+    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    contact_depth: f64,
     /// Worker threads [default: the number of cores]; the report is the same for any number.
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -325,6 +329,10 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         },
         certify: proving_ground::plan::CertifyOptions { threshold_m: cli.margin },
         engines: cli.engines.0,
+        engine: proving_ground::engine::RunOptions {
+            contact_depth_m: cli.contact_depth.max(0.0),
+            ..Default::default()
+        },
         ..Default::default()
     };
     // A spinner on stderr; indicatif draws nothing when stderr is not a terminal.

@@ -134,3 +134,66 @@ fn the_report_is_the_same_with_one_engine_at_a_time_and_without_engines() {
         both.goals.iter().map(|g| g.on_trajectory).collect::<Vec<_>>()
     );
 }
+
+#[test]
+fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
+    // A modular arm with four long elbow tubes, held out straight: gravity alone needs far more
+    // than the modules' 60 N m at joint 2. Its one goal is its own tool pose there.
+    let text = r#"{"name": "long-arm", "mode": "modular", "modules": ["direct", "L-long", "L-long", "L-long", "L-long", "I-long"]}"#;
+    let design = proving_ground::design::parse(text, std::path::Path::new("long-arm.json")).expect("valid design");
+    let model = proving_ground::model::from_design(&design);
+    let q = vec![0.0; 6];
+    let tool = model.tool_pose(&q);
+    let scenario = Scenario {
+        name: "reach-out".into(),
+        world_from_base: Isometry3::identity(),
+        floor: None,
+        obstacles: vec![],
+        goals: vec![Goal {
+            name: "out".into(),
+            position: tool.translation.vector,
+            rotation: tool.rotation,
+            tolerance: Tolerance::Position,
+        }],
+        home: Some(q),
+        provenance: None,
+    };
+    let loaded = proving_ground::pipeline::Loaded {
+        model,
+        design: Some(design),
+    };
+    let opts = ValidateOptions {
+        engines: Engines {
+            rapier: false,
+            mujoco: true,
+        },
+        ..Default::default()
+    };
+    let report = report::build(&validate(loaded, scenario, &opts).expect("runs"));
+    let overloads: Vec<_> = report.findings.iter().filter(|f| f.kind == FindingKind::StaticOverload).collect();
+    assert!(
+        !overloads.is_empty() && overloads.iter().all(|f| f.severity == Severity::Fail),
+        "{:#?}",
+        report.findings
+    );
+    assert!(
+        overloads
+            .iter()
+            .any(|f| f.message.starts_with("joint 2 ") && f.values["peak_torque"] > 100.0),
+        "{overloads:#?}"
+    );
+    assert!(
+        report.verdict.reasons.iter().any(|r| r.contains("over their rated torque")),
+        "{:?}",
+        report.verdict
+    );
+
+    // The paper's robot on its course stays within the rating at every joint.
+    let paper = report::build(&validate(paper_robot(), generate::course(generate::COURSE_SEED), &opts).expect("runs"));
+    assert!(paper.findings.iter().all(|f| f.kind != FindingKind::StaticOverload));
+    let load = paper.static_load.expect("MuJoCo ran");
+    assert!(
+        load.joints.iter().all(|j| j.rated == Some(60.0) && j.peak_torque < 60.0),
+        "{load:?}"
+    );
+}

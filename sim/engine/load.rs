@@ -7,6 +7,9 @@ use crate::model::Model;
 use serde::Serialize;
 
 /// The static gravity load of every joint along a trajectory, against its rating.
+/// Smallest torque scale the MuJoCo cross-check is relative to (N m).
+const LOAD_FLOOR_N_M: f64 = 1.0;
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StaticLoad {
     /// Gravity used (m/s^2, along world -z).
@@ -15,7 +18,8 @@ pub struct StaticLoad {
     pub joints: Vec<JointLoad>,
     /// Largest disagreement between MuJoCo's gravity torque (`qfrc_bias` at rest) and ours
     /// ([`Model::gravity_torques`]) over all samples and joints, relative to the largest
-    /// torque magnitude of that sample; above 1e-9 it is a finding (a bug on one side).
+    /// torque magnitude of that sample (at least 1 N m); above 1e-9 it is a finding (a bug on
+    /// one side).
     pub max_relative_disagreement: f64,
 }
 
@@ -68,13 +72,12 @@ pub fn static_load(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Re
         data.forward();
         let mujoco: Vec<f64> = loaded.dof_address.iter().map(|&d| data.qfrc_bias()[d]).collect();
         let ours = model.gravity_torques(q, gravity_m_s2);
-        let scale = mujoco.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+        // Relative to the sample's largest torque, but never to less than 1 N m: an arm standing
+        // straight up carries 1e-14 N m of rounding, whose relative spread means nothing.
+        let scale = mujoco.iter().fold(LOAD_FLOOR_N_M, |a, b| a.max(b.abs()));
         for (j, load) in joints.iter_mut().enumerate() {
             let difference = (mujoco[j] - ours[j]).abs();
-            // A sample with no load at all (zero gravity) has nothing to disagree about.
-            if scale > 0.0 {
-                max_relative_disagreement = max_relative_disagreement.max(difference / scale);
-            }
+            max_relative_disagreement = max_relative_disagreement.max(difference / scale);
             if mujoco[j].abs() > load.peak_torque {
                 load.peak_torque = mujoco[j].abs();
                 load.sample = index;

@@ -1,6 +1,6 @@
 //! The readable summary of a report, as `validate-design` prints it.
 
-use super::{Report, Severity};
+use super::{FindingKind, Report, Severity};
 use std::fmt::Write;
 
 fn mm(value: Option<f64>) -> String {
@@ -126,6 +126,23 @@ pub fn render(report: &Report) -> String {
                 .collect::<Vec<_>>()
                 .join(" ")
         );
+    }
+    if !report.engines.is_empty() {
+        let segments = report.trajectory.segments.len();
+        let agreement: Vec<String> = report
+            .engines
+            .iter()
+            .map(|engine| {
+                let disagreements = report
+                    .findings
+                    .iter()
+                    .filter(|f| f.engine == Some(engine.engine))
+                    .filter(|f| matches!(f.kind, FindingKind::ReplayContactNotPredicted | FindingKind::ReplayContactMissed))
+                    .count();
+                format!("{} {} of {segments}", engine.engine, segments - disagreements.min(segments))
+            })
+            .collect();
+        let _ = writeln!(out, "replay agrees with the certified check on segments: {}", agreement.join(", "));
     }
     if let Some(load) = &report.static_load {
         let _ = writeln!(
