@@ -6,10 +6,10 @@ use super::{EngineError, RunOptions};
 use crate::model::Model;
 use serde::Serialize;
 
-/// The static gravity load of every joint along a trajectory, against its rating.
 /// Smallest torque scale the MuJoCo cross-check is relative to (N m).
 const LOAD_FLOOR_N_M: f64 = 1.0;
 
+/// The static gravity load of every joint along a trajectory, against its rating.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StaticLoad {
     /// Gravity used (m/s^2, along world -z).
