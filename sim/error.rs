@@ -48,6 +48,18 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// A scenario obstacle has the name of a robot link.
+    #[error("scenario {scenario}: `{field}` is `{name}`, the name of a link of {robot}; rename the obstacle")]
+    NameClash {
+        /// Scenario name.
+        scenario: String,
+        /// The obstacle's field.
+        field: String,
+        /// The name.
+        name: String,
+        /// The robot.
+        robot: String,
+    },
     /// The report could not be serialised (a bug: every field is plain data).
     #[error("cannot write the report as JSON: {message}")]
     Report {

@@ -1,5 +1,7 @@
-//! `validate-design`: reads a design or a URDF, describes the model, exports it, and checks the
-//! export against MuJoCo's own kinematics; `validate-design generate` writes generated scenarios.
+//! `validate-design`: reads a design, a URDF or an MJCF robot, checks our kinematics of it against
+//! MuJoCo's, validates it on a scenario (IK, certified trajectory, rapier and MuJoCo), prints the
+//! report and exits 0 (passes), 1 (fails) or 2 (bad input); `validate-design generate` writes
+//! generated scenarios.
 
 use clap::{Parser, Subcommand, ValueEnum};
 use proving_ground::engine::{compare_kinematics, MujocoKinematics, ToolElement, MUJOCO_VERSION};
@@ -81,12 +83,12 @@ struct Cli {
     #[arg(long, value_name = "N", default_value_t = 0)]
     seed: u64,
     /// Print only the joints, links and tool pose; run nothing else.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "kinematics_only")]
     describe: bool,
     /// Treat warnings about the input as errors (exit 2).
     #[arg(long)]
     strict: bool,
-    /// Print only the verdict line (and nothing on stderr but errors).
+    /// Print only the verdict line (warnings about the input and errors still go to stderr).
     #[arg(long)]
     quiet: bool,
     /// Scenario JSON to validate the design on [default: scenarios/course.json, or the same
@@ -103,21 +105,30 @@ struct Cli {
     #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
     engines: EnginesArg,
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
-    #[arg(long, value_name = "K", default_value_t = 4)]
-    ik_seeds: usize,
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..))]
+    ik_seeds: u64,
     /// Judge every goal by this tolerance mode instead of the scenario's.
     #[arg(long, value_name = "MODE")]
     tolerance: Option<ToleranceArg>,
-    /// Clearance (m) every configuration and trajectory segment must keep [default: 0].
-    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    /// Clearance (m) every configuration and trajectory segment must keep.
+    #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = non_negative)]
     margin: f64,
     /// Engine contacts shallower than M metres are not counted (a tolerance for the engines'
     /// own geometric approximations).
-    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = non_negative)]
     contact_depth: f64,
     /// Worker threads [default: the number of cores]; the report is the same for any number.
-    #[arg(long, value_name = "N")]
-    threads: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    threads: Option<u64>,
+}
+
+/// A finite length of at least 0 m.
+fn non_negative(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(value) if value.is_finite() && value >= 0.0 => Ok(value),
+        Ok(value) => Err(format!("{value} m: expected a finite length of at least 0")),
+        Err(error) => Err(format!("`{text}`: {error}")),
+    }
 }
 
 /// `--engines`: `rapier,mujoco`, `rapier`, `mujoco` or `none`.
@@ -251,7 +262,9 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     }
     if let Some(threads) = cli.threads {
         // Only the first call configures the global pool; a second is harmless.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build_global();
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::try_from(threads).unwrap_or(usize::MAX))
+            .build_global();
     }
     let mut scenario = match &cli.scenario {
         Some(path) => pipeline::load_scenario(path)?,
@@ -323,14 +336,14 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
 
     let opts = pipeline::ValidateOptions {
         ik: proving_ground::ik::IkOptions {
-            seeds: cli.ik_seeds.max(1),
+            seeds: usize::try_from(cli.ik_seeds).unwrap_or(usize::MAX),
             seed: cli.seed,
             ..Default::default()
         },
         certify: proving_ground::plan::CertifyOptions { threshold_m: cli.margin },
         engines: cli.engines.0,
         engine: proving_ground::engine::RunOptions {
-            contact_depth_m: cli.contact_depth.max(0.0),
+            contact_depth_m: cli.contact_depth,
             ..Default::default()
         },
         ..Default::default()

@@ -49,7 +49,7 @@ pub struct Loaded {
     pub design: Option<design::Design>,
 }
 
-/// Reads a design JSON or a URDF into a model.
+/// Reads a design JSON, a URDF or an MJCF file into a model.
 ///
 /// # Errors
 /// The design or model stage's error, naming the file and the field or element.
@@ -93,7 +93,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
     }
 }
 
-/// Reads a design JSON or a URDF into a model.
+/// Reads a design JSON, a URDF or an MJCF file into a model.
 ///
 /// # Errors
 /// As [`load`].
@@ -233,8 +233,8 @@ pub struct Validation {
 /// MuJoCo in parallel), and the static load.
 ///
 /// # Errors
-/// [`Error::Collide`] for geometry that cannot be built, [`Error::Plan`] for a scenario home that
-/// does not fit the robot, [`Error::Engine`] when an engine refuses the model.
+/// [`Error::NameClash`] for an obstacle named like a robot link, [`Error::Collide`] for geometry
+/// that cannot be built, [`Error::Engine`] when an engine refuses the model.
 pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &ValidateOptions) -> Result<Validation, Error> {
     validate_with_progress(loaded, scenario, opts, &|_| {})
 }
@@ -250,6 +250,20 @@ pub fn validate_with_progress(
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Validation, Error> {
     progress("building the collision world");
+    // Contacts and findings name bodies: an obstacle may not share a robot link's name.
+    if let Some((index, obstacle)) = scenario
+        .obstacles
+        .iter()
+        .enumerate()
+        .find(|(_, o)| loaded.model.links.iter().any(|l| l.name == o.name))
+    {
+        return Err(Error::NameClash {
+            scenario: scenario.name.clone(),
+            field: format!("obstacles[{index}].name"),
+            name: obstacle.name.clone(),
+            robot: loaded.model.name.clone(),
+        });
+    }
     let model = loaded.model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
     progress(&format!("solving IK for {} goals", scenario.goals.len()));
@@ -298,24 +312,25 @@ pub fn validate_with_progress(
             replay: crate::engine::replay_rapier(&model, &scenario, &world, &samples, &opts.engine)?,
         }))
     };
-    let run_mujoco = || -> Result<(Option<EngineRuns>, Option<crate::engine::StaticLoad>), crate::engine::EngineError> {
+    // The static load along the trajectory only: a blocked goal's attempt is not a motion the
+    // robot makes.
+    let mut configurations = vec![trajectory.home.clone()];
+    configurations.extend(
+        samples
+            .iter()
+            .filter(|(clock, _)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned))
+            .map(|(_, q)| q.clone()),
+    );
+    let gravity = opts.engine.gravity_m_s2;
+    let run_mujoco = || -> Result<(Option<EngineRuns>, crate::engine::StaticLoad), crate::engine::EngineError> {
         if !opts.engines.mujoco {
-            return Ok((None, None));
+            return Ok((None, crate::engine::static_load_without_mujoco(&model, &configurations, gravity)?));
         }
         let runs = EngineRuns {
             dynamic: crate::engine::run_mujoco(&model, &scenario, &world, timed, &gains, &opts.engine)?,
             replay: crate::engine::replay_mujoco(&model, &scenario, &world, &samples, &opts.engine)?,
         };
-        // Along the trajectory only: a blocked goal's attempt is not a motion the robot makes.
-        let mut configurations = vec![trajectory.home.clone()];
-        configurations.extend(
-            samples
-                .iter()
-                .filter(|(clock, _)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned))
-                .map(|(_, q)| q.clone()),
-        );
-        let load = crate::engine::static_load(&model, &configurations, opts.engine.gravity_m_s2)?;
-        Ok((Some(runs), Some(load)))
+        Ok((Some(runs), crate::engine::static_load(&model, &configurations, gravity)?))
     };
     progress(&format!("running the engines ({:.1} s simulated)", timed.duration_s()));
     // The engines are independent and each deterministic: running them side by side changes
@@ -324,8 +339,8 @@ pub fn validate_with_progress(
     let mut rapier = rapier?;
     let (mut mujoco, static_load) = mujoco?;
     for runs in rapier.iter_mut().chain(mujoco.iter_mut()) {
-        confirm_contacts(&model, &world, &mut runs.dynamic.contacts);
-        confirm_contacts(&model, &world, &mut runs.replay.contacts);
+        crate::engine::confirm_contacts(&model, &world, &mut runs.dynamic.contacts);
+        crate::engine::confirm_contacts(&model, &world, &mut runs.replay.contacts);
     }
     Ok(Validation {
         pairs: world.pairs().to_vec(),
@@ -338,34 +353,9 @@ pub fn validate_with_progress(
         replayed,
         rapier,
         mujoco,
-        static_load,
+        static_load: Some(static_load),
         gains,
         loss_terms,
         options: opts.clone(),
     })
-}
-
-/// Measures each engine contact's pair in exact geometry at the engine's own configuration, so
-/// a contact only an engine sees (rapier's f32 narrow phase on cylinders is up to 1.25 cm off,
-/// MuJoCo's cylinders are approximate) is told apart from a real one.
-fn confirm_contacts(model: &Model, world: &collide::CollisionWorld, contacts: &mut [crate::engine::ContactInterval]) {
-    let mut ws = model.workspace();
-    let mut out = collide::Distances::new();
-    // Every pair within a kilometre is measured exactly, not bounded.
-    let query = collide::QueryOptions {
-        margin: 1e3,
-        hulls: false,
-        exact_depth: true,
-    };
-    for contact in contacts {
-        if contact.q.len() != model.dof() {
-            continue;
-        }
-        let Some(index) = world.pairs().iter().position(|p| p.a_name == contact.a && p.b_name == contact.b) else {
-            continue;
-        };
-        model.forward(&contact.q, &mut ws);
-        collide::distances(world, &ws.link_in_world, &query, &mut out);
-        contact.parry_distance_m = out.estimates.get(index).map(|e| e.distance);
-    }
 }

@@ -384,3 +384,32 @@ fn help_shows_every_option_in_an_example() {
         );
     }
 }
+
+#[test]
+fn option_values_out_of_range_exit_2_naming_the_option() {
+    for (option, value) in [
+        ("--margin", "NaN"),
+        ("--margin", "-0.5"),
+        ("--margin", "inf"),
+        ("--contact-depth", "NaN"),
+        ("--threads", "0"),
+        ("--ik-seeds", "0"),
+    ] {
+        let output = validate_design()
+            .args(["designs/ur5e.json", "--engines", "none", &format!("{option}={value}")])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{option} {value}: {stderr}");
+        assert!(stderr.contains(option), "{option} {value}: {stderr}");
+    }
+}
+
+#[test]
+fn describe_and_kinematics_only_conflict() {
+    let output = validate_design()
+        .args(["designs/ur5e.json", "--describe", "--kinematics-only"])
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+}

@@ -708,3 +708,28 @@ fn course_obstacles_are_in_the_way_of_a_careless_path() {
         }
     }
 }
+
+#[test]
+fn rejects_duplicate_obstacle_names() {
+    let stderr = error_for("duplicate_obstacle_names.json");
+    assert!(
+        stderr.contains("obstacles[1].name: `ball` is already the name of another obstacle"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn rejects_an_obstacle_named_like_a_robot_link() {
+    let name = "obstacle_named_like_a_link.json";
+    let output = validate_design()
+        .args(["designs/paper-real-world.json", "--engines", "none", "--scenario"])
+        .arg(fixture(&format!("scenarios/{name}")))
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("`obstacles[0].name` is `link2`, the name of a link of paper-real-world"),
+        "{stderr}"
+    );
+}

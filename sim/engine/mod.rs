@@ -2,6 +2,7 @@
 //! Produces what the engines compute: today MuJoCo's kinematics, Jacobians and geom distances,
 //! the independent oracles for our own. Fails with [`EngineError`] when an engine refuses a model.
 
+mod confirm;
 mod crosscheck;
 mod gains;
 mod load;
@@ -10,9 +11,10 @@ mod mujoco_run;
 mod rapier;
 mod run;
 
+pub use confirm::confirm_contacts;
 pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
 pub use gains::{gains, GainOptions};
-pub use load::{static_load, JointLoad, StaticLoad};
+pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
 pub use mujoco_run::{replay_mujoco, run_mujoco};
 pub use rapier::{replay_rapier, run_rapier};

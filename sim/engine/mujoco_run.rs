@@ -185,7 +185,8 @@ impl Loaded {
         let mut q: Option<Vec<f64>> = None;
         for contact in data.contact() {
             let depth = -contact.dist;
-            if depth < min_depth_m.max(0.0) {
+            // Strictly deeper than the tolerance counts, as in the rapier run.
+            if depth <= min_depth_m.max(0.0) {
                 continue;
             }
             let body = |geom: i32| usize::try_from(geom).ok().and_then(|g| self.geom_body.get(g).copied().flatten());

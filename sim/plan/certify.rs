@@ -125,6 +125,8 @@ impl MotionBounds {
     pub fn relative_motion(&self, a: Body, b: Body, delta: &[f64]) -> f64 {
         let moving = |joints: std::ops::Range<usize>, link: usize| -> f64 {
             joints
+                // A joint that does not move adds nothing, whatever its (possibly unbounded) radius.
+                .filter(|&j| delta[j] != 0.0)
                 .map(|j| {
                     let rate = if self.prismatic[j] { 1.0 } else { self.radius[j][link] };
                     delta[j].abs() * rate
@@ -171,8 +173,15 @@ pub struct SegmentChecker<'a> {
 }
 
 impl<'a> SegmentChecker<'a> {
-    /// A checker for `model` (placed as the world was built) in `world`.
+    /// A checker for `model` (placed as the world was built) in `world`. A threshold that is not
+    /// a finite number of at least 0 is taken as 0 (a NaN would certify everything).
     pub fn new(model: &'a Model, world: &'a CollisionWorld, opts: CertifyOptions) -> Self {
+        let threshold_m = if opts.threshold_m.is_finite() {
+            opts.threshold_m.max(0.0)
+        } else {
+            0.0
+        };
+        let opts = CertifyOptions { threshold_m };
         Self {
             model,
             world,
@@ -262,8 +271,12 @@ impl<'a> SegmentChecker<'a> {
             let mut lowest = f64::INFINITY;
             for (estimate, rate) in self.out.estimates.iter().zip(&self.rates) {
                 let excess = estimate.distance - threshold;
+                // An infinite distance is a pair with no geometry; an infinite rate is not
+                // certifiable: no step then.
                 if *rate > 0.0 && excess.is_finite() {
                     step = step.min(excess / (2.0 * rate));
+                } else if !rate.is_finite() && excess.is_finite() {
+                    step = 0.0;
                 }
             }
             for (estimate, rate) in self.out.estimates.iter().zip(&self.rates) {

@@ -263,7 +263,11 @@ pub fn plan(
     // goal: start from the nearest collision-free configuration instead, and say so. A home the
     // scenario gives is the user's and stays, colliding or not.
     let default_used = scenario.home.is_none() || home_replaced.is_some();
-    if default_used && home_clearance.as_ref().is_some_and(|c| c.distance_m <= threshold) {
+    if default_used
+        && home_clearance
+            .as_ref()
+            .is_some_and(|c| c.distance_m <= threshold + super::certify::TOUCH_TOLERANCE_M)
+    {
         if let Some((free, clearance)) = nearest_free(&mut checker, model, &home, threshold, opts.ik.seed) {
             let colliding = home_clearance
                 .as_ref()

@@ -109,7 +109,7 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
     let mut out = Vec::new();
     let trajectory = &validation.trajectory;
     if let Some(home) = &trajectory.home_clearance {
-        if home.distance_m <= validation.options.certify.threshold_m {
+        if home.distance_m <= validation.options.certify.threshold_m + crate::plan::TOUCH_TOLERANCE_M {
             out.push(finding(
                 FindingKind::HomeInCollision,
                 Severity::Fail,
@@ -186,17 +186,14 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
                 ));
             }
         }
-        if load.max_relative_disagreement > 1e-9 {
+        if let Some(disagreement) = load.max_relative_disagreement.filter(|d| *d > 1e-9) {
             out.push(finding(
                 FindingKind::GravityModelMismatch,
                 Severity::Warn,
                 None,
                 None,
-                format!(
-                    "our gravity torques and MuJoCo's differ by {:.2e} (relative)",
-                    load.max_relative_disagreement
-                ),
-                &[("relative", load.max_relative_disagreement)],
+                format!("our gravity torques and MuJoCo's differ by {disagreement:.2e} (relative)"),
+                &[("relative", disagreement)],
             ));
         }
     }
@@ -294,7 +291,13 @@ fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
 fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRuns, hold: (f64, f64), out: &mut Vec<Finding>) {
     for contact in &runs.dynamic.contacts {
         let exact = contact.parry_distance_m.unwrap_or(f64::NAN);
-        let (kind, severity, verdict) = if exact > 0.0 {
+        let (kind, severity, verdict) = if exact.is_nan() {
+            (
+                FindingKind::EngineContactNotConfirmed,
+                Severity::Warn,
+                "not re-measured in exact geometry (the engine's configuration is unknown)".to_string(),
+            )
+        } else if exact > 0.0 {
             (
                 FindingKind::EngineContactNotConfirmed,
                 Severity::Warn,

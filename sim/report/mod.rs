@@ -81,7 +81,7 @@ pub struct Criteria {
 pub struct DesignSummary {
     /// Name.
     pub name: String,
-    /// `free`, `economic`, `modular`, `preset` or `urdf`.
+    /// `free`, `economic`, `modular`, `preset`, `urdf` or `mjcf`.
     pub mode: String,
     /// Joints.
     pub dof: usize,
@@ -152,6 +152,8 @@ pub struct TrajectoryReport {
     pub blocked: usize,
     /// Per goal in order: the certified segment or the blocked attempt.
     pub segments: Vec<SegmentReport>,
+    /// Segments the engines replayed: the planned ones and the blocked goals' attempts.
+    pub replayed_segments: usize,
     /// The smallest certified clearance over the trajectory (m).
     pub certified_clearance_m: Option<f64>,
     /// Joint-space length (rad and m summed).
@@ -300,7 +302,11 @@ fn design_summary(validation: &Validation) -> DesignSummary {
         },
         None => DesignSummary {
             name: model.name.clone(),
-            mode: "urdf".into(),
+            mode: match &model.source {
+                crate::model::ModelSource::Design { mode } => mode.clone(),
+                crate::model::ModelSource::Urdf { .. } => "urdf".into(),
+                crate::model::ModelSource::Mjcf { .. } => "mjcf".into(),
+            },
             dof: model.dof(),
             parameters: None,
             hardware_cost_m: None,
@@ -393,6 +399,7 @@ fn trajectory_report(validation: &Validation) -> TrajectoryReport {
         reached: trajectory.reached(),
         blocked: trajectory.steps.len() - trajectory.reached(),
         segments,
+        replayed_segments: validation.replayed.len(),
         certified_clearance_m: certified,
         joint_length: trajectory.joint_length,
         tool_path_m: trajectory.tool_path_m,

@@ -128,7 +128,7 @@ pub fn render(report: &Report) -> String {
         );
     }
     if !report.engines.is_empty() {
-        let segments = report.trajectory.segments.len();
+        let segments = report.trajectory.replayed_segments;
         let agreement: Vec<String> = report
             .engines
             .iter()

@@ -135,7 +135,23 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
 
     let mut obstacles = Vec::with_capacity(file.obstacles.len());
     for (index, obstacle) in file.obstacles.iter().enumerate() {
-        obstacles.push(check.obstacle(index, obstacle)?);
+        let obstacle = check.obstacle(index, obstacle)?;
+        // Reports, engines and exclusions name obstacles: a name must say which one.
+        if obstacle.name == "floor" || obstacles.iter().any(|o: &Obstacle| o.name == obstacle.name) {
+            return Err(check.invalid(
+                &format!("obstacles[{index}].name"),
+                format!(
+                    "`{}` is already the name of {}; obstacle names must be unique",
+                    obstacle.name,
+                    if obstacle.name == "floor" {
+                        "the floor"
+                    } else {
+                        "another obstacle"
+                    }
+                ),
+            ));
+        }
+        obstacles.push(obstacle);
     }
 
     if file.goals.is_empty() {
