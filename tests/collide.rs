@@ -1391,3 +1391,58 @@ fn estimated_depths_keep_every_verdict_and_are_never_shallower() {
     // Enough overlaps of the kinds EPA would measure, and the estimate really used on them.
     assert!(overlaps > 500 && deeper > 100, "{overlaps} overlaps, {deeper} estimated deeper");
 }
+
+#[test]
+fn mesh_robots_find_the_same_closest_pair_and_contacts_with_the_hull_bounds_as_with_everything_measured() {
+    let model = load_model(
+        &panda_urdf(),
+        &LoadOptions {
+            tip_link: Some("panda_hand".into()),
+            ..Default::default()
+        },
+    )
+    .expect("panda loads");
+    let course = proving_ground::scenario::generate::course(proving_ground::scenario::generate::COURSE_SEED);
+    let world = collide::world(&model, &course, &CollideOptions::default()).expect("valid");
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let (mut bounded, mut everything) = (Distances::new(), Distances::new());
+    let all = QueryOptions {
+        margin: 1e3,
+        hulls: false,
+        exact_depth: true,
+    };
+    let near = QueryOptions {
+        margin: 0.02,
+        hulls: false,
+        exact_depth: true,
+    };
+    let mut ws = model.workspace();
+    let mut hull_bounded = 0;
+    for sample in 0..60 {
+        model.forward(&model.random_configuration(&mut rng), &mut ws);
+        distances(&world, &ws.link_in_world, &all, &mut everything);
+        distances(&world, &ws.link_in_world, &near, &mut bounded);
+        let truth = everything.closest.expect("pairs").distance;
+        assert_eq!(bounded.closest.expect("pairs").distance, truth, "sample {sample}");
+        let within: Vec<usize> = everything
+            .within_margin
+            .iter()
+            .filter(|p| p.distance <= 0.02)
+            .map(|p| p.pair)
+            .collect();
+        assert_eq!(
+            bounded.within_margin.iter().map(|p| p.pair).collect::<Vec<_>>(),
+            within,
+            "sample {sample}"
+        );
+        // Every bound is below the true distance.
+        for (estimate, exact) in bounded.estimates.iter().zip(&everything.estimates) {
+            assert!(
+                estimate.distance <= exact.distance + 1e-12,
+                "sample {sample}: {estimate:?} vs {exact:?}"
+            );
+            hull_bounded += usize::from(!estimate.exact && estimate.distance > 0.0);
+        }
+    }
+    assert!(hull_bounded > 50, "{hull_bounded}");
+}

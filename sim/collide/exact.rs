@@ -3,6 +3,10 @@
 //! the meshes.
 
 use super::narrow::{measure_convex, measure_floor, measure_shapes, Measured};
+
+/// Below the hulls' unpolished GJK gap that is still a lower bound of the meshes' gap (m): GJK on
+/// polytopes stops within its tolerance, far below this.
+const HULL_SLACK_M: f64 = 1e-4;
 use super::world::{CollisionWorld, Other};
 use super::{approx, effective_margin, Body, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
 use crate::frames::{parry_pose, vector_from_parry};
@@ -94,6 +98,13 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
         }
         if scratch.stages[index] == Stage::Boxed && candidate.b != Other::Floor {
             let bound = tighten(world, index, scratch);
+            scratch.queue.push(Reverse((order_key(bound), index)));
+            continue;
+        }
+        // A mesh pair's narrow phase walks triangle pairs; its hulls' distance, one convex query,
+        // bounds it from below first (a mesh lies inside its hull).
+        if scratch.stages[index] == Stage::Capsuled && world.has_mesh(candidate) {
+            let bound = hull_bound(world, index, scratch);
             scratch.queue.push(Reverse((order_key(bound), index)));
             continue;
         }
@@ -198,6 +209,31 @@ fn tighten(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch) -
     }
     scratch.stages[index] = Stage::Capsuled;
     scratch.bounds[index]
+}
+
+/// Raises candidate `index`'s bound (a pair with a mesh side) to its convex hulls' distance when
+/// the hulls are apart, and returns the bound. The hulls' gap is GJK's on polytopes, lowered by
+/// [`HULL_SLACK_M`] so rounding cannot make it exceed the meshes' gap.
+fn hull_bound(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch) -> f64 {
+    let candidate = &world.candidates[index];
+    let a = &world.colliders[candidate.a].geometry;
+    let (pose_b, b) = match candidate.b {
+        Other::Link(j) => (&scratch.poses[j], &world.colliders[j].geometry),
+        Other::Obstacle(k) => (&world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
+        Other::Floor => {
+            scratch.stages[index] = Stage::Hulled;
+            return scratch.bounds[index];
+        }
+    };
+    let hull_a = a.hull.as_ref().unwrap_or(&a.shape);
+    let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
+    let gap = measure_convex(&scratch.poses[candidate.a], &**hull_a, pose_b, &**hull_b, false).distance - HULL_SLACK_M;
+    let bound = &mut scratch.bounds[index];
+    if gap > 0.0 {
+        *bound = bound.max(gap);
+    }
+    scratch.stages[index] = Stage::Hulled;
+    *bound
 }
 
 /// Stores a measured candidate: its bound becomes its distance, and its pair's best improves.

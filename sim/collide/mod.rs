@@ -348,6 +348,8 @@ enum Stage {
     Boxed,
     /// Its bound also covers the bounding capsules.
     Capsuled,
+    /// Its bound also covers the convex hulls (a pair with a mesh side).
+    Hulled,
     /// Its bound is its measured distance.
     Measured,
 }
