@@ -185,49 +185,6 @@ pub struct ValidateOptions {
     pub excluded_pairs: Vec<collide::ExcludedPair>,
 }
 
-/// One engine's runs on a validation's trajectory.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct EngineRuns {
-    /// Following the timed trajectory with motors, gravity on.
-    pub dynamic: crate::engine::EngineRun,
-    /// Positions set along the replay segments (see [`crate::plan::replay_segments`]).
-    pub replay: crate::engine::EngineRun,
-}
-
-/// Everything a validation produced, stage by stage.
-#[derive(Debug, Clone)]
-pub struct Validation {
-    /// The model, placed at the scenario's base pose.
-    pub model: Model,
-    /// The design, for design files.
-    pub design: Option<design::Design>,
-    /// The scenario.
-    pub scenario: crate::scenario::Scenario,
-    /// Checked pairs and excluded pairs (with reasons), by name.
-    pub pairs: Vec<collide::CheckedPair>,
-    /// Excluded pairs with their reasons.
-    pub excluded: Vec<collide::ExcludedPair>,
-    /// IK solutions per goal.
-    pub solutions: Vec<crate::ik::GoalSolutions>,
-    /// The trajectory through the goals.
-    pub trajectory: crate::plan::Trajectory,
-    /// Segments replayed in the engines, with their certified checks.
-    pub replayed: Vec<crate::plan::ReplaySegment>,
-    /// rapier's runs, when run.
-    pub rapier: Option<EngineRuns>,
-    /// MuJoCo's runs, when run.
-    pub mujoco: Option<EngineRuns>,
-    /// Gravity torques along the trajectory against ratings (MuJoCo and ours), when MuJoCo runs.
-    pub static_load: Option<crate::engine::StaticLoad>,
-    /// Gains both engines used.
-    pub gains: crate::engine::Gains,
-    /// The paper's loss terms per goal at the chosen configuration (the trajectory's, else IK's
-    /// best); `None` for a goal with no configuration at all.
-    pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
-    /// The options the run used.
-    pub options: ValidateOptions,
-}
-
 /// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
 /// certified continuous check, the engines' dynamic runs and kinematic replays (rapier and
 /// MuJoCo in parallel), and the static load.
@@ -235,6 +192,12 @@ pub struct Validation {
 /// # Errors
 /// [`Error::NameClash`] for an obstacle named like a robot link, [`Error::Collide`] for geometry
 /// that cannot be built, [`Error::Engine`] when an engine refuses the model.
+pub use crate::report::{EngineRuns, Validation};
+
+/// Runs all stages; see [`validate_with_progress`].
+///
+/// # Errors
+/// As [`validate_with_progress`].
 pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &ValidateOptions) -> Result<Validation, Error> {
     validate_with_progress(loaded, scenario, opts, &|_| {})
 }
@@ -356,6 +319,13 @@ pub fn validate_with_progress(
         static_load: Some(static_load),
         gains,
         loss_terms,
-        options: opts.clone(),
+        settings: crate::report::Settings {
+            margin_m: opts.certify.threshold_m,
+            hold_position_m: opts.gains.position_tolerance_m,
+            hold_orientation_rad: opts.gains.orientation_tolerance_rad,
+            engine_contact_depth_m: opts.engine.contact_depth_m,
+            ik_seeds: opts.ik.seeds,
+            seed: opts.ik.seed,
+        },
     })
 }

@@ -9,8 +9,8 @@
 //! checkers (every 0.005 rad), so a contact thinner than a sample step can escape them.
 
 use super::Report;
+use super::{EngineRuns, Validation};
 use crate::engine::ContactInterval;
-use crate::pipeline::{EngineRuns, Validation};
 use crate::plan::GoalStep;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -109,7 +109,7 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
     let mut out = Vec::new();
     let trajectory = &validation.trajectory;
     if let Some(home) = &trajectory.home_clearance {
-        if home.distance_m <= validation.options.certify.threshold_m + crate::plan::TOUCH_TOLERANCE_M {
+        if home.distance_m <= validation.settings.margin_m + crate::plan::TOUCH_TOLERANCE_M {
             out.push(finding(
                 FindingKind::HomeInCollision,
                 Severity::Fail,

@@ -1,7 +1,7 @@
 //! The paper's objective summed over a scenario, as the design tool would score the design.
 
+use super::Validation;
 use crate::ik::{COLLISION_WEIGHT, DISTANCE_WEIGHT, HARDWARE_WEIGHT};
-use crate::pipeline::Validation;
 use serde::Serialize;
 
 /// `L = sum_i (w_d d_i + w_col c_col,i) + w_c c_h`, at the configurations the report chose

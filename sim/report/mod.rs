@@ -3,17 +3,18 @@
 //! loss, the findings and the verdict. Never fails: a failing design is a verdict.
 
 mod findings;
+mod inputs;
 mod loss;
 mod render;
 
 pub use findings::{Finding, FindingKind, Severity};
+pub use inputs::{EngineRuns, Settings, Validation};
 pub use loss::PaperLoss;
 pub use render::render;
 
 use crate::collide::ExcludedPair;
 use crate::engine::{ContactInterval, StaticLoad};
 use crate::ik::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
-use crate::pipeline::Validation;
 use crate::plan::{GoalStep, SegmentPoint};
 use crate::scenario::{Provenance, Tolerance};
 use serde::Serialize;
@@ -215,23 +216,23 @@ pub struct Verdict {
 
 /// Builds the report of a validation.
 pub fn build(validation: &Validation) -> Report {
-    let opts = &validation.options;
+    let settings = &validation.settings;
     let engines: Vec<_> = [("rapier", &validation.rapier), ("mujoco", &validation.mujoco)]
         .into_iter()
         .filter_map(|(name, runs)| runs.as_ref().map(|runs| (name, runs)))
         .collect();
-    let hold = (opts.gains.position_tolerance_m, opts.gains.orientation_tolerance_rad);
+    let hold = (settings.hold_position_m, settings.hold_orientation_rad);
     let criteria = Criteria {
         position_m: REACHED_POSITION_M,
         orientation_deg: REACHED_ORIENTATION_RAD.to_degrees(),
-        collision_margin_m: opts.certify.threshold_m,
+        collision_margin_m: settings.margin_m,
         geometry: "exact (parry3d-f64: the model's spheres, boxes, cylinders, capsules and triangle meshes as they are)",
         excluded_pairs: validation.excluded.clone(),
         hold_position_m: hold.0,
         hold_orientation_deg: hold.1.to_degrees(),
-        engine_contact_depth_m: opts.engine.contact_depth_m,
-        ik_seeds: opts.ik.seeds,
-        seed: opts.ik.seed,
+        engine_contact_depth_m: settings.engine_contact_depth_m,
+        ik_seeds: settings.ik_seeds,
+        seed: settings.seed,
         engines: engines.iter().map(|(name, _)| *name).collect(),
     };
     let goals = goal_reports(validation, &engines, hold);
@@ -314,7 +315,7 @@ fn design_summary(validation: &Validation) -> DesignSummary {
     }
 }
 
-fn goal_reports(validation: &Validation, engines: &[(&'static str, &crate::pipeline::EngineRuns)], hold: (f64, f64)) -> Vec<GoalReport> {
+fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)], hold: (f64, f64)) -> Vec<GoalReport> {
     validation
         .scenario
         .goals

@@ -1,0 +1,62 @@
+//! What the report is built from: every stage's output of one validation run.
+
+/// One engine's runs on a validation's trajectory.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EngineRuns {
+    /// Following the timed trajectory with motors, gravity on.
+    pub dynamic: crate::engine::EngineRun,
+    /// Positions set along the replay segments (see [`crate::plan::replay_segments`]).
+    pub replay: crate::engine::EngineRun,
+}
+
+/// Everything a validation produced, stage by stage.
+#[derive(Debug, Clone)]
+pub struct Validation {
+    /// The model, placed at the scenario's base pose.
+    pub model: crate::model::Model,
+    /// The design, for design files.
+    pub design: Option<crate::design::Design>,
+    /// The scenario.
+    pub scenario: crate::scenario::Scenario,
+    /// Checked pairs and excluded pairs (with reasons), by name.
+    pub pairs: Vec<crate::collide::CheckedPair>,
+    /// Excluded pairs with their reasons.
+    pub excluded: Vec<crate::collide::ExcludedPair>,
+    /// IK solutions per goal.
+    pub solutions: Vec<crate::ik::GoalSolutions>,
+    /// The trajectory through the goals.
+    pub trajectory: crate::plan::Trajectory,
+    /// Segments replayed in the engines, with their certified checks.
+    pub replayed: Vec<crate::plan::ReplaySegment>,
+    /// rapier's runs, when run.
+    pub rapier: Option<EngineRuns>,
+    /// MuJoCo's runs, when run.
+    pub mujoco: Option<EngineRuns>,
+    /// Gravity torques along the trajectory against ratings (MuJoCo's cross-checked with ours, or
+    /// ours alone without MuJoCo).
+    pub static_load: Option<crate::engine::StaticLoad>,
+    /// Gains both engines used.
+    pub gains: crate::engine::Gains,
+    /// The paper's loss terms per goal at the chosen configuration (the trajectory's, else IK's
+    /// best); `None` for a goal with no configuration at all.
+    pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
+    /// The settings the run used that the report states as its criteria.
+    pub settings: Settings,
+}
+
+/// The settings of a run that decide its verdict.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Settings {
+    /// Clearance every configuration and segment had to keep (m).
+    pub margin_m: f64,
+    /// Hold tolerance at the tool (m).
+    pub hold_position_m: f64,
+    /// Hold tolerance at the tool (rad).
+    pub hold_orientation_rad: f64,
+    /// Engine contacts at most this deep were not counted (m).
+    pub engine_contact_depth_m: f64,
+    /// IK starts per goal.
+    pub ik_seeds: usize,
+    /// Seed of IK's random starts.
+    pub seed: u64,
+}
