@@ -230,11 +230,15 @@ pub fn validate_with_progress(
     let model = loaded.model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
     progress(&format!("solving IK for {} goals", scenario.goals.len()));
-    let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &opts.ik);
+    let ik = crate::ik::IkOptions {
+        clearance_m: opts.certify.threshold_m,
+        ..opts.ik.clone()
+    };
+    let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &ik);
     progress("planning the trajectory (certified continuous check)");
     let trajectory_options = crate::plan::TrajectoryOptions {
         certify: opts.certify,
-        ik: opts.ik.clone(),
+        ik,
         timing: None,
     };
     let trajectory = crate::plan::plan(&model, &scenario, &world, &solutions, &trajectory_options)?;

@@ -148,3 +148,57 @@ fn collision_aware_ik_never_calls_a_colliding_solution_reached() {
         "collision-aware IK should find another branch for most goals: {reached} of {tried}"
     );
 }
+
+#[test]
+fn a_clearance_margin_makes_ik_call_a_solution_closer_than_it_not_reached() {
+    use proving_ground::collide::{self, CollideOptions};
+    use proving_ground::model::Shape;
+    use proving_ground::scenario::{Obstacle, Scenario};
+
+    let model = load_model(&common::repo().join("designs/ur20.json"), &LoadOptions::default()).expect("loads");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut compared, mut tightened) = (0, 0);
+    for index in 0..20 {
+        let q = model.random_configuration(&mut rng);
+        let tool = model.tool_pose(&q);
+        let scenario = Scenario {
+            name: "margin".into(),
+            world_from_base: nalgebra::Isometry3::identity(),
+            floor: None,
+            obstacles: vec![Obstacle {
+                name: "ball".into(),
+                world_from_shape: nalgebra::Isometry3::translation(0.0, 0.0, 3.0),
+                shape: Shape::Sphere { radius: 0.1 },
+            }],
+            goals: vec![Goal {
+                name: "g".into(),
+                position: tool.translation.vector,
+                rotation: tool.rotation,
+                tolerance: Tolerance::Pose,
+            }],
+            home: None,
+            provenance: None,
+        };
+        let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("world builds");
+        let plain = Ik::with_collisions(&model, &world, IkOptions::default()).solve(&scenario.goals[0], index, None);
+        let margin = 0.05;
+        let opts = IkOptions {
+            clearance_m: margin,
+            ..Default::default()
+        };
+        let strict = Ik::with_collisions(&model, &world, opts).solve(&scenario.goals[0], index, None);
+        for solution in &strict.solutions {
+            let clearance = solution.clearance.expect("measured").exact_m;
+            assert_eq!(
+                solution.reached,
+                solution.pose_reached && clearance > margin,
+                "goal {index}: {solution:?}"
+            );
+        }
+        compared += 1;
+        let close = |s: &proving_ground::ik::IkSolution| s.reached && s.clearance.is_some_and(|c| c.exact_m <= margin);
+        tightened += usize::from(plain.solutions.iter().any(close));
+    }
+    // Some plain solutions are free but closer than the margin: the margin is not vacuous.
+    assert!(compared == 20 && tightened > 0, "{tightened} of {compared}");
+}

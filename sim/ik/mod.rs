@@ -39,6 +39,9 @@ pub struct IkOptions {
     /// Collision-aware refinement steps per start whose solution collides (default 200, the
     /// paper's Adam budget); each step is one collision query and a few solver iterations.
     pub refinement_steps: usize,
+    /// Clearance a solution must keep to count as collision-free (m; default 0): the validation's
+    /// collision margin, so IK and the trajectory judge alike.
+    pub clearance_m: f64,
 }
 
 impl Default for IkOptions {
@@ -49,6 +52,7 @@ impl Default for IkOptions {
             seed: 0,
             distinct_tolerance: 1e-3,
             refinement_steps: 200,
+            clearance_m: 0.0,
         }
     }
 }
@@ -130,6 +134,12 @@ impl<'a> Ik<'a> {
         let mut found: Vec<IkSolution> = Vec::new();
         let mut closest: Option<IkSolution> = None;
         let mut iterations = 0;
+        // A NaN or negative margin means none: a NaN would call every configuration colliding.
+        let margin = if self.opts.clearance_m.is_finite() {
+            self.opts.clearance_m.max(0.0)
+        } else {
+            0.0
+        };
         for start in 0..self.opts.seeds {
             let mut q = match (start, first_seed) {
                 (0, Some(seed)) if seed.len() == self.model.dof() => seed.to_vec(),
@@ -139,7 +149,8 @@ impl<'a> Ik<'a> {
             let mut clearance = None;
             if let Some(checker) = self.checker.as_mut() {
                 let mut measured = checker.clearance(&q, false);
-                if measured.exact_m <= 0.0 || !is_reached(&goal_error(goal, &self.model.tool_pose(&q))) {
+                if measured.exact_m <= margin || !is_reached(&goal_error(goal, &self.model.tool_pose(&q))) {
+                    checker.margin = margin;
                     refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, &mut rng);
                     measured = checker.clearance(&q, false);
                 }
@@ -147,7 +158,7 @@ impl<'a> Ik<'a> {
             }
             let error = goal_error(goal, &self.model.tool_pose(&q));
             let pose_reached = is_reached(&error);
-            let reached = pose_reached && clearance.is_none_or(|c| c.exact_m > 0.0);
+            let reached = pose_reached && clearance.is_none_or(|c| c.exact_m > margin);
             let solution = IkSolution {
                 q,
                 error,
@@ -170,7 +181,7 @@ impl<'a> Ik<'a> {
                 if solution.clearance.is_some() {
                     let exact = checker.clearance(&solution.q, true);
                     // Touching within rounding, GJK's overlap test and EPA may disagree on the sign.
-                    solution.reached = solution.pose_reached && exact.exact_m > 0.0;
+                    solution.reached = solution.pose_reached && exact.exact_m > margin;
                     solution.clearance = Some(exact);
                 }
             }

@@ -38,6 +38,8 @@ pub(crate) struct Checker<'a> {
     exact: Distances,
     approximate: Distances,
     gradient: DVector<f64>,
+    /// Clearance a configuration must keep to count as free (m).
+    pub(crate) margin: f64,
 }
 
 impl<'a> Checker<'a> {
@@ -49,6 +51,7 @@ impl<'a> Checker<'a> {
             exact: Distances::new(),
             approximate: Distances::new(),
             gradient: DVector::zeros(model.dof()),
+            margin: 0.0,
         }
     }
 
@@ -134,7 +137,8 @@ fn add_point_gradient(
     }
 }
 
-/// Refines `q` towards a pose-reaching, collision-free configuration within `steps` steps.
+/// Refines `q` towards a pose-reaching configuration keeping the checker's margin within `steps`
+/// steps.
 /// Returns true when it got there.
 pub(crate) fn refine<R: rand::Rng>(
     solver: &mut Solver,
@@ -145,12 +149,13 @@ pub(crate) fn refine<R: rand::Rng>(
     done: Convergence,
     rng: &mut R,
 ) -> bool {
+    let margin = checker.margin;
     let mut stuck = 0;
     let mut step = 0;
     while step < steps {
         let clearance = checker.loss_gradient(q);
         let pose_ok = solver.converged_at(goal, q, done);
-        if clearance > 0.0 {
+        if clearance > margin {
             if pose_ok {
                 return true;
             }
@@ -176,5 +181,5 @@ pub(crate) fn refine<R: rand::Rng>(
         }
         step += 1 + solver.solve(goal, q, 3, done, rng);
     }
-    checker.loss_gradient(q) > 0.0 && solver.converged_at(goal, q, done)
+    checker.loss_gradient(q) > margin && solver.converged_at(goal, q, done)
 }
