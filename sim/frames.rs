@@ -102,6 +102,44 @@ pub fn vector_from_parry(v: parry3d_f64::math::Vector) -> Vector3<f64> {
     Vector3::new(v.x, v.y, v.z)
 }
 
+/// A segment whose squared length is at most this (m^2) is a point.
+const POINT_SEGMENT_M2: f64 = 1e-24;
+
+/// The closest points of segments `[p1, q1]` and `[p2, q2]`, one on each (Ericson, Real-Time
+/// Collision Detection, 5.1.9, with point segments and parallel segments handled).
+pub fn closest_points_of_segments(p1: Vector3<f64>, q1: Vector3<f64>, p2: Vector3<f64>, q2: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.norm_squared(), d2.norm_squared(), d2.dot(&r));
+    let (s, t) = if a <= POINT_SEGMENT_M2 && e <= POINT_SEGMENT_M2 {
+        (0.0, 0.0)
+    } else if a <= POINT_SEGMENT_M2 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(&r);
+        if e <= POINT_SEGMENT_M2 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(&d2);
+            let denominator = a * e - b * b;
+            // Parallel segments: any s works; start from 0 and let the clamping below fix t, s.
+            let s = if denominator > 0.0 {
+                ((b * f - c * e) / denominator).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t = (b * s + f) / e;
+            if t < 0.0 {
+                ((-c / a).clamp(0.0, 1.0), 0.0)
+            } else if t > 1.0 {
+                (((b - c) / a).clamp(0.0, 1.0), 1.0)
+            } else {
+                (s, t)
+            }
+        }
+    };
+    (p1 + d1 * s, p2 + d2 * t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

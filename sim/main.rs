@@ -249,7 +249,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         package_paths: cli.package_paths.clone(),
     };
     let loaded = pipeline::load(design_path, &opts)?;
-    let model = &loaded.model.clone();
+    let model = &loaded.model;
     for diagnostic in &model.diagnostics {
         eprintln!("{diagnostic}");
     }

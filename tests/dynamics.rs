@@ -4,15 +4,16 @@
 
 mod common;
 
+use common::{box_crossing_samples, course, engine_depths, parry_depths, tour};
+
 use mujoco_rs::prelude::*;
 use nalgebra::Isometry3;
-use proving_ground::collide::{self, Body, CollisionWorld, Distances, QueryOptions};
-use proving_ground::engine::{self, replay_mujoco, run_mujoco, static_load, EngineRun, GainOptions, Gains, RunOptions};
+use proving_ground::collide::Body;
+use proving_ground::engine::{replay_mujoco, run_mujoco, static_load, EngineRun, RunOptions};
 use proving_ground::export::{to_mjcf, MjcfOptions};
 use proving_ground::model::{self, Model, Shape};
 use proving_ground::pipeline::{self, LoadOptions};
-use proving_ground::plan::{TimedPath, TimingLimits};
-use proving_ground::scenario::{generate, Obstacle, Scenario};
+use proving_ground::scenario::{generate, Obstacle};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -76,30 +77,6 @@ fn gravity_torques_and_reflected_inertia_match_mujoco_on_every_design() {
             }
         }
     }
-}
-
-struct Course {
-    model: Model,
-    scenario: Scenario,
-    world: CollisionWorld,
-}
-
-fn course() -> Course {
-    let model = load(&common::repo().join("designs/paper-real-world.json"));
-    let scenario = generate::course(generate::COURSE_SEED);
-    let model = model.placed(&scenario.world_from_base);
-    let world = pipeline::collision_world(&model, &scenario, &[]).expect("world builds");
-    Course { model, scenario, world }
-}
-
-/// From the course home through the first `goals` goal configurations.
-fn tour(course: &Course, goals: usize) -> (TimedPath, Gains) {
-    let mut waypoints = vec![generate::COURSE_HOME.to_vec()];
-    waypoints.extend(generate::course_configurations().into_iter().take(goals));
-    let labels: Vec<Option<usize>> = (0..goals).map(Some).collect();
-    let path = TimedPath::through(&waypoints, &labels, &TimingLimits::of(&course.model));
-    let gains = engine::gains(&course.model, &path, &GainOptions::default());
-    (path, gains)
 }
 
 #[test]
@@ -173,40 +150,6 @@ fn two_mujoco_runs_are_identical() {
     assert_eq!(run(), run());
 }
 
-/// Deepest parry penetration per (link, body) pair over the samples, names as in EngineRun.
-fn parry_depths(model: &Model, world: &CollisionWorld, samples: &[(f64, Vec<f64>)]) -> Vec<(String, String, f64)> {
-    let mut ws = model.workspace();
-    let mut out = Distances::new();
-    let mut deepest: Vec<(String, String, f64)> = Vec::new();
-    for (_, q) in samples {
-        model.forward(q, &mut ws);
-        collide::distances(world, &ws.link_in_world, &QueryOptions::default(), &mut out);
-        for d in out.within_margin.iter().filter(|d| d.distance < 0.0) {
-            let pair = &world.pairs()[d.pair];
-            let depth = -d.distance;
-            match deepest.iter_mut().find(|(a, b, _)| *a == pair.a_name && *b == pair.b_name) {
-                Some(entry) => entry.2 = entry.2.max(depth),
-                None => deepest.push((pair.a_name.clone(), pair.b_name.clone(), depth)),
-            }
-        }
-    }
-    deepest.sort_by(|x, y| (&x.0, &x.1).cmp(&(&y.0, &y.1)));
-    deepest
-}
-
-/// Deepest engine penetration per pair over a run.
-fn engine_depths(run: &EngineRun) -> Vec<(String, String, f64)> {
-    let mut deepest: Vec<(String, String, f64)> = Vec::new();
-    for c in &run.contacts {
-        match deepest.iter_mut().find(|(a, b, _)| *a == c.a && *b == c.b) {
-            Some(entry) => entry.2 = entry.2.max(c.max_depth_m),
-            None => deepest.push((c.a.clone(), c.b.clone(), c.max_depth_m)),
-        }
-    }
-    deepest.sort_by(|x, y| (&x.0, &x.1).cmp(&(&y.0, &y.1)));
-    deepest
-}
-
 #[test]
 fn replay_through_the_course_box_reports_the_penetration_parry_measures() {
     let course = course();
@@ -217,16 +160,7 @@ fn replay_through_the_course_box_reports_the_penetration_parry_measures() {
         .position(|o| o.name == "box")
         .expect("the course has a box");
     assert!(course.world.pairs().iter().any(|p| p.b == Body::Obstacle(box_index)));
-    // The two low goals of the box region face each other across the box: the straight
-    // joint-space path between them runs through it (see scenario/generate/course.rs).
-    let configurations = generate::course_configurations();
-    let (from, to) = (&configurations[12], &configurations[23]);
-    let samples: Vec<(f64, Vec<f64>)> = (0..=40)
-        .map(|i| {
-            let s = i as f64 / 40.0;
-            (s, from.iter().zip(to).map(|(a, b)| a + s * (b - a)).collect())
-        })
-        .collect();
+    let samples = box_crossing_samples();
     let run = replay_mujoco(&course.model, &course.scenario, &course.world, &samples, &RunOptions::default()).expect("MuJoCo replays");
     let parry = parry_depths(&course.model, &course.world, &samples);
     let mujoco = engine_depths(&run);

@@ -16,9 +16,9 @@
 //! - parry 0.31's `contact` of a shape with a half-space given second passes the wrong relative
 //!   pose; the floor is given first and the contact flipped.
 
-use super::approx::{capsules, closest_points_of_segments};
+use super::approx::capsules;
 use super::world::{BoundingCapsule, Geometry};
-use crate::frames::{parry_vector, vector_from_parry};
+use crate::frames::{closest_points_of_segments, parry_vector, vector_from_parry};
 use parry3d_f64::math::{Pose, Real, Vector};
 use parry3d_f64::query::details::{
     contact_composite_shape_shape, contact_shape_composite_shape, contact_support_map_support_map_with_params,

@@ -1,8 +1,12 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code, unreachable_pub)]
 
+use proving_ground::collide::{self, CollisionWorld, Distances, QueryOptions};
+use proving_ground::engine::{self, EngineRun, GainOptions, Gains};
 use proving_ground::model::Model;
 use proving_ground::pipeline::{self, LoadOptions};
+use proving_ground::plan::{TimedPath, TimingLimits};
+use proving_ground::scenario::{generate, Scenario};
 use std::path::{Path, PathBuf};
 
 /// The repository root.
@@ -54,4 +58,79 @@ pub fn stem(path: &Path) -> String {
 /// A fixture under tests/fixtures/.
 pub fn fixture(name: &str) -> PathBuf {
     repo().join("tests/fixtures").join(name)
+}
+
+/// The paper's robot placed in its course, with the course's collision world.
+pub struct Course {
+    pub model: Model,
+    pub scenario: Scenario,
+    pub world: CollisionWorld,
+}
+
+/// The paper's robot in its course.
+pub fn course() -> Course {
+    let model = pipeline::load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("shipped design loads");
+    let scenario = generate::course(generate::COURSE_SEED);
+    let model = model.placed(&scenario.world_from_base);
+    let world = pipeline::collision_world(&model, &scenario, &[]).expect("world builds");
+    Course { model, scenario, world }
+}
+
+/// From the course home through the first `goals` goal configurations, with the gains the
+/// engines use for it.
+pub fn tour(course: &Course, goals: usize) -> (TimedPath, Gains) {
+    let mut waypoints = vec![generate::COURSE_HOME.to_vec()];
+    waypoints.extend(generate::course_configurations().into_iter().take(goals));
+    let labels: Vec<Option<usize>> = (0..goals).map(Some).collect();
+    let path = TimedPath::through(&waypoints, &labels, &TimingLimits::of(&course.model));
+    let gains = engine::gains(&course.model, &path, &GainOptions::default());
+    (path, gains)
+}
+
+/// 41 configurations on the straight joint-space path from the course's goal 12 to goal 23: the
+/// two low goals of the box region face each other across the box, so the path runs through it
+/// (see scenario/generate/course.rs).
+pub fn box_crossing_samples() -> Vec<(f64, Vec<f64>)> {
+    let configurations = generate::course_configurations();
+    let (from, to) = (&configurations[12], &configurations[23]);
+    (0..=40)
+        .map(|i| {
+            let s = i as f64 / 40.0;
+            (s, from.iter().zip(to).map(|(a, b)| a + s * (b - a)).collect())
+        })
+        .collect()
+}
+
+/// Deepest exact (parry3d) penetration per pair over `samples`, sorted by pair names.
+pub fn parry_depths(model: &Model, world: &CollisionWorld, samples: &[(f64, Vec<f64>)]) -> Vec<(String, String, f64)> {
+    let mut ws = model.workspace();
+    let mut out = Distances::new();
+    let mut deepest = Vec::new();
+    for (_, q) in samples {
+        model.forward(q, &mut ws);
+        collide::distances(world, &ws.link_in_world, &QueryOptions::default(), &mut out);
+        for d in out.within_margin.iter().filter(|d| d.distance < 0.0) {
+            let pair = &world.pairs()[d.pair];
+            deepen(&mut deepest, &pair.a_name, &pair.b_name, -d.distance);
+        }
+    }
+    deepest.sort_by(|x, y| (&x.0, &x.1).cmp(&(&y.0, &y.1)));
+    deepest
+}
+
+/// Deepest engine penetration per pair over a run, sorted by pair names.
+pub fn engine_depths(run: &EngineRun) -> Vec<(String, String, f64)> {
+    let mut deepest = Vec::new();
+    for c in &run.contacts {
+        deepen(&mut deepest, &c.a, &c.b, c.max_depth_m);
+    }
+    deepest.sort_by(|x, y| (&x.0, &x.1).cmp(&(&y.0, &y.1)));
+    deepest
+}
+
+fn deepen(deepest: &mut Vec<(String, String, f64)>, a: &str, b: &str, depth: f64) {
+    match deepest.iter_mut().find(|(x, y, _)| x == a && y == b) {
+        Some(entry) => entry.2 = entry.2.max(depth),
+        None => deepest.push((a.to_string(), b.to_string(), depth)),
+    }
 }

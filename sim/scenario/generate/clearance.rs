@@ -353,44 +353,10 @@ pub(crate) fn point_segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vec
     (p - (a + ab * t)).norm()
 }
 
-/// Distance between the segments `p1`-`q1` and `p2`-`q2` (m), closed form (Ericson, Real-Time
-/// Collision Detection, 5.1.9).
+/// Distance between the segments `p1`-`q1` and `p2`-`q2` (m).
 pub(crate) fn segment_distance(p1: &Vector3<f64>, q1: &Vector3<f64>, p2: &Vector3<f64>, q2: &Vector3<f64>) -> f64 {
-    let d1 = q1 - p1;
-    let d2 = q2 - p2;
-    let r = p1 - p2;
-    let a = d1.norm_squared();
-    let e = d2.norm_squared();
-    let f = d2.dot(&r);
-    let tiny = 1e-18;
-    let (s, t) = if a <= tiny && e <= tiny {
-        (0.0, 0.0)
-    } else if a <= tiny {
-        (0.0, (f / e).clamp(0.0, 1.0))
-    } else {
-        let c = d1.dot(&r);
-        if e <= tiny {
-            ((-c / a).clamp(0.0, 1.0), 0.0)
-        } else {
-            let b = d1.dot(&d2);
-            let denominator = a * e - b * b;
-            let mut s = if denominator > tiny {
-                ((b * f - c * e) / denominator).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t = (b * s + f) / e;
-            if t < 0.0 {
-                t = 0.0;
-                s = (-c / a).clamp(0.0, 1.0);
-            } else if t > 1.0 {
-                t = 1.0;
-                s = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            (s, t)
-        }
-    };
-    ((p1 + d1 * s) - (p2 + d2 * t)).norm()
+    let (a, b) = crate::frames::closest_points_of_segments(*p1, *q1, *p2, *q2);
+    (a - b).norm()
 }
 
 #[cfg(test)]
