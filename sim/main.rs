@@ -117,6 +117,17 @@ struct Cli {
     /// own geometric approximations).
     #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = non_negative)]
     contact_depth: f64,
+    /// How goals are joined: `rrt-connect` (straight segments first, then a certified
+    /// RRT-Connect detour) or `straight` (the paper's heuristic: one straight segment).
+    #[arg(long, value_name = "PLANNER", default_value = "rrt-connect")]
+    planner: PlannerArg,
+    /// Random samples per goal before the planner reports `no_path` (rrt-connect).
+    #[arg(long, value_name = "N", default_value_t = proving_ground::plan::DEFAULT_PLAN_BUDGET as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    plan_budget: u64,
+    /// The paper's static metric only: a collision-free IK solution per goal; no trajectory, no
+    /// engines (the fastest mode).
+    #[arg(long, conflicts_with_all = ["engines", "planner", "plan_budget"])]
+    reach_only: bool,
     /// Worker threads [default: the number of cores]; the report is the same for any number.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     threads: Option<u64>,
@@ -154,6 +165,17 @@ impl std::str::FromStr for EnginesArg {
         }
         Ok(Self(engines))
     }
+}
+
+/// `--planner`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PlannerArg {
+    /// Straight segments first, then RRT-Connect with certified edges and shortcutting.
+    #[value(name = "rrt-connect")]
+    RrtConnect,
+    /// One straight joint-space segment per goal (the paper's heuristic).
+    #[value(name = "straight")]
+    Straight,
 }
 
 #[derive(Debug, Subcommand)]
@@ -342,6 +364,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         },
         certify: proving_ground::plan::CertifyOptions { threshold_m: cli.margin },
         engines: cli.engines.0,
+        planner: proving_ground::plan::PlannerOptions {
+            kind: match cli.planner {
+                PlannerArg::RrtConnect => proving_ground::plan::PlannerKind::RrtConnect,
+                PlannerArg::Straight => proving_ground::plan::PlannerKind::Straight,
+            },
+            budget: usize::try_from(cli.plan_budget).unwrap_or(usize::MAX),
+            seed: cli.seed,
+        },
+        reach_only: cli.reach_only,
         engine: proving_ground::engine::RunOptions {
             contact_depth_m: cli.contact_depth,
             ..Default::default()

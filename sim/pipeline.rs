@@ -183,6 +183,11 @@ pub struct ValidateOptions {
     pub gains: crate::engine::GainOptions,
     /// Extra self pairs to exclude (e.g. from an SRDF), with reasons.
     pub excluded_pairs: Vec<collide::ExcludedPair>,
+    /// The planner joining the goals, its sample budget and seed.
+    pub planner: crate::plan::PlannerOptions,
+    /// The paper's static metric alone: per goal a collision-free IK solution, no trajectory,
+    /// no engines (default false).
+    pub reach_only: bool,
 }
 
 /// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
@@ -235,11 +240,64 @@ pub fn validate_with_progress(
         ..opts.ik.clone()
     };
     let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &ik);
+    let proofs: Vec<Option<String>> = scenario
+        .goals
+        .iter()
+        .zip(&solutions)
+        .map(|(goal, found)| {
+            (!found.reached())
+                .then(|| crate::ik::unreachable_proof(&model, &world, goal))
+                .flatten()
+        })
+        .collect();
+    let settings = crate::report::Settings {
+        margin_m: opts.certify.threshold_m,
+        hold_position_m: opts.gains.position_tolerance_m,
+        hold_orientation_rad: opts.gains.orientation_tolerance_rad,
+        engine_contact_depth_m: opts.engine.contact_depth_m,
+        ik_seeds: opts.ik.seeds,
+        seed: opts.ik.seed,
+        reach_only: opts.reach_only,
+    };
+    if opts.reach_only {
+        let loss_terms = scenario
+            .goals
+            .iter()
+            .zip(&solutions)
+            .map(|(goal, found)| {
+                found
+                    .solutions
+                    .first()
+                    .map(|s| crate::ik::paper_loss_terms(&model, &world, goal, &s.q))
+            })
+            .collect();
+        return Ok(Validation {
+            pairs: world.pairs().to_vec(),
+            excluded: world.excluded().to_vec(),
+            model,
+            design: loaded.design,
+            scenario,
+            solutions,
+            proofs,
+            trajectory: None,
+            replayed: Vec::new(),
+            rapier: None,
+            mujoco: None,
+            static_load: None,
+            gains: None,
+            loss_terms,
+            settings,
+        });
+    }
     progress("planning the trajectory (certified continuous check)");
     let trajectory_options = crate::plan::TrajectoryOptions {
         certify: opts.certify,
         ik,
         timing: None,
+        planner: crate::plan::PlannerOptions {
+            seed: opts.ik.seed,
+            ..opts.planner
+        },
     };
     let trajectory = crate::plan::plan(&model, &scenario, &world, &solutions, &trajectory_options)?;
     let replayed = crate::plan::replay_segments(&trajectory);
@@ -316,20 +374,14 @@ pub fn validate_with_progress(
         design: loaded.design,
         scenario,
         solutions,
-        trajectory,
+        proofs,
+        trajectory: Some(trajectory),
         replayed,
         rapier,
         mujoco,
         static_load: Some(static_load),
-        gains,
+        gains: Some(gains),
         loss_terms,
-        settings: crate::report::Settings {
-            margin_m: opts.certify.threshold_m,
-            hold_position_m: opts.gains.position_tolerance_m,
-            hold_orientation_rad: opts.gains.orientation_tolerance_rad,
-            engine_contact_depth_m: opts.engine.contact_depth_m,
-            ik_seeds: opts.ik.seeds,
-            seed: opts.ik.seed,
-        },
+        settings,
     })
 }

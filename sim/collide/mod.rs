@@ -93,6 +93,7 @@ mod compare;
 mod exact;
 mod narrow;
 mod pairs;
+mod point;
 mod structural;
 mod world;
 

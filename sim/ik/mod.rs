@@ -5,10 +5,12 @@
 mod dls;
 mod error;
 mod loss;
+mod reach;
 mod refine;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
+pub use reach::{reach_bound, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;
@@ -195,6 +197,11 @@ impl<'a> Ik<'a> {
             starts: self.opts.seeds,
             iterations,
         }
+    }
+
+    /// The solver's settings.
+    pub fn options(&self) -> &IkOptions {
+        &self.opts
     }
 
     /// Whether two configurations are the same solution: every joint within the tolerance,

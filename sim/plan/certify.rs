@@ -195,6 +195,11 @@ impl<'a> SegmentChecker<'a> {
         }
     }
 
+    /// The clearance every segment must keep (m).
+    pub fn threshold(&self) -> f64 {
+        self.opts.threshold_m
+    }
+
     /// Clearance of one configuration and its closest pair.
     pub fn clearance(&mut self, q: &[f64]) -> Option<SegmentPoint> {
         self.query(q);
@@ -223,6 +228,34 @@ impl<'a> SegmentChecker<'a> {
 
     /// Certifies the straight segment from `from` to `to`.
     pub fn check(&mut self, from: &[f64], to: &[f64]) -> SegmentCheck {
+        self.advance(from, to, f64::INFINITY).0
+    }
+
+    /// [`check`](Self::check), also returning how far the segment is certified with room to
+    /// spare: the largest path parameter `s` among the advancement points at which every pair
+    /// keeps at least `room` (m) beyond the threshold (`[0, s]` is certified free, since the
+    /// whole advancement up to any of its points is). `None` when no point past the start does.
+    /// A planner grows its trees to such points, where a next motion is not born grazing.
+    pub fn advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (SegmentCheck, Option<f64>) {
+        let mut roomy = None;
+        let mut ends = [f64::NAN; 2];
+        let check = self.advance_inner(from, to, room, &mut roomy, &mut ends);
+        (check, roomy)
+    }
+
+    /// Whether the segment is certified free and, at every advancement point, keeps `room` (m)
+    /// beyond the threshold or at least the clearance of its closer end: a free edge that does
+    /// not come nearer its obstacles than it must. With the check.
+    pub fn roomy_free(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck) {
+        let mut roomy = None;
+        let mut ends = [f64::NAN; 2];
+        let check = self.advance_inner(from, to, room, &mut roomy, &mut ends);
+        let needed = (self.opts.threshold_m + room).min(ends[0]).min(ends[1]);
+        let ok = check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed);
+        (ok, check)
+    }
+
+    fn advance_inner(&mut self, from: &[f64], to: &[f64], room: f64, roomy: &mut Option<f64>, ends: &mut [f64; 2]) -> SegmentCheck {
         let threshold = self.opts.threshold_m;
         for (d, (a, b)) in self.delta.iter_mut().zip(from.iter().zip(to)) {
             *d = b - a;
@@ -261,6 +294,15 @@ impl<'a> SegmentChecker<'a> {
                     touch: here,
                     queries,
                 };
+            }
+            if s > 0.0 && smallest >= threshold + room {
+                *roomy = Some(s);
+            }
+            if s == 0.0 {
+                ends[0] = smallest;
+            }
+            if s >= 1.0 {
+                ends[1] = smallest;
             }
             if s >= 1.0 {
                 certified = certified.min(smallest);

@@ -1,5 +1,5 @@
 //! The segments the engines replay kinematically, beside the certified check: the planned
-//! segments and, for each blocked goal, the segment that was tried (the motion the paper's
+//! edges and, for each goal without a path, the segment that was tried (the motion the paper's
 //! heuristic would have made), each with its certified verdict.
 //!
 //! The replay clock is by segment, not by time: segment `k` occupies `[k, k + 1)` and a sample at
@@ -29,34 +29,41 @@ pub struct ReplaySegment {
     pub certified: SegmentCheck,
 }
 
-/// The segments of `trajectory` to replay, in goal order.
+/// The segments of `trajectory` to replay, in goal order: every edge of each reached goal's
+/// path, and each unreached goal's attempt.
 pub fn replay_segments(trajectory: &Trajectory) -> Vec<ReplaySegment> {
     let mut previous = trajectory.home.clone();
     let mut segments = Vec::new();
     for step in &trajectory.steps {
         match step {
-            GoalStep::Reached { goal, q, segment, .. } => {
-                segments.push(ReplaySegment {
-                    goal: *goal,
-                    planned: true,
-                    from: previous.clone(),
-                    to: q.clone(),
-                    certified: segment.clone(),
-                });
-                previous.clone_from(q);
-            }
-            GoalStep::Blocked {
+            GoalStep::Reached {
                 goal,
-                attempt: Some(attempt),
+                waypoints,
+                segments: checks,
                 ..
-            } => segments.push(ReplaySegment {
-                goal: *goal,
-                planned: false,
-                from: attempt.from.clone(),
-                to: attempt.to.clone(),
-                certified: attempt.segment.clone(),
-            }),
-            GoalStep::Blocked { attempt: None, .. } => {}
+            } => {
+                for (to, check) in waypoints.iter().zip(checks) {
+                    segments.push(ReplaySegment {
+                        goal: *goal,
+                        planned: true,
+                        from: previous.clone(),
+                        to: to.clone(),
+                        certified: check.clone(),
+                    });
+                    previous.clone_from(to);
+                }
+            }
+            _ => {
+                if let Some(attempt) = step.attempt() {
+                    segments.push(ReplaySegment {
+                        goal: step.goal(),
+                        planned: false,
+                        from: attempt.from.clone(),
+                        to: attempt.to.clone(),
+                        certified: attempt.segment.clone(),
+                    });
+                }
+            }
         }
     }
     segments

@@ -9,11 +9,13 @@
 //! solution's segment), and the trajectory goes on from the last reached configuration.
 
 use super::certify::{CertifyOptions, SegmentCheck, SegmentChecker, SegmentPoint};
+use super::planner::{distance, polyline_length, Planner, PlannerKind, PlannerOptions, Straight};
+use super::rrt::RrtConnect;
 use super::timing::{TimedPath, TimingLimits};
 use crate::collide::CollisionWorld;
-use crate::ik::{GoalSolutions, Ik, IkOptions};
+use crate::ik::{GoalSolutions, Ik, IkOptions, IkSolution};
 use crate::model::{JointKind, Model};
-use crate::scenario::Scenario;
+use crate::scenario::{Goal, Scenario};
 use serde::Serialize;
 use std::f64::consts::TAU;
 
@@ -65,35 +67,62 @@ pub struct TrajectoryOptions {
     pub ik: IkOptions,
     /// Timing limits; `None`: [`TimingLimits::of`] the model.
     pub timing: Option<TimingLimits>,
+    /// Which planner joins the goals, its budget and seed.
+    pub planner: PlannerOptions,
 }
 
 /// How one goal went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "outcome", rename_all = "snake_case")]
 pub enum GoalStep {
-    /// Reached by a certified segment.
+    /// Reached by a certified path.
     Reached {
         /// Goal index.
         goal: usize,
         /// The configuration chosen.
         q: Vec<f64>,
-        /// Which candidate it was, nearest first (0: the nearest solution connected).
+        /// Which goal configuration it was, in the order tried (0: the nearest solution).
         candidate: usize,
         /// Found by solving IK again from the previous configuration.
         resolved: bool,
-        /// The segment from the previous configuration.
-        segment: SegmentCheck,
+        /// The path's configurations after the previous one, ending at `q`.
+        waypoints: Vec<Vec<f64>>,
+        /// The certified check of each edge of the path, `segments[i]` ending at `waypoints[i]`.
+        segments: Vec<SegmentCheck>,
+        /// Joint-space length of the path before shortcutting.
+        length_before_shortcut: f64,
+        /// Random samples the planner drew (0: a straight segment).
+        samples: usize,
+        /// Exact clearance of `q` and the pair that sets it.
+        clearance: Option<SegmentPoint>,
     },
-    /// No solution connects.
-    Blocked {
+    /// IK found no collision-free configuration reaching the goal.
+    Unreachable {
         /// Goal index.
         goal: usize,
-        /// Collision-free solutions tried (0: IK found none).
+        /// IK starts per solve (the scenario's solve and the re-solve from the previous
+        /// configuration each used this many).
+        starts: usize,
+        /// Seed of IK's random starts.
+        seed: u64,
+    },
+    /// Collision-free configurations exist; no certified path to any was found.
+    NoPath {
+        /// Goal index.
+        goal: usize,
+        /// Collision-free goal configurations searched for (IK solutions and their whole-turn
+        /// equivalents).
         tried: usize,
-        /// Where the nearest solution's segment stops: the pair and the configuration.
+        /// The planner's sample budget.
+        budget: usize,
+        /// Samples drawn.
+        samples: usize,
+        /// Where the closest attempt stopped: the pair and the configuration.
         stop: Option<SegmentPoint>,
-        /// The nearest solution's segment that was tried, from the previous configuration:
-        /// the motion the paper's heuristic would have made. The engines replay it too.
+        /// Joint-space distance from the search's nearest configuration to the goal set.
+        gap: Option<f64>,
+        /// The straight segment to the nearest solution, from the previous configuration: the
+        /// motion the paper's heuristic would have made. The engines replay it too.
         attempt: Option<Attempt>,
     },
 }
@@ -102,7 +131,24 @@ impl GoalStep {
     /// The goal's index.
     pub fn goal(&self) -> usize {
         match self {
-            GoalStep::Reached { goal, .. } | GoalStep::Blocked { goal, .. } => *goal,
+            GoalStep::Reached { goal, .. } | GoalStep::Unreachable { goal, .. } | GoalStep::NoPath { goal, .. } => *goal,
+        }
+    }
+
+    /// The outcome's name: `reached`, `unreachable` or `no_path`.
+    pub fn outcome(&self) -> &'static str {
+        match self {
+            GoalStep::Reached { .. } => "reached",
+            GoalStep::Unreachable { .. } => "unreachable",
+            GoalStep::NoPath { .. } => "no_path",
+        }
+    }
+
+    /// The tried segment that is not free, for a goal not reached.
+    pub fn attempt(&self) -> Option<&Attempt> {
+        match self {
+            GoalStep::Reached { .. } | GoalStep::Unreachable { .. } => None,
+            GoalStep::NoPath { attempt, .. } => attempt.as_ref(),
         }
     }
 }
@@ -121,6 +167,8 @@ pub struct Attempt {
 /// The planned trajectory.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Trajectory {
+    /// The planner that joined the goals.
+    pub planner: PlannerOptions,
     /// Start configuration.
     pub home: Vec<f64>,
     /// Clearance at home and its closest pair (a home in collision is a finding).
@@ -131,16 +179,23 @@ pub struct Trajectory {
     pub steps: Vec<GoalStep>,
     /// Joint-space length of the motion (rad and m summed as numbers).
     pub joint_length: f64,
-    /// Length of the tool's path (m), measured on 64 points per segment.
+    /// Joint-space length the planner found before shortcutting.
+    pub joint_length_before_shortcut: f64,
+    /// Length of the tool's path (m), measured on 64 points per edge.
     pub tool_path_m: f64,
     /// The timed reference through the reached goals.
     pub timed: TimedPath,
 }
 
 impl Trajectory {
-    /// Goals reached by a certified segment.
+    /// Goals reached by a certified path.
     pub fn reached(&self) -> usize {
         self.steps.iter().filter(|s| matches!(s, GoalStep::Reached { .. })).count()
+    }
+
+    /// Goals with the given outcome (`reached`, `unreachable`, `no_path`).
+    pub fn count(&self, outcome: &str) -> usize {
+        self.steps.iter().filter(|s| s.outcome() == outcome).count()
     }
 }
 
@@ -237,8 +292,53 @@ fn nearest_free(checker: &mut SegmentChecker, model: &Model, home: &[f64], thres
     })
 }
 
-fn distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+/// Most whole-turn equivalents of one solution put in a goal set (the nearest the start kept).
+const MAX_EQUIVALENTS: usize = 64;
+
+/// `q` and its whole-turn equivalents: each revolute angle moved by whole turns within its
+/// limits (a joint without limits by the one shift nearest `near`), the nearest `near` first, at
+/// most [`MAX_EQUIVALENTS`].
+pub fn whole_turn_equivalents(model: &Model, q: &[f64], near: &[f64]) -> Vec<Vec<f64>> {
+    let nearest = nearest_equivalent(model, q, near);
+    let options: Vec<Vec<f64>> = model
+        .joints
+        .iter()
+        .zip(&nearest)
+        .map(|(joint, &x)| match (joint.kind, joint.limits) {
+            (JointKind::Prismatic, _) | (_, None) => vec![x],
+            (_, Some([lo, hi])) => {
+                let below = ((x - lo) / TAU).floor() as i64;
+                let above = ((hi - x) / TAU).floor() as i64;
+                // Zero turns written as `x` itself, so the nearest equivalent keeps its bits.
+                (-below.min(4)..=above.min(4))
+                    .map(|k| if k == 0 { x } else { x + k as f64 * TAU })
+                    .filter(|v| (lo..=hi).contains(v))
+                    .collect()
+            }
+        })
+        .collect();
+    let mut all = vec![Vec::with_capacity(q.len())];
+    for choices in &options {
+        let mut next = Vec::with_capacity(all.len() * choices.len());
+        for partial in &all {
+            for &v in choices {
+                let mut grown = partial.clone();
+                grown.push(v);
+                next.push(grown);
+            }
+        }
+        all = next;
+        if all.len() > 4096 {
+            break;
+        }
+    }
+    all.retain(|c| c.len() == q.len());
+    if all.is_empty() {
+        return vec![nearest];
+    }
+    all.sort_by(|a, b| distance(a, near).total_cmp(&distance(b, near)));
+    all.truncate(MAX_EQUIVALENTS);
+    all
 }
 
 /// Plans the trajectory of `model` (placed) through `scenario` from its home, with the goals'
@@ -282,83 +382,212 @@ pub fn plan(
         }
     }
     let mut ik = Ik::with_collisions(model, world, opts.ik.clone());
+    let mut rrt = RrtConnect {
+        limits: model.joints.iter().map(|j| j.limits).collect(),
+        budget: opts.planner.budget,
+        straight_attempts: 0,
+    };
     let mut previous = home.clone();
     let mut steps = Vec::with_capacity(scenario.goals.len());
     let mut waypoints = vec![home.clone()];
     let mut goals = Vec::new();
+    let mut length_before_shortcut = 0.0;
     for (index, goal) in scenario.goals.iter().enumerate() {
-        let mut tried: Vec<Vec<f64>> = Vec::new();
-        let mut stop: Option<SegmentPoint> = None;
-        let mut attempt: Option<Attempt> = None;
-        let mut step = None;
         let given = solutions.get(index).map(|s| s.solutions.as_slice()).unwrap_or_default();
-        for resolved in [false, true] {
-            let fresh;
-            let found = if resolved {
-                fresh = ik.solve(goal, index, Some(&previous));
-                fresh.solutions.as_slice()
-            } else {
-                given
-            };
-            let mut candidates: Vec<Vec<f64>> = found
-                .iter()
-                .filter(|s| s.reached)
-                .map(|s| nearest_equivalent(model, &s.q, &previous))
-                .filter(|q| !tried.iter().any(|t| ik.same_configuration(t, q)))
-                .collect();
-            candidates.sort_by(|a, b| distance(a, &previous).total_cmp(&distance(b, &previous)));
-            for q in candidates {
-                let segment = checker.check(&previous, &q);
-                tried.push(q.clone());
-                if segment.free {
-                    step = Some(GoalStep::Reached {
-                        goal: index,
-                        q,
-                        candidate: tried.len() - 1,
-                        resolved,
-                        segment,
-                    });
-                    break;
-                }
-                if attempt.is_none() {
-                    stop = segment.touch.clone().or(segment.closest.clone());
-                    attempt = Some(Attempt {
-                        from: previous.clone(),
-                        to: q.clone(),
-                        segment,
-                    });
-                }
-            }
-            if step.is_some() {
-                break;
-            }
+        let stream = opts.planner.seed ^ (index as u64 + 1).wrapping_mul(0xA076_1D64_78BD_642F);
+        let step = match opts.planner.kind {
+            PlannerKind::Straight => straight_step(&mut ik, &mut checker, model, goal, index, given, &previous, stream),
+            PlannerKind::RrtConnect => sampled_step(&mut ik, &mut checker, &mut rrt, model, goal, index, given, &previous, stream, opts),
+        };
+        let mut step = step;
+        if let GoalStep::Reached { q, clearance, .. } = &mut step {
+            *clearance = checker.clearance(q);
         }
-        let step = step.unwrap_or(GoalStep::Blocked {
-            goal: index,
-            tried: tried.len(),
-            stop,
-            attempt,
-        });
-        if let GoalStep::Reached { q, .. } = &step {
+        if let GoalStep::Reached {
+            q,
+            waypoints: path,
+            length_before_shortcut: before,
+            ..
+        } = &step
+        {
+            length_before_shortcut += before;
+            for (k, w) in path.iter().enumerate() {
+                waypoints.push(w.clone());
+                goals.push((k + 1 == path.len()).then_some(index));
+            }
             previous.clone_from(q);
-            waypoints.push(q.clone());
-            goals.push(Some(index));
         }
         steps.push(step);
     }
     let limits = opts.timing.clone().unwrap_or_else(|| TimingLimits::of(model));
     let timed = TimedPath::through(&waypoints, &goals, &limits);
-    let joint_length = waypoints.windows(2).map(|w| distance(&w[0], &w[1])).sum();
+    let joint_length = polyline_length(&waypoints[0], &waypoints[1..]);
     let tool_path_m = tool_path_length(model, &waypoints);
     Ok(Trajectory {
+        planner: opts.planner,
         home,
         home_clearance,
         home_replaced,
         steps,
         joint_length,
+        joint_length_before_shortcut: length_before_shortcut,
         tool_path_m,
         timed,
     })
+}
+
+/// The collision-free solutions IK found, as configurations nearest `previous` (whole turns),
+/// not already in `tried`, nearest first.
+fn free_candidates(ik: &Ik<'_>, model: &Model, found: &[IkSolution], previous: &[f64], tried: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut candidates: Vec<Vec<f64>> = found
+        .iter()
+        .filter(|s| s.reached)
+        .map(|s| nearest_equivalent(model, &s.q, previous))
+        .filter(|q| !tried.iter().any(|t| ik.same_configuration(t, q)))
+        .collect();
+    candidates.sort_by(|a, b| distance(a, previous).total_cmp(&distance(b, previous)));
+    candidates
+}
+
+/// The paper's heuristic: among the goal's solutions, the nearest one a straight certified
+/// segment reaches; else IK solved again from the previous configuration, and the same.
+#[allow(clippy::too_many_arguments)]
+fn straight_step(
+    ik: &mut Ik<'_>,
+    checker: &mut SegmentChecker<'_>,
+    model: &Model,
+    goal: &Goal,
+    index: usize,
+    given: &[IkSolution],
+    previous: &[f64],
+    stream: u64,
+) -> GoalStep {
+    let mut tried: Vec<Vec<f64>> = Vec::new();
+    let mut failure = None;
+    let mut fresh = None;
+    for resolved in [false, true] {
+        if resolved {
+            fresh = Some(ik.solve(goal, index, Some(previous)));
+        }
+        let found = fresh.as_ref().map_or(given, |f| f.solutions.as_slice());
+        let candidates = free_candidates(ik, model, found, previous, &tried);
+        let offset = tried.len();
+        tried.extend(candidates.iter().cloned());
+        match Straight.connect(checker, previous, &candidates, stream) {
+            Ok(path) => return reached(index, path, offset, resolved),
+            Err(f) if failure.is_none() && !candidates.is_empty() => failure = Some((f, candidates[0].clone())),
+            Err(_) => {}
+        }
+    }
+    not_reached(checker, ik, index, tried.len(), 0, previous, failure)
+}
+
+/// The default: straight segments to the goal set, then the sampling planner towards every
+/// collision-free solution (the scenario's and those of IK solved again from the previous
+/// configuration) and their whole-turn equivalents.
+#[allow(clippy::too_many_arguments)]
+fn sampled_step(
+    ik: &mut Ik<'_>,
+    checker: &mut SegmentChecker<'_>,
+    planner: &mut RrtConnect,
+    model: &Model,
+    goal: &Goal,
+    index: usize,
+    given: &[IkSolution],
+    previous: &[f64],
+    stream: u64,
+    opts: &TrajectoryOptions,
+) -> GoalStep {
+    let fresh = ik.solve(goal, index, Some(previous));
+    let mut candidates = free_candidates(ik, model, given, previous, &[]);
+    let from_given = candidates.len();
+    candidates.extend(free_candidates(ik, model, &fresh.solutions, previous, &candidates));
+    if candidates.is_empty() {
+        return not_reached(checker, ik, index, 0, 0, previous, None);
+    }
+    // The goal set: each candidate (nearest first) and then every whole-turn equivalent.
+    let mut goal_set = candidates.clone();
+    for candidate in &candidates {
+        goal_set.extend(
+            whole_turn_equivalents(model, candidate, previous)
+                .into_iter()
+                .filter(|e| e != candidate),
+        );
+    }
+    planner.straight_attempts = candidates.len();
+    match planner.connect(checker, previous, &goal_set, stream) {
+        Ok(path) => {
+            // Which solution the reached configuration came from.
+            let origin = if path.target < candidates.len() {
+                path.target
+            } else {
+                candidates
+                    .iter()
+                    .position(|c| ik.same_configuration(c, &goal_set[path.target]))
+                    .unwrap_or(0)
+            };
+            reached(index, path, 0, origin >= from_given)
+        }
+        Err(failure) => {
+            let first = candidates[0].clone();
+            not_reached(
+                checker,
+                ik,
+                index,
+                goal_set.len(),
+                opts.planner.budget,
+                previous,
+                Some((failure, first)),
+            )
+        }
+    }
+}
+
+fn reached(index: usize, path: super::planner::Path, offset: usize, resolved: bool) -> GoalStep {
+    GoalStep::Reached {
+        goal: index,
+        q: path.waypoints.last().cloned().unwrap_or_default(),
+        candidate: offset + path.target,
+        resolved,
+        waypoints: path.waypoints,
+        segments: path.segments,
+        length_before_shortcut: path.length_before_shortcut,
+        samples: path.samples,
+        clearance: None,
+    }
+}
+
+/// A goal not reached: `unreachable` when no collision-free solution was found, else `no_path`
+/// with the failure and the straight attempt to the nearest solution (for the engines' replay).
+fn not_reached(
+    checker: &mut SegmentChecker<'_>,
+    ik: &Ik<'_>,
+    index: usize,
+    tried: usize,
+    budget: usize,
+    previous: &[f64],
+    failure: Option<(super::planner::Failure, Vec<f64>)>,
+) -> GoalStep {
+    match failure {
+        None => GoalStep::Unreachable {
+            goal: index,
+            starts: ik.options().seeds,
+            seed: ik.options().seed,
+        },
+        Some((failure, nearest)) => GoalStep::NoPath {
+            goal: index,
+            tried,
+            budget,
+            samples: failure.samples,
+            stop: failure.stop,
+            gap: failure.gap,
+            attempt: Some(Attempt {
+                from: previous.to_vec(),
+                segment: checker.check(previous, &nearest),
+                to: nearest,
+            }),
+        },
+    }
 }
 
 fn tool_path_length(model: &Model, waypoints: &[Vec<f64>]) -> f64 {

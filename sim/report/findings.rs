@@ -31,10 +31,12 @@ pub enum Severity {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FindingKind {
-    /// IK found no collision-free configuration within the thresholds.
+    /// IK found no collision-free configuration within the thresholds (proven, or not found from
+    /// the IK starts: the finding says which).
     GoalUnreachable,
-    /// Collision-free configurations exist but no certified segment connects one.
-    GoalBlocked,
+    /// Collision-free configurations exist but the planner found no certified path to one within
+    /// its budget.
+    GoalNoPath,
     /// The home configuration is in collision.
     HomeInCollision,
     /// The scenario's home does not fit the robot, or the default home collides: the tour starts
@@ -107,7 +109,10 @@ fn finding(
 /// Every finding of a validation, in a fixed order.
 pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &EngineRuns)], hold: (f64, f64)) -> Vec<Finding> {
     let mut out = Vec::new();
-    let trajectory = &validation.trajectory;
+    let Some(trajectory) = &validation.trajectory else {
+        goal_findings(validation, &mut out);
+        return out;
+    };
     if let Some(home) = &trajectory.home_clearance {
         if home.distance_m <= validation.settings.margin_m + crate::plan::TOUCH_TOLERANCE_M {
             out.push(finding(
@@ -201,7 +206,8 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
 }
 
 fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
-    for (index, step) in validation.trajectory.steps.iter().enumerate() {
+    let settings = &validation.settings;
+    for (index, goal) in validation.scenario.goals.iter().enumerate() {
         let solutions = validation.solutions.get(index).map(|g| g.solutions.as_slice()).unwrap_or_default();
         let best = solutions.first();
         if let Some(best) = best {
@@ -236,49 +242,86 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
                 }
             }
         }
-        match step {
-            GoalStep::Reached { .. } => {}
-            GoalStep::Blocked { tried: 0, .. } => {
-                let (position, orientation, clearance) = best.map_or((f64::NAN, f64::NAN, f64::NAN), |s| {
-                    (
-                        s.error.position_m,
-                        s.error.orientation_rad,
-                        s.clearance.map_or(f64::NAN, |c| c.exact_m),
-                    )
-                });
-                let why = match best {
-                    Some(s) if s.pose_reached => format!("every solution found collides (best clearance {:.1} mm)", clearance * 1e3),
-                    _ => format!("closest miss {:.2} mm, {:.2} deg", position * 1e3, orientation.to_degrees()),
-                };
-                out.push(finding(
-                    FindingKind::GoalUnreachable,
-                    Severity::Fail,
-                    Some(index),
-                    None,
-                    format!("goal {index} ({}): not reached: {why}", validation.scenario.goals[index].name),
-                    &[
-                        ("position_m", position),
-                        ("orientation_rad", orientation),
-                        ("clearance_m", clearance),
-                    ],
-                ));
-            }
-            GoalStep::Blocked { tried, stop, .. } => {
-                let (pair, distance) = stop
-                    .as_ref()
-                    .map_or((String::from("?"), f64::NAN), |s| (format!("{} and {}", s.a, s.b), s.distance_m));
-                out.push(finding(
-                    FindingKind::GoalBlocked,
-                    Severity::Fail,
-                    Some(index),
-                    None,
-                    format!(
-                        "goal {index} ({}): none of {tried} collision-free solutions is connected by a free segment; the nearest stops where {pair} touch",
-                        validation.scenario.goals[index].name
-                    ),
-                    &[("distance_m", distance), ("tried", *tried as f64)],
-                ));
-            }
+        let step = validation.trajectory.as_ref().and_then(|t| t.steps.get(index));
+        let unreachable = match step {
+            Some(step) => matches!(step, GoalStep::Unreachable { .. }),
+            None => !best.is_some_and(|s| s.reached),
+        };
+        if unreachable {
+            let (position, orientation, clearance) = best.map_or((f64::NAN, f64::NAN, f64::NAN), |s| {
+                (
+                    s.error.position_m,
+                    s.error.orientation_rad,
+                    s.clearance.map_or(f64::NAN, |c| c.exact_m),
+                )
+            });
+            let proof = validation.proofs.get(index).cloned().flatten();
+            let why = match (&proof, best) {
+                (Some(proof), _) => format!("proven: {proof}"),
+                (None, Some(s)) if s.pose_reached => format!(
+                    "every solution found from {} IK starts (seed {}) collides (best clearance {:.1} mm); not proven",
+                    settings.ik_seeds,
+                    settings.seed,
+                    clearance * 1e3
+                ),
+                _ => format!(
+                    "no solution from {} IK starts (seed {}), closest miss {:.2} mm, {:.2} deg; not proven",
+                    settings.ik_seeds,
+                    settings.seed,
+                    position * 1e3,
+                    orientation.to_degrees()
+                ),
+            };
+            out.push(finding(
+                FindingKind::GoalUnreachable,
+                Severity::Fail,
+                Some(index),
+                None,
+                format!("goal {index} ({}): unreachable: {why}", goal.name),
+                &[
+                    ("position_m", position),
+                    ("orientation_rad", orientation),
+                    ("clearance_m", clearance),
+                    ("proven", if proof.is_some() { 1.0 } else { 0.0 }),
+                ],
+            ));
+        }
+        if let Some(GoalStep::NoPath {
+            tried,
+            budget,
+            samples,
+            stop,
+            gap,
+            ..
+        }) = step
+        {
+            let (pair, distance) = stop
+                .as_ref()
+                .map_or((String::from("?"), f64::NAN), |s| (format!("{} and {}", s.a, s.b), s.distance_m));
+            let search = if *budget == 0 {
+                "no straight segment to any of them is free (planner `straight`)".to_string()
+            } else {
+                format!(
+                    "no certified path found in {samples} samples (budget {budget}); the search stayed {:.3} rad from the goal set",
+                    gap.unwrap_or(f64::NAN)
+                )
+            };
+            out.push(finding(
+                FindingKind::GoalNoPath,
+                Severity::Fail,
+                Some(index),
+                None,
+                format!(
+                    "goal {index} ({}): {tried} collision-free configurations, {search}; the closest attempt stops where {pair} touch",
+                    goal.name
+                ),
+                &[
+                    ("distance_m", distance),
+                    ("tried", *tried as f64),
+                    ("budget", *budget as f64),
+                    ("samples", *samples as f64),
+                ],
+            ));
         }
     }
 }
@@ -420,25 +463,39 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
     }
 }
 
-/// Passed when no finding fails; the reasons count the failing findings by kind.
-pub(super) fn verdict(findings: &[Finding]) -> super::Verdict {
-    let mut counts: BTreeMap<FindingKind, usize> = BTreeMap::new();
+/// Passed when no finding fails; the reasons count the failing findings by kind, telling proven
+/// failures from the limits of the search (IK starts, planner budget).
+pub(super) fn verdict(findings: &[Finding], settings: &super::Settings, budget: Option<usize>) -> super::Verdict {
+    let mut counts: BTreeMap<(FindingKind, bool), usize> = BTreeMap::new();
     for f in findings.iter().filter(|f| f.severity == Severity::Fail) {
-        *counts.entry(f.kind).or_default() += 1;
+        let proven = f.values.get("proven").is_some_and(|p| *p > 0.0);
+        *counts.entry((f.kind, proven)).or_default() += 1;
     }
+    let goals = |count: usize| if count == 1 { "goal" } else { "goals" };
     let reasons = counts
         .iter()
-        .map(|(kind, count)| {
-            let what = match kind {
-                FindingKind::GoalUnreachable => "goals not reached by IK",
-                FindingKind::GoalBlocked => "goals blocked (no collision-free segment)",
-                FindingKind::HomeInCollision => "home configuration in collision",
-                FindingKind::EngineContact => "contacts in the engines' dynamic runs",
-                FindingKind::GoalNotHeld => "goals not held by an engine",
-                FindingKind::StaticOverload => "joints over their rated torque under gravity",
-                _ => "other failures",
-            };
-            format!("{count} {what}")
+        .map(|((kind, proven), &count)| match kind {
+            FindingKind::GoalUnreachable if *proven => format!("{count} {} unreachable (proven)", goals(count)),
+            FindingKind::GoalUnreachable => format!(
+                "{count} {} unreachable (no collision-free IK solution found from {} starts, seed {})",
+                goals(count),
+                settings.ik_seeds,
+                settings.seed
+            ),
+            FindingKind::GoalNoPath => match budget {
+                Some(budget) if budget > 0 => format!("{count} {} without a path found in {budget} samples", goals(count)),
+                _ => format!("{count} {} without a free straight segment", goals(count)),
+            },
+            other => {
+                let what = match other {
+                    FindingKind::HomeInCollision => "home configuration in collision",
+                    FindingKind::EngineContact => "contacts in the engines' dynamic runs",
+                    FindingKind::GoalNotHeld => "goals not held by an engine",
+                    FindingKind::StaticOverload => "joints over their rated torque under gravity",
+                    _ => "other failures",
+                };
+                format!("{count} {what}")
+            }
         })
         .collect::<Vec<_>>();
     super::Verdict {

@@ -24,8 +24,11 @@ pub struct Validation {
     pub excluded: Vec<crate::collide::ExcludedPair>,
     /// IK solutions per goal.
     pub solutions: Vec<crate::ik::GoalSolutions>,
-    /// The trajectory through the goals.
-    pub trajectory: crate::plan::Trajectory,
+    /// Per goal, why no configuration can reach it, where that is proven (see
+    /// [`crate::ik::unreachable_proof`]); `None` for goals IK reached or could not prove.
+    pub proofs: Vec<Option<String>>,
+    /// The trajectory through the goals; `None` in a reach-only run.
+    pub trajectory: Option<crate::plan::Trajectory>,
     /// Segments replayed in the engines, with their certified checks.
     pub replayed: Vec<crate::plan::ReplaySegment>,
     /// rapier's runs, when run.
@@ -35,8 +38,8 @@ pub struct Validation {
     /// Gravity torques along the trajectory against ratings (MuJoCo's cross-checked with ours, or
     /// ours alone without MuJoCo).
     pub static_load: Option<crate::engine::StaticLoad>,
-    /// Gains both engines used.
-    pub gains: crate::engine::Gains,
+    /// Gains both engines used; `None` in a reach-only run.
+    pub gains: Option<crate::engine::Gains>,
     /// The paper's loss terms per goal at the chosen configuration (the trajectory's, else IK's
     /// best); `None` for a goal with no configuration at all.
     pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
@@ -57,6 +60,8 @@ pub struct Settings {
     pub engine_contact_depth_m: f64,
     /// IK starts per goal.
     pub ik_seeds: usize,
-    /// Seed of IK's random starts.
+    /// Seed of IK's random starts (and the planner's streams).
     pub seed: u64,
+    /// Only the static reach metric ran: no trajectory, no engines.
+    pub reach_only: bool,
 }

@@ -35,8 +35,8 @@ pub struct Report {
     pub scenario: ScenarioSummary,
     /// Per goal, course order.
     pub goals: Vec<GoalReport>,
-    /// The trajectory through the goals.
-    pub trajectory: TrajectoryReport,
+    /// The trajectory through the goals; `None` in a reach-only run.
+    pub trajectory: Option<TrajectoryReport>,
     /// Per engine run.
     pub engines: Vec<EngineReport>,
     /// Gravity torques along the trajectory against the ratings (needs MuJoCo).
@@ -52,6 +52,11 @@ pub struct Report {
 /// The criteria a verdict was reached under.
 #[derive(Debug, Clone, Serialize)]
 pub struct Criteria {
+    /// `full` (IK, certified trajectory, engines) or `reach_only` (the paper's static metric:
+    /// a collision-free IK solution per goal, nothing else).
+    pub mode: &'static str,
+    /// The planner that joined the goals, its sample budget and seed (`None` in reach-only).
+    pub planner: Option<crate::plan::PlannerOptions>,
     /// A goal is reached below this position error (m).
     pub position_m: f64,
     /// ... and below this orientation error (deg), judged per the goal's tolerance mode.
@@ -116,6 +121,13 @@ pub struct GoalReport {
     pub name: String,
     /// Tolerance mode it is judged by.
     pub tolerance: Tolerance,
+    /// `reached` (on a certified path; in reach-only: a collision-free IK solution),
+    /// `unreachable` (no collision-free IK solution from the starts) or `no_path` (solutions
+    /// exist, no certified path found within the planner's budget).
+    pub outcome: &'static str,
+    /// Why no configuration can reach the goal, when that is proven (beyond the arm's reach,
+    /// inside an obstacle); `None` otherwise.
+    pub proven: Option<String>,
     /// IK found a collision-free solution within the thresholds.
     pub reached: bool,
     /// Distinct solutions IK found that reach the pose (colliding or not).
@@ -132,7 +144,7 @@ pub struct GoalReport {
     pub exact_clearance_m: Option<f64>,
     /// The paper's capsule model's clearance of the chosen configuration (m).
     pub approximate_clearance_m: Option<f64>,
-    /// The trajectory reaches it by a certified segment.
+    /// The trajectory reaches it by a certified path.
     pub on_trajectory: bool,
     /// Engines that held it within the hold tolerance.
     pub held_by: Vec<&'static str>,
@@ -147,37 +159,56 @@ pub struct TrajectoryReport {
     pub home_clearance_m: Option<f64>,
     /// Why the scenario's or the default home was replaced, when it was.
     pub home_replaced: Option<String>,
-    /// Goals reached by a certified segment.
+    /// Goals reached by a certified path.
     pub reached: usize,
-    /// Goals blocked.
-    pub blocked: usize,
-    /// Per goal in order: the certified segment or the blocked attempt.
+    /// Goals without a collision-free IK solution.
+    pub unreachable: usize,
+    /// Goals with collision-free solutions but no certified path within the budget.
+    pub no_path: usize,
+    /// Per goal in order: its certified path, or the attempt of a goal without one.
     pub segments: Vec<SegmentReport>,
+    /// Edges of the whole path (a straight segment is one edge).
+    pub edges: usize,
     /// Segments the engines replayed: the planned ones and the blocked goals' attempts.
     pub replayed_segments: usize,
     /// The smallest certified clearance over the trajectory (m).
     pub certified_clearance_m: Option<f64>,
     /// Joint-space length (rad and m summed).
     pub joint_length: f64,
+    /// Joint-space length before the planner's shortcutting.
+    pub joint_length_before_shortcut: f64,
     /// Tool path length (m).
     pub tool_path_m: f64,
     /// Duration of the timed trajectory (s).
     pub duration_s: f64,
 }
 
-/// One segment of the trajectory, or a blocked goal's attempt.
+/// One goal's path on the trajectory, or the attempt of a goal without one.
 #[derive(Debug, Clone, Serialize)]
 pub struct SegmentReport {
     /// Goal it heads for.
     pub goal: usize,
-    /// On the trajectory (certified free) or blocked.
+    /// `reached`, `unreachable` or `no_path`.
+    pub outcome: &'static str,
+    /// On the trajectory (every edge certified free).
     pub planned: bool,
-    /// Certified lower bound on its clearance (m), up to where it stopped.
+    /// Edges of the path (1: a straight segment); 0 for a goal without a path.
+    pub edges: usize,
+    /// Random samples the planner drew for this goal.
+    pub samples: usize,
+    /// Joint-space length of the path, and before shortcutting.
+    pub joint_length: Option<f64>,
+    /// Joint-space length of the path the planner found, before shortcutting.
+    pub joint_length_before_shortcut: Option<f64>,
+    /// Certified lower bound on its clearance (m), over every edge (an attempt: up to where it
+    /// stopped).
     pub certified_clearance_m: Option<f64>,
     /// Closest approach measured, with the pair.
     pub closest: Option<SegmentPoint>,
-    /// Where a blocked attempt stops: pair and configuration.
+    /// Where the closest attempt of a goal without a path stops: pair and configuration.
     pub stop: Option<SegmentPoint>,
+    /// Joint-space distance the search for a goal without a path stayed from its goal set.
+    pub gap: Option<f64>,
     /// Collision queries of the continuous check.
     pub queries: usize,
 }
@@ -223,6 +254,8 @@ pub fn build(validation: &Validation) -> Report {
         .collect();
     let hold = (settings.hold_position_m, settings.hold_orientation_rad);
     let criteria = Criteria {
+        mode: if settings.reach_only { "reach_only" } else { "full" },
+        planner: validation.trajectory.as_ref().map(|t| t.planner),
         position_m: REACHED_POSITION_M,
         orientation_deg: REACHED_ORIENTATION_RAD.to_degrees(),
         collision_margin_m: settings.margin_m,
@@ -236,7 +269,7 @@ pub fn build(validation: &Validation) -> Report {
         engines: engines.iter().map(|(name, _)| *name).collect(),
     };
     let goals = goal_reports(validation, &engines, hold);
-    let trajectory = trajectory_report(validation);
+    let trajectory = validation.trajectory.as_ref().map(|t| trajectory_report(validation, t));
     let engine_reports = engines
         .iter()
         .map(|(name, runs)| {
@@ -266,7 +299,11 @@ pub fn build(validation: &Validation) -> Report {
         })
         .collect();
     let findings = findings::collect(validation, &engines, hold);
-    let verdict = findings::verdict(&findings);
+    let budget = validation.trajectory.as_ref().map(|t| match t.planner.kind {
+        crate::plan::PlannerKind::Straight => 0,
+        crate::plan::PlannerKind::RrtConnect => t.planner.budget,
+    });
+    let verdict = findings::verdict(&findings, settings, budget);
     Report {
         schema_version: SCHEMA_VERSION,
         criteria,
@@ -323,17 +360,15 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
         .enumerate()
         .map(|(index, goal)| {
             let found = validation.solutions.get(index).map(|g| g.solutions.as_slice()).unwrap_or_default();
-            let step = validation.trajectory.steps.get(index);
+            let step = validation.trajectory.as_ref().and_then(|t| t.steps.get(index));
             let on_trajectory = matches!(step, Some(GoalStep::Reached { .. }));
             let chosen = match step {
                 Some(GoalStep::Reached { q, .. }) => Some(q.clone()),
                 _ => found.first().map(|s| s.q.clone()),
             };
-            let solution = chosen.as_ref().and_then(|q| {
-                found
-                    .iter()
-                    .find(|s| crate::plan::nearest_equivalent(&validation.model, &s.q, q) == *q || s.q == *q)
-            });
+            let solution = chosen
+                .as_ref()
+                .and_then(|q| found.iter().find(|s| same_modulo_turns(&validation.model, &s.q, q)));
             let error = chosen.as_ref().map(|q| crate::ik::goal_error(goal, &validation.model.tool_pose(q)));
             let held_by = engines
                 .iter()
@@ -345,16 +380,31 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                 })
                 .map(|(name, _)| *name)
                 .collect();
+            let ik_reached = found.first().is_some_and(|s| s.reached);
+            let outcome = match step {
+                Some(step) => step.outcome(),
+                None if ik_reached => "reached",
+                None => "unreachable",
+            };
             GoalReport {
                 index,
                 name: goal.name.clone(),
                 tolerance: goal.tolerance,
-                reached: found.first().is_some_and(|s| s.reached),
+                outcome,
+                proven: if outcome == "unreachable" {
+                    validation.proofs.get(index).cloned().flatten()
+                } else {
+                    None
+                },
+                reached: ik_reached,
                 solutions_found: found.iter().filter(|s| s.pose_reached).count(),
                 solutions_free: found.iter().filter(|s| s.reached).count(),
                 position_error_m: error.map(|e| e.position_m),
                 orientation_error_deg: error.map(|e| e.orientation_rad.to_degrees()),
-                exact_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.exact_m)),
+                exact_clearance_m: match step {
+                    Some(GoalStep::Reached { clearance, .. }) => clearance.as_ref().map(|c| c.distance_m),
+                    _ => solution.and_then(|s| s.clearance.map(|c| c.exact_m)),
+                },
                 approximate_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.approximate_m)),
                 chosen,
                 on_trajectory,
@@ -364,26 +414,87 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
         .collect()
 }
 
-fn trajectory_report(validation: &Validation) -> TrajectoryReport {
-    let trajectory = &validation.trajectory;
+/// Whether two configurations are the same up to whole turns of revolute joints (to 1e-9).
+fn same_modulo_turns(model: &crate::model::Model, a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && model.joints.iter().zip(a.iter().zip(b)).all(|(joint, (x, y))| {
+            let difference = if joint.kind == crate::model::JointKind::Prismatic {
+                x - y
+            } else {
+                crate::ik::wrap_angle(x - y)
+            };
+            difference.abs() <= 1e-9
+        })
+}
+
+fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajectory) -> TrajectoryReport {
+    let mut previous = trajectory.home.clone();
     let segments: Vec<SegmentReport> = trajectory
         .steps
         .iter()
         .map(|step| match step {
-            GoalStep::Reached { goal, segment, .. } => SegmentReport {
+            GoalStep::Reached {
+                goal,
+                waypoints,
+                segments,
+                length_before_shortcut,
+                samples,
+                q,
+                ..
+            } => {
+                let length = crate::plan::polyline_length(&previous, waypoints);
+                previous.clone_from(q);
+                SegmentReport {
+                    goal: *goal,
+                    outcome: step.outcome(),
+                    planned: true,
+                    edges: segments.len(),
+                    samples: *samples,
+                    joint_length: Some(length),
+                    joint_length_before_shortcut: Some(*length_before_shortcut),
+                    certified_clearance_m: segments.iter().map(|s| s.certified_clearance_m).reduce(f64::min),
+                    closest: segments
+                        .iter()
+                        .filter_map(|s| s.closest.clone())
+                        .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m)),
+                    stop: None,
+                    gap: None,
+                    queries: segments.iter().map(|s| s.queries).sum(),
+                }
+            }
+            GoalStep::Unreachable { goal, .. } => SegmentReport {
                 goal: *goal,
-                planned: true,
-                certified_clearance_m: Some(segment.certified_clearance_m),
-                closest: segment.closest.clone(),
-                stop: None,
-                queries: segment.queries,
-            },
-            GoalStep::Blocked { goal, stop, attempt, .. } => SegmentReport {
-                goal: *goal,
+                outcome: step.outcome(),
                 planned: false,
+                edges: 0,
+                samples: 0,
+                joint_length: None,
+                joint_length_before_shortcut: None,
+                certified_clearance_m: None,
+                closest: None,
+                stop: None,
+                gap: None,
+                queries: 0,
+            },
+            GoalStep::NoPath {
+                goal,
+                samples,
+                stop,
+                gap,
+                attempt,
+                ..
+            } => SegmentReport {
+                goal: *goal,
+                outcome: step.outcome(),
+                planned: false,
+                edges: 0,
+                samples: *samples,
+                joint_length: None,
+                joint_length_before_shortcut: None,
                 certified_clearance_m: attempt.as_ref().map(|a| a.segment.certified_clearance_m),
                 closest: attempt.as_ref().and_then(|a| a.segment.closest.clone()),
                 stop: stop.clone(),
+                gap: *gap,
                 queries: attempt.as_ref().map_or(0, |a| a.segment.queries),
             },
         })
@@ -398,11 +509,14 @@ fn trajectory_report(validation: &Validation) -> TrajectoryReport {
         home_clearance_m: trajectory.home_clearance.as_ref().map(|c| c.distance_m),
         home_replaced: trajectory.home_replaced.clone(),
         reached: trajectory.reached(),
-        blocked: trajectory.steps.len() - trajectory.reached(),
+        unreachable: trajectory.count("unreachable"),
+        no_path: trajectory.count("no_path"),
+        edges: segments.iter().map(|s| s.edges).sum(),
         segments,
         replayed_segments: validation.replayed.len(),
         certified_clearance_m: certified,
         joint_length: trajectory.joint_length,
+        joint_length_before_shortcut: trajectory.joint_length_before_shortcut,
         tool_path_m: trajectory.tool_path_m,
         duration_s: trajectory.timed.duration_s(),
     }

@@ -28,6 +28,19 @@ pub fn render(report: &Report) -> String {
         if report.scenario.floor { ", floor" } else { "" }
     );
     let c = &report.criteria;
+    if c.mode == "reach_only" {
+        let _ = writeln!(
+            out,
+            "reach-only: the paper's static metric (a collision-free IK solution per goal from {} starts, seed {}); no trajectory, no engines",
+            c.ik_seeds, c.seed
+        );
+    } else if let Some(planner) = &c.planner {
+        let budget = match planner.kind {
+            crate::plan::PlannerKind::Straight => String::new(),
+            crate::plan::PlannerKind::RrtConnect => format!(", budget {} samples per goal", planner.budget),
+        };
+        let _ = writeln!(out, "planner: {}{budget}, seed {}", planner.kind.name(), planner.seed);
+    }
     let _ = writeln!(
         out,
         "criteria: reached < {} mm and < {} deg, collision-free with margin {} mm in exact geometry ({} pairs excluded), held within {} mm / {} deg, engines: {}",
@@ -42,19 +55,16 @@ pub fn render(report: &Report) -> String {
 
     let _ = writeln!(
         out,
-        "\ngoal                      reached  pos mm  ori deg  clear mm  capsule mm  held by"
+        "\ngoal                      outcome      pos mm  ori deg  clear mm  capsule mm  held by"
     );
     for goal in &report.goals {
-        let status = if goal.on_trajectory {
-            "yes"
-        } else if goal.reached {
-            "blocked"
-        } else {
-            "no"
+        let status = match goal.outcome {
+            "unreachable" if goal.proven.is_some() => "unreach.(p)",
+            other => other,
         };
         let _ = writeln!(
             out,
-            "{:<3} {:<21} {:<8} {:>6}  {:>7}  {:>8}  {:>10}  {}",
+            "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>8}  {:>10}  {}",
             goal.index,
             truncate(&goal.name, 21),
             status,
@@ -70,42 +80,8 @@ pub fn render(report: &Report) -> String {
         );
     }
 
-    let t = &report.trajectory;
-    let _ = writeln!(
-        out,
-        "\ntrajectory: {} of {} goals by certified segments, {} blocked; certified clearance {} mm; {:.2} rad in joint space, tool path {:.2} m, {:.1} s",
-        t.reached,
-        t.reached + t.blocked,
-        t.blocked,
-        mm(t.certified_clearance_m),
-        t.joint_length,
-        t.tool_path_m,
-        t.duration_s
-    );
-    if let Some(closest) = t
-        .segments
-        .iter()
-        .filter(|s| s.planned)
-        .filter_map(|s| s.closest.as_ref().map(|c| (s.goal, c)))
-        .min_by(|a, b| a.1.distance_m.total_cmp(&b.1.distance_m))
-    {
-        let _ = writeln!(
-            out,
-            "  closest approach {:.1} mm ({} and {}) on the segment to goal {}",
-            closest.1.distance_m * 1e3,
-            closest.1.a,
-            closest.1.b,
-            closest.0
-        );
-    }
-    for segment in t.segments.iter().filter(|s| !s.planned) {
-        if let Some(stop) = &segment.stop {
-            let _ = writeln!(
-                out,
-                "  goal {} blocked: {} and {} touch at s = {:.3} of the nearest solution's segment",
-                segment.goal, stop.a, stop.b, stop.s
-            );
-        }
+    if let Some(t) = &report.trajectory {
+        trajectory_lines(&mut out, t);
     }
 
     for engine in &report.engines {
@@ -128,7 +104,7 @@ pub fn render(report: &Report) -> String {
         );
     }
     if !report.engines.is_empty() {
-        let segments = report.trajectory.replayed_segments;
+        let segments = report.trajectory.as_ref().map_or(0, |t| t.replayed_segments);
         let agreement: Vec<String> = report
             .engines
             .iter()
@@ -177,6 +153,52 @@ pub fn render(report: &Report) -> String {
         let _ = writeln!(out, "\nverdict: FAIL: {}", verdict.reasons.join("; "));
     }
     out
+}
+
+fn trajectory_lines(out: &mut String, t: &super::TrajectoryReport) {
+    let goals = t.reached + t.unreachable + t.no_path;
+    let detours = t.segments.iter().filter(|s| s.edges > 1).count();
+    let _ = writeln!(
+        out,
+        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} without a path; certified clearance {} mm; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
+        t.reached,
+        t.edges,
+        t.unreachable,
+        t.no_path,
+        mm(t.certified_clearance_m),
+        t.joint_length,
+        t.joint_length_before_shortcut,
+        t.tool_path_m,
+        t.duration_s
+    );
+    if let Some(closest) = t
+        .segments
+        .iter()
+        .filter(|s| s.planned)
+        .filter_map(|s| s.closest.as_ref().map(|c| (s.goal, c)))
+        .min_by(|a, b| a.1.distance_m.total_cmp(&b.1.distance_m))
+    {
+        let _ = writeln!(
+            out,
+            "  closest approach {:.1} mm ({} and {}) on the path to goal {}",
+            closest.1.distance_m * 1e3,
+            closest.1.a,
+            closest.1.b,
+            closest.0
+        );
+    }
+    for segment in t.segments.iter().filter(|s| s.outcome == "no_path") {
+        if let Some(stop) = &segment.stop {
+            let _ = writeln!(
+                out,
+                "  goal {} without a path: the closest attempt stops where {} and {} touch ({:.1} mm)",
+                segment.goal,
+                stop.a,
+                stop.b,
+                stop.distance_m * 1e3
+            );
+        }
+    }
 }
 
 fn truncate(text: &str, width: usize) -> String {
