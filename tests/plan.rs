@@ -243,7 +243,9 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
 // Trajectory
 
 use proving_ground::ik::{solve_goals, IkOptions};
-use proving_ground::plan::{home_configuration, nearest_equivalent, plan, GoalStep, PlanError, TrajectoryOptions};
+use proving_ground::plan::{
+    home_configuration, nearest_equivalent, plan, GoalStep, PlanError, PlannerKind, PlannerOptions, TrajectoryOptions,
+};
 use proving_ground::scenario::{Goal, Tolerance};
 
 /// The wand with its tool at the rod's tip.
@@ -282,10 +284,12 @@ fn the_paper_robot_tours_the_course_with_every_segment_certified() {
             .collect::<Vec<_>>()
     );
     for step in &trajectory.steps {
-        let GoalStep::Reached { segment, q, goal, .. } = step else {
+        let GoalStep::Reached { segments, q, goal, .. } = step else {
             unreachable!()
         };
-        assert!(segment.free && segment.certified_clearance_m > 0.0, "goal {goal}: {segment:?}");
+        for segment in segments {
+            assert!(segment.free && segment.certified_clearance_m > 0.0, "goal {goal}: {segment:?}");
+        }
         let error = proving_ground::ik::goal_error(&scenario.goals[*goal], &placed.tool_pose(q));
         assert!(
             error.position_m < 1e-3 && error.orientation_rad < 1f64.to_radians(),
@@ -304,7 +308,7 @@ fn the_paper_robot_tours_the_course_with_every_segment_certified() {
 }
 
 #[test]
-fn a_blocked_goal_names_the_pair_and_the_tour_goes_on_from_the_last_reached_configuration() {
+fn a_goal_in_a_closed_pocket_is_no_path_naming_the_pair_and_the_tour_goes_on_from_the_last_reached_configuration() {
     let model = wand_with_tip();
     // Goal "left" needs +90 degrees (its other turn, -270, is beyond the -3 rad limit) and a pin
     // at +45 degrees stands in the way; goal "right" at -90 degrees is clear from home.
@@ -313,20 +317,41 @@ fn a_blocked_goal_names_the_pair_and_the_tour_goes_on_from_the_last_reached_conf
     let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
     let solutions = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
     assert!(solutions.iter().all(|s| s.reached()), "IK reaches both goals: {solutions:?}");
-    let trajectory = plan(&model, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
-    let GoalStep::Blocked { tried, stop, .. } = &trajectory.steps[0] else {
-        panic!("left must be blocked: {:?}", trajectory.steps[0])
-    };
-    assert_eq!(*tried, 1);
-    let stop = stop.as_ref().expect("the blocking pair");
-    assert_eq!((stop.a.as_str(), stop.b.as_str()), ("rod", "pin"));
-    assert!(stop.q[0] > 0.0 && stop.q[0] < std::f64::consts::FRAC_PI_4, "{stop:?}");
-    let GoalStep::Reached { q, segment, .. } = &trajectory.steps[1] else {
-        panic!("right must be reached: {:?}", trajectory.steps[1])
-    };
-    // From home (0), not from the blocked goal.
-    assert!((q[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-3 && segment.free, "{q:?}");
-    assert_eq!(trajectory.timed.holds().len(), 1);
+    // The pocket [pi/4, 3] is closed off: the pin on one side, the joint limit on the other.
+    for kind in [PlannerKind::Straight, PlannerKind::RrtConnect] {
+        let opts = TrajectoryOptions {
+            planner: PlannerOptions {
+                kind,
+                budget: 500,
+                seed: 0,
+            },
+            ..Default::default()
+        };
+        let trajectory = plan(&model, &scenario, &world, &solutions, &opts).expect("plans");
+        let GoalStep::NoPath {
+            tried,
+            stop,
+            budget,
+            samples,
+            ..
+        } = &trajectory.steps[0]
+        else {
+            panic!("{kind:?}: left must have no path: {:?}", trajectory.steps[0])
+        };
+        match kind {
+            PlannerKind::Straight => assert_eq!((*tried, *budget, *samples), (1, 0, 0)),
+            PlannerKind::RrtConnect => assert_eq!((*budget, *samples), (500, 500), "the budget is spent and named"),
+        }
+        let stop = stop.as_ref().expect("the blocking pair");
+        assert_eq!((stop.a.as_str(), stop.b.as_str()), ("rod", "pin"));
+        assert!(stop.q[0] > 0.0 && stop.q[0] < std::f64::consts::FRAC_PI_4, "{stop:?}");
+        let GoalStep::Reached { q, segments, .. } = &trajectory.steps[1] else {
+            panic!("right must be reached: {:?}", trajectory.steps[1])
+        };
+        // From home (0), not from the goal without a path.
+        assert!((q[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-3 && segments.iter().all(|s| s.free), "{q:?}");
+        assert_eq!(trajectory.timed.holds().len(), 1);
+    }
 }
 
 #[test]
@@ -380,4 +405,176 @@ fn a_default_home_in_collision_is_replaced_by_the_nearest_free_configuration_but
     assert!(trajectory.home_replaced.is_none() && trajectory.home == [0.0]);
     assert!(trajectory.home_clearance.as_ref().is_some_and(|c| c.distance_m < 0.0));
     assert_eq!(trajectory.reached(), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Planner: detours, outcomes, determinism
+
+use proving_ground::pipeline::{validate, Loaded, ValidateOptions};
+
+/// A planar arm of two 0.5 m DH tubes (0.12 m across) turning about z, joint 1 limited to half a
+/// turn each way so that the only way from +x to +y is the short way round.
+fn planar_arm() -> Model {
+    let text = r#"{"mode": "free", "joints": [
+        {"d": 0, "a": 0.5, "alpha": 0, "limits": [-3.1, 3.1]},
+        {"d": 0, "a": 0.5, "alpha": 0, "limits": [-3.1, 3.1]}]}"#;
+    let design = proving_ground::design::parse(text, std::path::Path::new("planar.json")).expect("valid design");
+    proving_ground::model::from_design(&design)
+}
+
+/// From the arm stretched along +x to stretched along +y, with a ball on the 45 degree line at
+/// 0.8 m: the straight joint-space segment sweeps the stretched arm through it; folding the
+/// elbow while passing it is a way round.
+fn wall_scenario() -> Scenario {
+    let mut scenario = with_obstacles(vec![ball("wall", Vector3::new(0.8 * 0.5f64.sqrt(), 0.8 * 0.5f64.sqrt(), 0.0), 0.05)]);
+    scenario.goals = vec![position_goal("x", 1.0, 0.0), position_goal("y", 0.0, 1.0)];
+    scenario.home = Some(vec![0.0, 0.0]);
+    scenario
+}
+
+#[test]
+fn a_wall_the_straight_segment_crosses_is_routed_around_with_every_edge_certified() {
+    let model = planar_arm();
+    let scenario = wall_scenario();
+    let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
+    let solutions = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
+    assert!(solutions.iter().all(|s| s.reached()), "IK reaches both goals: {solutions:?}");
+
+    let straight = TrajectoryOptions {
+        planner: PlannerOptions {
+            kind: PlannerKind::Straight,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let trajectory = plan(&model, &scenario, &world, &solutions, &straight).expect("plans");
+    assert!(
+        matches!(&trajectory.steps[1], GoalStep::NoPath { stop: Some(stop), .. } if stop.b == "wall"),
+        "the paper's heuristic is stopped by the wall: {:?}",
+        trajectory.steps[1]
+    );
+
+    let trajectory = plan(&model, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
+    let GoalStep::Reached {
+        waypoints, segments, q, ..
+    } = &trajectory.steps[1]
+    else {
+        panic!("the planner routes around the wall: {:?}", trajectory.steps[1])
+    };
+    assert!(segments.len() > 1, "a detour has more than one edge: {waypoints:?}");
+    assert_eq!(waypoints.last(), Some(q));
+    // Every edge certified, and checked again here by a fresh checker, and sampled densely.
+    let mut checker = SegmentChecker::new(&model, &world, CertifyOptions::default());
+    let mut from = match &trajectory.steps[0] {
+        GoalStep::Reached { q, .. } => q.clone(),
+        other => panic!("goal x is reached: {other:?}"),
+    };
+    for (to, segment) in waypoints.iter().zip(segments) {
+        assert!(segment.free && segment.certified_clearance_m > 0.0, "{segment:?}");
+        assert!(checker.check(&from, to).free, "{from:?} -> {to:?}");
+        assert!(checker.sampled_clearance(&from, to, 2000) > 0.0, "{from:?} -> {to:?}");
+        from.clone_from(to);
+    }
+    let error = proving_ground::ik::goal_error(&scenario.goals[1], &model.tool_pose(q));
+    assert!(error.position_m < 1e-3, "{error:?}");
+    // The engines follow the whole path: one timed edge per waypoint, a rest at each goal only.
+    let edges: usize = trajectory
+        .steps
+        .iter()
+        .map(|s| match s {
+            GoalStep::Reached { segments, .. } => segments.len(),
+            _ => 0,
+        })
+        .sum();
+    assert_eq!(trajectory.timed.segments.len(), edges);
+    assert_eq!(trajectory.timed.holds().iter().map(|h| h.goal).collect::<Vec<_>>(), [0, 1]);
+    assert!(trajectory.joint_length <= trajectory.joint_length_before_shortcut + 1e-12);
+    let replayed = proving_ground::plan::replay_segments(&trajectory);
+    assert_eq!(replayed.len(), edges);
+}
+
+fn report_of(model: Model, scenario: Scenario, opts: &ValidateOptions) -> proving_ground::report::Report {
+    let loaded = Loaded { model, design: None };
+    let validation = validate(loaded, scenario, opts).expect("runs");
+    proving_ground::report::build(&validation)
+}
+
+fn kinematic() -> ValidateOptions {
+    ValidateOptions {
+        engines: proving_ground::pipeline::Engines {
+            rapier: false,
+            mujoco: false,
+        },
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_goal_inside_a_closed_box_is_unreachable_and_proven_and_one_beyond_reach_too() {
+    let mut scenario = wall_scenario();
+    scenario.obstacles = vec![Obstacle {
+        name: "crate".into(),
+        world_from_shape: Isometry3::translation(0.0, 0.8, 0.0),
+        shape: Shape::Box {
+            half_extents: [0.1, 0.1, 0.1],
+        },
+    }];
+    scenario.goals = vec![position_goal("in the crate", 0.0, 0.8), position_goal("too far", 1.2, 0.0)];
+    let report = report_of(planar_arm(), scenario, &kinematic());
+    for goal in &report.goals {
+        assert_eq!(goal.outcome, "unreachable", "{goal:?}");
+    }
+    let crate_proof = report.goals[0].proven.as_deref().expect("proven");
+    assert!(crate_proof.contains("inside crate") && crate_proof.contains("link2"), "{crate_proof}");
+    let reach_proof = report.goals[1].proven.as_deref().expect("proven");
+    assert!(reach_proof.contains("1.200 m") && reach_proof.contains("1.000 m"), "{reach_proof}");
+    assert_eq!(report.verdict.reasons, ["2 goals unreachable (proven)"]);
+}
+
+#[test]
+fn the_verdict_names_the_budget_of_a_goal_without_a_path() {
+    let mut scenario = with_obstacles(vec![ball("pin", Vector3::new(0.5 * 0.5f64.sqrt(), 0.5 * 0.5f64.sqrt(), 0.0), 0.01)]);
+    scenario.goals = vec![position_goal("left", 0.0, 1.0)];
+    let opts = ValidateOptions {
+        planner: PlannerOptions {
+            budget: 300,
+            ..Default::default()
+        },
+        ..kinematic()
+    };
+    let report = report_of(wand_with_tip(), scenario, &opts);
+    assert_eq!(report.goals[0].outcome, "no_path");
+    assert_eq!(report.verdict.reasons, ["1 goal without a path found in 300 samples"]);
+    let trajectory = report.trajectory.as_ref().expect("a trajectory");
+    assert_eq!((trajectory.no_path, trajectory.segments[0].samples), (1, 300));
+}
+
+#[test]
+fn reach_only_runs_no_trajectory_and_says_so() {
+    let opts = ValidateOptions {
+        reach_only: true,
+        ..kinematic()
+    };
+    let report = report_of(planar_arm(), wall_scenario(), &opts);
+    assert_eq!(report.criteria.mode, "reach_only");
+    assert!(report.trajectory.is_none() && report.engines.is_empty() && report.static_load.is_none());
+    assert!(report.goals.iter().all(|g| g.outcome == "reached"), "{:?}", report.goals);
+    assert!(report.verdict.passed);
+}
+
+#[test]
+fn planned_detours_are_byte_identical_on_one_and_on_two_threads() {
+    let design = repo().join("designs/ur10e.json");
+    let scenario = proving_ground::scenario::load(&repo().join("scenarios/cluttered/task-00.json")).expect("task loads");
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let loaded = proving_ground::pipeline::load(&design, &LoadOptions::default()).expect("loads");
+            let validation = validate(loaded, scenario.clone(), &kinematic()).expect("runs");
+            serde_json::to_string_pretty(&proving_ground::report::build(&validation)).expect("serialises")
+        })
+    };
+    let first = run(1);
+    assert!(first.contains("\"edges\": 2") || first.contains("\"edges\": 3"), "the run has detours");
+    assert_eq!(first, run(2), "one thread and two threads differ");
 }
