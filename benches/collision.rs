@@ -88,7 +88,15 @@ fn collision(c: &mut Criterion) {
                 ExcludedPair::new(&pair.a_name, &pair.b_name, "in contact in every sampled configuration")
             })
             .collect();
-        let free_world = collide::world(&model, &scenario, &CollideOptions { excluded_pairs }).expect("valid world");
+        let free_world = collide::world(
+            &model,
+            &scenario,
+            &CollideOptions {
+                excluded_pairs,
+                ..Default::default()
+            },
+        )
+        .expect("valid world");
         let free = configurations(&model, |poses| {
             distances(&free_world, poses, &query, &mut out);
             out.within_margin.is_empty()

@@ -55,8 +55,11 @@ fn scenarios(c: &mut Criterion) {
     ] {
         let model = load_model(&root.join(design), &LoadOptions::default()).expect("shipped design loads");
         let placed = model.placed(&scenario.world_from_base);
-        let excluded_pairs = proving_ground::collide::structural_overlaps(&placed, &Default::default()).expect("geometry builds");
-        let opts = proving_ground::collide::CollideOptions { excluded_pairs };
+        let structural = proving_ground::collide::structural_overlaps(&placed, &Default::default()).expect("geometry builds");
+        let opts = proving_ground::collide::CollideOptions {
+            excluded_pairs: structural.pairs,
+            excluded_shapes: structural.shapes,
+        };
         let world = proving_ground::collide::world(&placed, scenario, &opts).expect("world builds");
         group.bench_function(format!("{}/{}", model.name, scenario.name), |b| {
             b.iter(|| black_box(proving_ground::ik::solve_goals(&placed, scenario, Some(&world), &IkOptions::default()).len()))

@@ -125,13 +125,14 @@ fn kinematically_reached(model: &Model, task: &Scenario) -> usize {
 
 fn solve_all(model: &Model, tasks: &[Scenario]) -> Result<Vec<Vec<GoalSolutions>>, Box<dyn std::error::Error + Send + Sync>> {
     // Self pairs do not depend on where the robot stands: sampled once per design.
-    let excluded_pairs = structural_overlaps(model, &StructuralOptions::default())?;
+    let structural = structural_overlaps(model, &StructuralOptions::default())?;
     tasks
         .iter()
         .map(|task| {
             let placed = model.placed(&task.world_from_base);
             let opts = CollideOptions {
-                excluded_pairs: excluded_pairs.clone(),
+                excluded_pairs: structural.pairs.clone(),
+                excluded_shapes: structural.shapes.clone(),
             };
             let world = collide::world(&placed, task, &opts)?;
             Ok(solve_goals(&placed, task, Some(&world), &IkOptions::default()))

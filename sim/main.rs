@@ -27,6 +27,9 @@ Examples:
   validate-design designs/modular-elbow.json --scenario scenarios/workspace/pose.json --engines none
   validate-design designs/paper-real-world.json --engines mujoco --seed 3 --ik-seeds 8 --contact-depth 0.0005
   validate-design designs/ur10e.json --tolerance position --margin 0.01 --threads 1 --quiet
+  validate-design designs/ur5e.json --scenario scenarios/cluttered/task-00.json --planner straight
+  validate-design designs/ur20.json --scenario scenarios/cluttered/task-12.json --plan-budget 50000
+  validate-design designs/ur5e.json --scenario scenarios/cluttered/task-03.json --reach-only
   validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --tip panda_hand
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
   validate-design robot.xml --kinematics-only --mujoco-checks 20
@@ -35,7 +38,7 @@ Examples:
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
 
 Exit codes:
-  0  the design passes the scenario (every goal reached by a certified collision-free segment,
+  0  the design passes the scenario (every goal reached by a certified collision-free path,
      held by every engine run, no contact, no joint over its rating under gravity); with
      --describe or --kinematics-only: the model was built (and MuJoCo agrees with our kinematics)
   1  the design fails: the verdict line lists the reasons (or MuJoCo disagrees with our

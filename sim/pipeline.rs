@@ -145,9 +145,14 @@ pub fn collision_world(
     scenario: &crate::scenario::Scenario,
     extra: &[collide::ExcludedPair],
 ) -> Result<collide::CollisionWorld, Error> {
-    let mut excluded_pairs = collide::structural_overlaps(placed, &collide::StructuralOptions::default())?;
+    let structural = collide::structural_overlaps(placed, &collide::StructuralOptions::default())?;
+    let mut excluded_pairs = structural.pairs;
     excluded_pairs.extend_from_slice(extra);
-    Ok(collide::world(placed, scenario, &collide::CollideOptions { excluded_pairs })?)
+    let opts = collide::CollideOptions {
+        excluded_pairs,
+        excluded_shapes: structural.shapes,
+    };
+    Ok(collide::world(placed, scenario, &opts)?)
 }
 
 /// Which physics engines a validation runs.
@@ -274,6 +279,7 @@ pub fn validate_with_progress(
         return Ok(Validation {
             pairs: world.pairs().to_vec(),
             excluded: world.excluded().to_vec(),
+            excluded_shapes: world.excluded_shapes().to_vec(),
             model,
             design: loaded.design,
             scenario,
@@ -365,11 +371,13 @@ pub fn validate_with_progress(
     let (mut mujoco, static_load) = mujoco?;
     for runs in rapier.iter_mut().chain(mujoco.iter_mut()) {
         crate::engine::confirm_contacts(&model, &world, &mut runs.dynamic.contacts);
+        crate::engine::measure_reference(&model, &world, timed, &mut runs.dynamic.contacts);
         crate::engine::confirm_contacts(&model, &world, &mut runs.replay.contacts);
     }
     Ok(Validation {
         pairs: world.pairs().to_vec(),
         excluded: world.excluded().to_vec(),
+        excluded_shapes: world.excluded_shapes().to_vec(),
         model,
         design: loaded.design,
         scenario,

@@ -36,7 +36,7 @@ fn main_command_validates_the_paper_robot_on_the_course_and_passes() {
         stdout.contains("design paper-real-world (modular, 5 joints, hardware cost 1.00 m) on scenario course"),
         "{stdout}"
     );
-    assert!(stdout.contains("trajectory: 36 of 36 goals by certified segments"), "{stdout}");
+    assert!(stdout.contains("trajectory: 36 of 36 goals on certified paths"), "{stdout}");
     assert!(
         stdout.contains("rapier: 36 goals held") && stdout.contains("mujoco: 36 goals held"),
         "{stdout}"
@@ -314,7 +314,7 @@ fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
     let dir = tempfile::tempdir().expect("temp dir");
     let json = dir.path().join("report.json");
     let output = validate_design()
-        .args(["designs/ur5e.json", "--engines", "none", "--json"])
+        .args(["designs/abb-irb-2600.json", "--engines", "none", "--json"])
         .arg(&json)
         .output()
         .expect("runs");
@@ -332,7 +332,7 @@ fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
     assert_eq!(report["verdict"]["passed"], false);
     assert!(report["verdict"]["reasons"].as_array().is_some_and(|r| !r.is_empty()));
     assert_eq!(report["criteria"]["position_m"], 0.001);
-    // The course's home is the 5-joint paper robot's: the UR5e starts from its own.
+    // The course's home is the 5-joint paper robot's: the ABB starts from its own.
     assert!(
         report["findings"]
             .as_array()

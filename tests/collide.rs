@@ -1263,6 +1263,7 @@ fn excluded_pairs_are_listed_with_reasons_and_bad_names_are_errors() {
     )];
     let opts = CollideOptions {
         excluded_pairs: vec![ExcludedPair::new("link4", "link2", "never in contact (SRDF)")],
+        ..Default::default()
     };
     let world = collide::world(&model, &scenario(obstacles.clone(), Some(0.0)), &opts).expect("valid");
     for (i, joint) in model.joints.iter().enumerate() {
@@ -1291,6 +1292,7 @@ fn excluded_pairs_are_listed_with_reasons_and_bad_names_are_errors() {
 
     let opts = CollideOptions {
         excluded_pairs: vec![ExcludedPair::new("link2", "elbow", "typo")],
+        ..Default::default()
     };
     let error = collide::world(&model, &scenario(obstacles, None), &opts)
         .err()
@@ -1307,32 +1309,86 @@ fn excluded_pairs_are_listed_with_reasons_and_bad_names_are_errors() {
 }
 
 /// Links two apart joined by a `direct` module (d = 0.1 m < the 0.12 m tube diameter) overlap at
-/// every configuration; those pairs, and only those, are excluded by sampling, with the reason.
+/// every configuration around the joint between them: those shape pairs, and only those, are
+/// excluded by sampling, with the reason; the rest of the two links stays checked.
 #[test]
 fn structural_overlaps_are_found_by_sampling_and_only_those() {
     use proving_ground::collide::{structural_overlaps, StructuralOptions};
     let load = |design: &str| proving_ground::pipeline::load_model(&common::repo().join(design), &Default::default()).expect("loads");
-    let names = |model: &proving_ground::model::Model| -> Vec<(String, String)> {
-        structural_overlaps(model, &StructuralOptions::default())
-            .expect("geometry builds")
-            .into_iter()
-            .map(|e| (e.a, e.b))
-            .collect()
-    };
     let paper = load("designs/paper-real-world.json");
+    let found = structural_overlaps(&paper, &StructuralOptions::default()).expect("builds");
+    assert!(found.pairs.is_empty(), "{:?}", found.pairs);
+    let shapes: Vec<(&str, &str, &str, &str)> = found
+        .shapes
+        .iter()
+        .map(|e| (e.a.as_str(), e.a_label.as_str(), e.b.as_str(), e.b_label.as_str()))
+        .collect();
     assert_eq!(
-        names(&paper),
+        shapes,
         [
-            ("link2".to_string(), "link4".to_string()),
-            ("link3".to_string(), "link5".to_string())
+            ("link2", "a tube of joint 2", "link4", "joint module 4"),
+            ("link2", "a tube of joint 2", "link4", "d tube of joint 4"),
+            ("link3", "joint module 3", "link5", "joint module 5"),
+            ("link3", "d tube of joint 3", "link5", "joint module 5"),
+            ("link3", "d tube of joint 3", "link5", "d tube of joint 5"),
         ]
     );
-    // UR5e's wrist tubes (0.12 m across, 0.0997 m apart along the wrist) overlap in most
-    // configurations and touch end to end (within 1e-17 m) in the rest.
-    // Its links 3 and 6 overlap in about 16% of configurations: checked.
-    assert_eq!(names(&load("designs/ur5e.json")), [("link4".to_string(), "link6".to_string())]);
-    let reason = &structural_overlaps(&paper, &StructuralOptions::default()).expect("builds")[0].reason;
-    assert!(reason.contains("in contact at all 256 sampled configurations"), "{reason}");
+    assert!(found.shapes[0].reason.contains("in contact at all 256 sampled configurations"));
+    assert!(found.shapes[0].reason.contains("the rest of the two links is checked"));
+    // UR5e's wrist links are one tube each (0.12 m across, 0.0997 m apart along the wrist): they
+    // overlap in most configurations and touch end to end (within 1e-17 m) in the rest, and no
+    // other shape is left to check, so the link pair is excluded whole. Its links 3 and 6 overlap
+    // in about 16% of configurations: checked.
+    let ur5e = structural_overlaps(&load("designs/ur5e.json"), &StructuralOptions::default()).expect("builds");
+    let pairs: Vec<(&str, &str)> = ur5e.pairs.iter().map(|e| (e.a.as_str(), e.b.as_str())).collect();
+    assert_eq!(pairs, [("link4", "link6")]);
+    assert!(ur5e.shapes.is_empty());
+    assert!(ur5e.pairs[0].reason.contains("in contact at all 256 sampled configurations"));
+
+    // A real fold of one link into the other is caught: on the modular designs, each link pair
+    // with shape pairs left out is still checked, and where it is in contact at random
+    // configurations the contact is between shapes that do not overlap by construction.
+    let mut folds = Vec::new();
+    for design in [
+        "paper-real-world",
+        "modular-elbow",
+        "modular-long-reach",
+        "modular-tall",
+        "modular-compact",
+    ] {
+        let model = load(&format!("designs/{design}.json"));
+        let world = proving_ground::pipeline::collision_world(&model, &scenario(vec![], None), &[]).expect("builds");
+        let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+        let mut ws = model.workspace();
+        let mut out = Distances::new();
+        for _ in 0..500 {
+            model.forward(&model.random_configuration(&mut rng), &mut ws);
+            distances(&world, &ws.link_in_world, &QueryOptions::default(), &mut out);
+            for contact in &out.within_margin {
+                let (Body::Link(i), Body::Link(j)) = (contact.a.body, contact.b.body) else {
+                    continue;
+                };
+                let pair = &world.pairs()[contact.pair];
+                if world.excluded_shapes().iter().any(|e| e.a == pair.a_name && e.b == pair.b_name) {
+                    assert!(
+                        world.shape_pair_checked((i, contact.a.element), (j, contact.b.element)),
+                        "{contact:?}"
+                    );
+                    folds.push(format!("{design}: {} {}", pair.a_name, pair.b_name));
+                }
+            }
+        }
+    }
+    folds.sort();
+    folds.dedup();
+    // Before shape-level exclusion these link pairs were excluded whole: never checked.
+    for expected in [
+        "paper-real-world: link3 link5",
+        "modular-elbow: link4 link6",
+        "modular-tall: link4 link6",
+    ] {
+        assert!(folds.iter().any(|f| f == expected), "{expected} not among {folds:?}");
+    }
 }
 
 #[test]

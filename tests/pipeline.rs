@@ -3,8 +3,8 @@
 mod common;
 
 use common::repo;
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use proving_ground::model::Shape;
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use proving_ground::model::{Shape, TriMesh};
 use proving_ground::pipeline::{load, validate, Engines, LoadOptions, ValidateOptions};
 use proving_ground::report::{self, FindingKind, Severity};
 use proving_ground::scenario::{generate, Goal, Obstacle, Scenario, Tolerance};
@@ -20,8 +20,9 @@ fn the_paper_robot_passes_the_course_in_both_engines_with_no_contacts_and_every_
     let report = report::build(&validation);
     let fails: Vec<_> = report.findings_at_least(Severity::Warn).collect();
     assert!(report.verdict.passed && fails.is_empty(), "{fails:#?}");
-    assert_eq!(report.trajectory.reached, 36);
-    assert!(report.trajectory.certified_clearance_m.is_some_and(|c| c > 0.0));
+    let trajectory = report.trajectory.as_ref().expect("a full run plans a trajectory");
+    assert_eq!(trajectory.reached, 36);
+    assert!(trajectory.certified_clearance_m.is_some_and(|c| c > 0.0));
     assert_eq!(report.engines.len(), 2);
     for engine in &report.engines {
         assert_eq!(engine.goals_held, 36, "{}", engine.engine);
@@ -74,10 +75,12 @@ fn a_path_through_an_obstacle_is_caught_by_all_three_checkers_at_the_same_segmen
     let validation = validate(loaded, scenario, &ValidateOptions::default()).expect("runs");
     let report = report::build(&validation);
     assert!(!report.verdict.passed);
-    let blocked: Vec<_> = report.findings.iter().filter(|f| f.kind == FindingKind::GoalBlocked).collect();
+    // The other way round (-270 degrees) is beyond the limit: no planner finds a path.
+    let blocked: Vec<_> = report.findings.iter().filter(|f| f.kind == FindingKind::GoalNoPath).collect();
     assert_eq!(blocked.len(), 1, "{:#?}", report.findings);
     // parry3d: the segment stops where link 1 (the arm) touches the ball, before 45 degrees.
-    let stop = report.trajectory.segments[0].stop.as_ref().expect("the certified check stops");
+    let trajectory = report.trajectory.as_ref().expect("a full run plans a trajectory");
+    let stop = trajectory.segments[0].attempt_stop.as_ref().expect("the certified check stops");
     assert_eq!((stop.a.as_str(), stop.b.as_str()), ("link1", "ball"), "{stop:?}");
     assert!(stop.q[0] > 0.0 && stop.q[0] < FRAC_PI_4, "{stop:?}");
     // Both engines' kinematic replays find the same pair on the same (only) replayed segment.
@@ -187,7 +190,7 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
             "{overloads:#?}"
         );
         assert!(
-            report.verdict.reasons.iter().any(|r| r.contains("over their rated torque")),
+            report.verdict.reasons.iter().any(|r| r.contains("rated torque under gravity")),
             "{:?}",
             report.verdict
         );
@@ -201,4 +204,112 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
         load.joints.iter().all(|j| j.rated == Some(60.0) && j.peak_torque < 60.0),
         "{load:?}"
     );
+}
+
+/// A U-shaped prism (closed, faces outwards): 0.6 x 0.6 m in x-y with a notch 0.2 m wide
+/// (x in [0.2, 0.4]) and 0.4 m deep opening towards +y, extruded 0.2 m along z.
+fn u_mesh() -> TriMesh {
+    let outline = [
+        [0.0, 0.0],
+        [3.0, 0.0],
+        [3.0, 3.0],
+        [2.0, 3.0],
+        [2.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 3.0],
+        [0.0, 3.0],
+    ];
+    let cap = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [0, 4, 5], [0, 5, 7], [5, 6, 7]];
+    let mut vertices = Vec::new();
+    for z in [0.0, 1.0] {
+        vertices.extend(outline.iter().map(|[x, y]| [x * 0.2, y * 0.2, z * 0.2]));
+    }
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for [a, b, c] in cap {
+        triangles.push([a, c, b]);
+        triangles.push([a + 8, b + 8, c + 8]);
+    }
+    for i in 0..8u32 {
+        let j = (i + 1) % 8;
+        triangles.push([i, j, j + 8]);
+        triangles.push([i, j + 8, i + 8]);
+    }
+    TriMesh {
+        uri: "u.stl".into(),
+        file: std::path::PathBuf::from("u.stl"),
+        scale: [1.0; 3],
+        vertices,
+        triangles,
+    }
+}
+
+#[test]
+fn an_engine_contact_exact_geometry_refutes_does_not_fail_the_design() {
+    // One joint swings a 0.6 m tube (0.12 m thick, 0.3 m up) a quarter turn into the notch of a
+    // U-shaped mesh: 40 mm from the notch's floor and from both prongs at the goal, and free all
+    // the way in exact geometry. The U's convex hull, which MuJoCo collides, swallows the tube.
+    let text = r#"{"name": "swing", "mode": "free", "joints": [{"d": 0.3, "a": 0.6, "alpha": 0, "limits": [-3, 3]}]}"#;
+    let design = proving_ground::design::parse(text, std::path::Path::new("swing.json")).expect("valid design");
+    let loaded = proving_ground::pipeline::Loaded {
+        model: proving_ground::model::from_design(&design),
+        design: Some(design),
+    };
+    // The mesh's +y (the notch's opening) faces world +x, where the tube comes from; its x (across
+    // the notch) is world z, its extrusion world y.
+    let rotation = Rotation3::from_matrix_unchecked(Matrix3::new(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0));
+    let u = Obstacle {
+        name: "u".into(),
+        world_from_shape: Isometry3::from_parts(Translation3::new(-0.3, 0.3, 0.0), UnitQuaternion::from_rotation_matrix(&rotation)),
+        shape: Shape::Mesh(u_mesh()),
+    };
+    let scenario = Scenario {
+        name: "into-a-notch".into(),
+        world_from_base: Isometry3::identity(),
+        floor: None,
+        obstacles: vec![u],
+        goals: vec![Goal {
+            name: "in the notch".into(),
+            position: Vector3::new(0.0, 0.6, 0.3),
+            rotation: UnitQuaternion::identity(),
+            tolerance: Tolerance::Position,
+        }],
+        home: None,
+        provenance: None,
+    };
+    let validation = validate(loaded, scenario, &ValidateOptions::default()).expect("runs");
+    let report = report::build(&validation);
+    let trajectory = report.trajectory.as_ref().expect("planned");
+    assert_eq!(trajectory.reached, 1, "{:#?}", report.findings);
+    // Exact geometry: free, with the 40 mm of the notch at the goal.
+    let clearance = report.goals[0].exact_clearance_m.expect("measured");
+    assert!((clearance - 0.04).abs() < 1e-6, "{clearance}");
+    // MuJoCo collides the hull: contacts, each refuted at MuJoCo's own configuration.
+    let mujoco = report.engines.iter().find(|e| e.engine == "mujoco").expect("ran");
+    assert!(!mujoco.contacts.is_empty(), "MuJoCo's hull should touch the tube");
+    for contact in &mujoco.contacts {
+        assert!(contact.parry_distance_m.is_some_and(|d| d > 0.0), "{contact:?}");
+    }
+    let refuted: Vec<_> = report
+        .findings
+        .iter()
+        .filter(|f| f.kind == FindingKind::EngineContactNotConfirmed && f.engine == Some("mujoco"))
+        .collect();
+    assert!(
+        !refuted.is_empty()
+            && refuted
+                .iter()
+                .all(|f| f.severity == Severity::Warn && f.message.contains("convex hulls"))
+    );
+    let fails: Vec<_> = report.findings_at_least(Severity::Fail).collect();
+    // The hull pushes MuJoCo's arm off the goal: a miss that is MuJoCo's, so a warning.
+    assert!(
+        report
+            .findings
+            .iter()
+            .any(|f| f.kind == FindingKind::GoalNotHeldAfterEngineArtefact && f.engine == Some("mujoco") && f.severity == Severity::Warn),
+        "{:#?}",
+        report.findings
+    );
+    assert_eq!(report.goals[0].held_by, ["rapier"]);
+    assert!(report.verdict.passed && fails.is_empty(), "{fails:#?}");
 }

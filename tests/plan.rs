@@ -349,7 +349,10 @@ fn a_goal_in_a_closed_pocket_is_no_path_naming_the_pair_and_the_tour_goes_on_fro
             panic!("right must be reached: {:?}", trajectory.steps[1])
         };
         // From home (0), not from the goal without a path.
-        assert!((q[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-3 && segments.iter().all(|s| s.free), "{q:?}");
+        assert!(
+            (q[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-3 && segments.iter().all(|s| s.free),
+            "{q:?}"
+        );
         assert_eq!(trajectory.timed.holds().len(), 1);
     }
 }
@@ -426,7 +429,11 @@ fn planar_arm() -> Model {
 /// 0.8 m: the straight joint-space segment sweeps the stretched arm through it; folding the
 /// elbow while passing it is a way round.
 fn wall_scenario() -> Scenario {
-    let mut scenario = with_obstacles(vec![ball("wall", Vector3::new(0.8 * 0.5f64.sqrt(), 0.8 * 0.5f64.sqrt(), 0.0), 0.05)]);
+    let mut scenario = with_obstacles(vec![ball(
+        "wall",
+        Vector3::new(0.8 * 0.5f64.sqrt(), 0.8 * 0.5f64.sqrt(), 0.0),
+        0.05,
+    )]);
     scenario.goals = vec![position_goal("x", 1.0, 0.0), position_goal("y", 0.0, 1.0)];
     scenario.home = Some(vec![0.0, 0.0]);
     scenario
@@ -525,7 +532,10 @@ fn a_goal_inside_a_closed_box_is_unreachable_and_proven_and_one_beyond_reach_too
         assert_eq!(goal.outcome, "unreachable", "{goal:?}");
     }
     let crate_proof = report.goals[0].proven.as_deref().expect("proven");
-    assert!(crate_proof.contains("inside crate") && crate_proof.contains("link2"), "{crate_proof}");
+    assert!(
+        crate_proof.contains("inside crate") && crate_proof.contains("link2"),
+        "{crate_proof}"
+    );
     let reach_proof = report.goals[1].proven.as_deref().expect("proven");
     assert!(reach_proof.contains("1.200 m") && reach_proof.contains("1.000 m"), "{reach_proof}");
     assert_eq!(report.verdict.reasons, ["2 goals unreachable (proven)"]);
@@ -575,6 +585,9 @@ fn planned_detours_are_byte_identical_on_one_and_on_two_threads() {
         })
     };
     let first = run(1);
-    assert!(first.contains("\"edges\": 2") || first.contains("\"edges\": 3"), "the run has detours");
+    assert!(
+        first.contains("\"edges\": 2") || first.contains("\"edges\": 3"),
+        "the run has detours"
+    );
     assert_eq!(first, run(2), "one thread and two threads differ");
 }

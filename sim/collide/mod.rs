@@ -100,8 +100,8 @@ mod world;
 pub use approx::approximate_distances;
 pub use compare::compare;
 pub use exact::distances;
-pub use pairs::{CheckedPair, ExcludedPair};
-pub use structural::{structural_overlaps, StructuralOptions, TOUCHING_M};
+pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair};
+pub use structural::{structural_overlaps, StructuralExclusions, StructuralOptions, TOUCHING_M};
 pub use world::{world, CollisionWorld};
 
 use nalgebra::Vector3;
@@ -113,6 +113,9 @@ pub struct CollideOptions {
     /// Link pairs not to check, by link name (the model's link names, not names merged into a
     /// link), each with the reason it is safe to leave out; default none.
     pub excluded_pairs: Vec<ExcludedPair>,
+    /// Collider pairs of otherwise checked link pairs not to measure, each with its reason;
+    /// default none.
+    pub excluded_shapes: Vec<ExcludedShapePair>,
 }
 
 /// Options for one distance query.
@@ -419,6 +422,18 @@ pub enum CollideError {
         merged_into: String,
         /// Every link the model has.
         known: String,
+    },
+    /// A shape exclusion names a link or a collider the model does not have.
+    #[error("excluded shape pair {index}: link `{link}` has no collider {shape} (it has {count})")]
+    UnknownShape {
+        /// Index in the exclusion list.
+        index: usize,
+        /// The link named.
+        link: String,
+        /// The collider index given.
+        shape: usize,
+        /// Colliders the link has.
+        count: usize,
     },
     /// An exclusion names the same link twice.
     #[error("excluded pair {index}: `{link}` with itself; a link is never checked against itself")]

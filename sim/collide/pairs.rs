@@ -44,6 +44,27 @@ impl ExcludedPair {
     }
 }
 
+/// Two shapes of a checked link pair that are not measured against each other, with the reason:
+/// the pieces that overlap by construction (a joint housing and the tube of the link two joints
+/// on), while every other shape pair of the two links is still checked.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ExcludedShapePair {
+    /// Name of the first link.
+    pub a: String,
+    /// Index of its collider in `Link::colliders`.
+    pub a_shape: usize,
+    /// The collider's label (e.g. `joint module 3`).
+    pub a_label: String,
+    /// Name of the second link.
+    pub b: String,
+    /// Index of its collider in `Link::colliders`.
+    pub b_shape: usize,
+    /// The collider's label.
+    pub b_label: String,
+    /// Why the shape pair is safe to leave out.
+    pub reason: String,
+}
+
 /// Both lists of a world.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PairLists {
@@ -240,6 +261,7 @@ mod tests {
         let mut model = model();
         let opts = CollideOptions {
             excluded_pairs: vec![ExcludedPair::new("link3", "link1", "never in contact (SRDF)")],
+            ..Default::default()
         };
         let lists = pair_lists(&model, &scenario(false), &opts).expect("valid");
         assert!(lists.checked.iter().all(|p| !(p.a_name == "link1" && p.b_name == "link3")));
@@ -249,6 +271,7 @@ mod tests {
 
         let opts = CollideOptions {
             excluded_pairs: vec![ExcludedPair::new("link1", "lnk3", "typo")],
+            ..Default::default()
         };
         let error = pair_lists(&model, &scenario(false), &opts).expect_err("unknown link");
         assert!(error.to_string().contains("no link named `lnk3`"), "{error}");
@@ -257,12 +280,14 @@ mod tests {
         model.links[3].merged.push("gripper".into());
         let opts = CollideOptions {
             excluded_pairs: vec![ExcludedPair::new("gripper", "link1", "x")],
+            ..Default::default()
         };
         let error = pair_lists(&model, &scenario(false), &opts).expect_err("merged link");
         assert!(error.to_string().contains("merged into model link `link3`"), "{error}");
 
         let opts = CollideOptions {
             excluded_pairs: vec![ExcludedPair::new("link2", "link2", "x")],
+            ..Default::default()
         };
         assert!(matches!(
             pair_lists(&model, &scenario(false), &opts),

@@ -7,7 +7,7 @@
 //! the "always in collision" category of a MoveIt collision matrix. Pairs that merely touch at the
 //! home configuration are not excluded: one free sample keeps a pair checked.
 
-use super::{distances, world, CollideError, CollideOptions, Distances, ExcludedPair, QueryOptions};
+use super::{distances, world, Body, CollideError, CollideOptions, Distances, ExcludedPair, ExcludedShapePair, QueryOptions};
 use crate::model::Model;
 use crate::scenario::Scenario;
 use rand::SeedableRng;
@@ -30,11 +30,24 @@ impl Default for StructuralOptions {
     }
 }
 
-/// Self pairs of `model` in contact at every sampled configuration, as exclusions with the reason.
+/// What [`structural_overlaps`] leaves out.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StructuralExclusions {
+    /// Link pairs left out whole: in contact at every sample, and still so without any of their
+    /// shape pairs that are.
+    pub pairs: Vec<ExcludedPair>,
+    /// Shape pairs left out of otherwise checked link pairs: the pieces in contact at every
+    /// sample (a joint housing inside the next link's tube), the rest of the two links checked.
+    pub shapes: Vec<ExcludedShapePair>,
+}
+
+/// Self pairs of `model` in contact at every sampled configuration: for each, the shape pairs
+/// that are (excluded alone when the link pair is otherwise free at some sample, so a real fold
+/// of one link into the other is still caught), else the whole link pair; each with its reason.
 ///
 /// # Errors
 /// When the model's geometry cannot be built (see [`world`]).
-pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<Vec<ExcludedPair>, CollideError> {
+pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<StructuralExclusions, CollideError> {
     let empty = Scenario {
         name: "empty".into(),
         world_from_base: nalgebra::Isometry3::identity(),
@@ -57,8 +70,10 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<Ve
         hulls: false,
         exact_depth: true,
     };
+    let mut placements = Vec::with_capacity(opts.samples);
     for _ in 0..opts.samples {
         model.forward(&model.random_configuration(&mut rng), &mut ws);
+        placements.push(ws.link_in_world.clone());
         distances(&world, &ws.link_in_world, &query, &mut out);
         let mut touching = vec![false; pairs.len()];
         for pair in &out.within_margin {
@@ -71,19 +86,50 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<Ve
             break;
         }
     }
-    Ok(pairs
-        .iter()
-        .zip(&always)
-        .filter(|(_, always)| **always)
-        .map(|(pair, _)| {
-            ExcludedPair::new(
+    let sampled = format!("in contact at all {} sampled configurations (seed {})", opts.samples, opts.seed);
+    let mut exclusions = StructuralExclusions::default();
+    for (pair, _) in pairs.iter().zip(&always).filter(|(_, always)| **always) {
+        let (Body::Link(i), Body::Link(j)) = (pair.a, pair.b) else {
+            continue;
+        };
+        let shape_pairs: Vec<(usize, usize)> = (0..model.links[i].colliders.len())
+            .flat_map(|a| (0..model.links[j].colliders.len()).map(move |b| (a, b)))
+            .collect();
+        let touching = |placement: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize)| {
+            world.collider_distance(placement, (i, a), (j, b)).is_some_and(|d| d <= TOUCHING_M)
+        };
+        let overlapping: Vec<(usize, usize)> = shape_pairs
+            .iter()
+            .copied()
+            .filter(|&p| placements.iter().all(|placement| touching(placement, p)))
+            .collect();
+        // Without the overlapping pieces, is the rest of the two links free at some sample?
+        let rest_free_somewhere = placements.iter().any(|placement| {
+            shape_pairs
+                .iter()
+                .filter(|p| !overlapping.contains(p))
+                .all(|&p| !touching(placement, p))
+        });
+        let some_rest = overlapping.len() < shape_pairs.len();
+        if overlapping.is_empty() || !some_rest || !rest_free_somewhere {
+            exclusions.pairs.push(ExcludedPair::new(
                 pair.a_name.clone(),
                 pair.b_name.clone(),
-                format!(
-                    "in contact at all {} sampled configurations (seed {}): the links overlap by construction, so checking them tells nothing about a motion",
-                    opts.samples, opts.seed
-                ),
-            )
-        })
-        .collect())
+                format!("{sampled}: the links overlap by construction, so checking them tells nothing about a motion"),
+            ));
+            continue;
+        }
+        for (a, b) in overlapping {
+            exclusions.shapes.push(ExcludedShapePair {
+                a: pair.a_name.clone(),
+                a_shape: a,
+                a_label: model.links[i].colliders[a].label.clone(),
+                b: pair.b_name.clone(),
+                b_shape: b,
+                b_label: model.links[j].colliders[b].label.clone(),
+                reason: format!("{sampled}: these two pieces overlap by construction; the rest of the two links is checked"),
+            });
+        }
+    }
+    Ok(exclusions)
 }

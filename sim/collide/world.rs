@@ -1,7 +1,7 @@
 //! The collision world: parry shapes for every link collider, capsule segment, obstacle and the
 //! floor, and the pairs to check, built once per (model, scenario).
 
-use super::pairs::{pair_lists, CheckedPair, ExcludedPair, FLOOR_NAME};
+use super::pairs::{pair_lists, CheckedPair, ExcludedPair, ExcludedShapePair, FLOOR_NAME};
 use super::{Body, CollideError, CollideOptions};
 use crate::frames::{parry_pose, parry_vector, vector_from_parry};
 use crate::model::{Model, Shape, TriMesh, PAPER_CAPSULE_RADIUS_M};
@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, SharedShape, TriMeshFlags};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Everything a query needs about one model in one scenario: parry shapes in f64 and the pair
 /// lists. Build it with [`world`]; it holds parry handles and is not part of any output.
@@ -26,6 +26,10 @@ pub struct CollisionWorld {
     pub(super) floor: Option<f64>,
     pub(super) pairs: Vec<CheckedPair>,
     pub(super) excluded: Vec<ExcludedPair>,
+    /// Collider pairs of checked link pairs left out, with their reasons.
+    pub(super) excluded_shapes: Vec<ExcludedShapePair>,
+    /// The same, as `(link, collider)` pairs, lower link first.
+    pub(super) skipped: HashSet<((usize, usize), (usize, usize))>,
     /// The collider pairs of the exact model, pair by pair.
     pub(super) candidates: Vec<Candidate>,
     /// The capsule pairs of the approximate model, pair by pair.
@@ -253,8 +257,14 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
         });
     }
 
+    let skipped = skipped_shapes(model, &opts.excluded_shapes)?;
     // Every element pair of every checked pair, so a query only walks flat lists.
     let collider_links: Vec<usize> = colliders.iter().map(|c| c.link).collect();
+    let collider_ids: Vec<(usize, usize)> = colliders.iter().map(|c| (c.link, c.element)).collect();
+    let kept = |a: usize, b: usize| {
+        let (x, y) = (collider_ids[a], collider_ids[b]);
+        !skipped.contains(&(x.min(y), x.max(y)))
+    };
     let capsule_links: Vec<usize> = capsules.iter().map(|c| c.link).collect();
     let mut candidates = Vec::new();
     let mut capsule_candidates = Vec::new();
@@ -262,10 +272,13 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
         let Body::Link(link) = checked.a else {
             unreachable!("body a of a checked pair is always a link")
         };
-        for (links, out) in [(&collider_links, &mut candidates), (&capsule_links, &mut capsule_candidates)] {
+        for (exact, links, out) in [
+            (true, &collider_links, &mut candidates),
+            (false, &capsule_links, &mut capsule_candidates),
+        ] {
             for a in elements(links, link) {
                 match checked.b {
-                    Body::Link(other) => out.extend(elements(links, other).map(|b| Candidate {
+                    Body::Link(other) => out.extend(elements(links, other).filter(|&b| !exact || kept(a, b)).map(|b| Candidate {
                         pair,
                         a,
                         b: Other::Link(b),
@@ -290,6 +303,8 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
         floor,
         pairs: lists.checked,
         excluded: lists.excluded,
+        excluded_shapes: opts.excluded_shapes.clone(),
+        skipped,
         candidates,
         capsule_candidates,
     })
@@ -304,6 +319,33 @@ impl CollisionWorld {
     /// Every robot pair left out, with the reason.
     pub fn excluded(&self) -> &[ExcludedPair] {
         &self.excluded
+    }
+
+    /// Index of the link named `name`.
+    pub fn link_index(&self, name: &str) -> Option<usize> {
+        self.link_names.iter().position(|n| n == name)
+    }
+
+    /// Collider pairs of checked link pairs that are not measured, with their reasons.
+    pub fn excluded_shapes(&self) -> &[ExcludedShapePair] {
+        &self.excluded_shapes
+    }
+
+    /// Whether collider `a.1` of link `a.0` is measured against collider `b.1` of link `b.0`
+    /// when their link pair is checked (false for an excluded shape pair).
+    pub fn shape_pair_checked(&self, a: (usize, usize), b: (usize, usize)) -> bool {
+        !self.skipped.contains(&(a.min(b), a.max(b)))
+    }
+
+    /// The exact signed distance (m) between collider `a.1` of link `a.0` and collider `b.1` of
+    /// link `b.0`, links placed at `link_in_world`, whether or not the pair is checked; `None`
+    /// for a collider the model does not have.
+    pub fn collider_distance(&self, link_in_world: &[Isometry3<f64>], a: (usize, usize), b: (usize, usize)) -> Option<f64> {
+        let find = |(link, element): (usize, usize)| self.colliders.iter().find(|c| c.link == link && c.element == element);
+        let (ca, cb) = (find(a)?, find(b)?);
+        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
+        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        Some(super::narrow::measure_shapes(&pose_a, &ca.geometry, &pose_b, &cb.geometry, true).distance)
     }
 
     /// Number of links the world was built for (`link_in_world` must have this length).
@@ -344,6 +386,28 @@ impl CollisionWorld {
 }
 
 /// Indices of the elements (colliders or capsules) of `link`, given each element's link.
+/// The excluded shape pairs as `(link, collider)` index pairs, lower first.
+fn skipped_shapes(model: &Model, exclusions: &[ExcludedShapePair]) -> Result<HashSet<((usize, usize), (usize, usize))>, CollideError> {
+    let mut out = HashSet::new();
+    for (index, e) in exclusions.iter().enumerate() {
+        let find = |name: &str, shape: usize| {
+            let link = model.links.iter().position(|l| l.name == name);
+            match link {
+                Some(i) if shape < model.links[i].colliders.len() => Ok((i, shape)),
+                _ => Err(CollideError::UnknownShape {
+                    index,
+                    link: name.into(),
+                    shape,
+                    count: link.map_or(0, |i| model.links[i].colliders.len()),
+                }),
+            }
+        };
+        let (x, y) = (find(&e.a, e.a_shape)?, find(&e.b, e.b_shape)?);
+        out.insert((x.min(y), x.max(y)));
+    }
+    Ok(out)
+}
+
 fn elements(element_links: &[usize], link: usize) -> impl Iterator<Item = usize> + '_ {
     element_links.iter().enumerate().filter(move |(_, &l)| l == link).map(|(k, _)| k)
 }

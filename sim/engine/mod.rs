@@ -11,7 +11,7 @@ mod mujoco_run;
 mod rapier;
 mod run;
 
-pub use confirm::confirm_contacts;
+pub use confirm::{confirm_contacts, measure_reference};
 pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
 pub use gains::{gains, GainOptions};
 pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};

@@ -82,13 +82,28 @@ impl Loaded {
             .unwrap_or_default();
         // Every link pair the collision world does not check is excluded, so MuJoCo does not
         // push apart what our collision model deliberately leaves touching.
+        // A checked link pair with shape pairs left out (pieces that overlap by construction) is
+        // excluded as bodies and its remaining geom pairs collided explicitly.
         let mut excluded_body_pairs = Vec::new();
-        if world.is_some() {
+        let mut explicit_geom_pairs = Vec::new();
+        if let Some(world) = world {
             for a in 0..model.links.len() {
                 for b in a + 1..model.links.len() {
+                    let names = (model.links[a].name.clone(), model.links[b].name.clone());
                     if !checked.contains_key(&(Body::Link(a), Body::Link(b))) {
-                        excluded_body_pairs.push((model.links[a].name.clone(), model.links[b].name.clone()));
+                        excluded_body_pairs.push(names);
+                        continue;
                     }
+                    let shapes = |link: usize| 0..model.links[link].colliders.len();
+                    let all = shapes(a).flat_map(|x| shapes(b).map(move |y| (x, y)));
+                    if all.clone().all(|(x, y)| world.shape_pair_checked((a, x), (b, y))) {
+                        continue;
+                    }
+                    explicit_geom_pairs.extend(
+                        all.filter(|&(x, y)| world.shape_pair_checked((a, x), (b, y)))
+                            .map(|(x, y)| (format!("{}/{x}", names.0), format!("{}/{y}", names.1))),
+                    );
+                    excluded_body_pairs.push(names);
                 }
             }
         }
@@ -112,6 +127,7 @@ impl Loaded {
             world_colliders,
             floor_height: scenario.and_then(|s| s.floor).map(|f| f.height),
             excluded_body_pairs,
+            explicit_geom_pairs,
             gravity_m_s2: opts.gravity_m_s2,
             integrator: Some(INTEGRATOR.into()),
         };

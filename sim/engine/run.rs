@@ -52,6 +52,11 @@ pub struct ContactInterval {
     /// The exact (parry3d-f64) signed distance of the same pair at `q`, when the pipeline
     /// checked it (m): positive means the engine reports a contact exact geometry does not have.
     pub parry_distance_m: Option<f64>,
+    /// The exact signed distance of the same pair along the reference (the planned, certified
+    /// motion) over the contact's interval, its smallest value (m), when the pipeline measured
+    /// it: positive means the reference keeps the pair apart and the engine's own tracking error
+    /// brought them together.
+    pub reference_distance_m: Option<f64>,
 }
 
 /// How well an engine held one goal: measured at the end of the goal's dwell.
@@ -140,6 +145,7 @@ impl ContactRecorder {
                 max_depth_m: depth_m,
                 q: q.to_vec(),
                 parry_distance_m: None,
+                reference_distance_m: None,
             });
             self.seen.push(true);
         }

@@ -54,6 +54,10 @@ pub struct MjcfOptions {
     /// Body pairs (body names) whose contacts MuJoCo ignores, beyond the pairs one joint
     /// connects (always excluded); default none. A pair given twice is written once.
     pub excluded_body_pairs: Vec<(String, String)>,
+    /// Geom pairs (geom names, `link/k`) MuJoCo collides explicitly (`<pair>`), whatever the
+    /// body exclusions: the shape pairs still checked of a link pair whose other shape pairs
+    /// overlap by construction; default none.
+    pub explicit_geom_pairs: Vec<(String, String)>,
     /// Gravity along world -z (m/s^2); default 9.81.
     pub gravity_m_s2: f64,
     /// MuJoCo `integrator` option (`Euler`, `implicitfast`, `implicit`, `RK4`); default `None`:
@@ -71,6 +75,7 @@ impl Default for MjcfOptions {
             world_colliders: Vec::new(),
             floor_height: None,
             excluded_body_pairs: Vec::new(),
+            explicit_geom_pairs: Vec::new(),
             gravity_m_s2: 9.81,
             integrator: None,
         }
@@ -163,8 +168,12 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
             pairs.push((a, b));
         }
     }
-    if !pairs.is_empty() {
+    if !pairs.is_empty() || !opts.explicit_geom_pairs.is_empty() {
         line(&mut out, 1, "<contact>");
+        for (a, b) in &opts.explicit_geom_pairs {
+            let (geom1, geom2) = (escape(a), escape(b));
+            line(&mut out, 2, &format!(r#"<pair geom1="{geom1}" geom2="{geom2}"/>"#));
+        }
         for (a, b) in pairs {
             let (body1, body2) = (escape(a), escape(b));
             line(&mut out, 2, &format!(r#"<exclude body1="{body1}" body2="{body2}"/>"#));

@@ -22,7 +22,7 @@
 //! give the same path on any machine and any number of threads. The budget counts samples.
 
 use super::certify::SegmentChecker;
-use super::planner::{distance, polyline_length, Failure, Path, Planner, Straight};
+use super::planner::{distance, polyline_length, Failure, Path, Planner};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -160,13 +160,27 @@ impl RrtConnect {
 
 impl Planner for RrtConnect {
     fn connect(&mut self, checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>], stream: u64) -> Result<Path, Failure> {
-        let straight = Straight.connect(checker, start, &goals[..self.straight_attempts.min(goals.len())], stream);
-        let first_failure = match straight {
-            Ok(path) => return Ok(path),
-            Err(failure) => failure,
+        let firsts = &goals[..self.straight_attempts.min(goals.len())];
+        // A straight segment that keeps room first; one that grazes only when no detour with
+        // room is found, since an engine's tracking error would turn its graze into a contact.
+        let (tight, first_failure) = match straight_with_room(checker, start, firsts) {
+            Straights::Roomy(path) => return Ok(path),
+            Straights::Tight(path) => (
+                Some(path),
+                Failure {
+                    samples: 0,
+                    stop: None,
+                    gap: None,
+                },
+            ),
+            Straights::None(failure) => (None, failure),
+        };
+        let fallback = |failure: Failure| match &tight {
+            Some(path) => Ok(path.clone()),
+            None => Err(failure),
         };
         if self.budget == 0 || goals.is_empty() {
-            return Err(first_failure);
+            return fallback(first_failure);
         }
         let dof = start.len();
         let bounds = self.bounds(start, goals);
@@ -220,11 +234,51 @@ impl Planner for RrtConnect {
                 samples,
             });
         }
-        Err(closest_attempt(checker, &from_start, goals, self.budget).unwrap_or(Failure {
+        fallback(closest_attempt(checker, &from_start, goals, self.budget).unwrap_or(Failure {
             samples: self.budget,
             ..first_failure
         }))
     }
+}
+
+/// What straight segments to the first goal configurations give.
+enum Straights {
+    /// One keeps [`ROOM_M`] (or its ends' clearance).
+    Roomy(Path),
+    /// None keeps room; this one, the first free, grazes.
+    Tight(Path),
+    /// None is free: where the first one stops.
+    None(Failure),
+}
+
+/// Straight segments to `goals` in order: the first that keeps room, else the first free one.
+fn straight_with_room(checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>]) -> Straights {
+    let mut tight = None;
+    let mut failure = Failure {
+        samples: 0,
+        stop: None,
+        gap: goals.first().map(|g| distance(start, g)),
+    };
+    for (target, goal) in goals.iter().enumerate() {
+        let (roomy, segment) = checker.roomy_free(start, goal, ROOM_M);
+        if target == 0 && !segment.free {
+            failure.stop = segment.touch.clone().or_else(|| segment.closest.clone());
+        }
+        let path = |segment| Path {
+            waypoints: vec![goal.clone()],
+            segments: vec![segment],
+            target,
+            length_before_shortcut: distance(start, goal),
+            samples: 0,
+        };
+        if roomy {
+            return Straights::Roomy(path(segment));
+        }
+        if segment.free && tight.is_none() {
+            tight = Some(path(segment));
+        }
+    }
+    tight.map_or(Straights::None(failure), Straights::Tight)
 }
 
 /// After a failed search: the start-tree node nearest the goal set, and where its straight edge

@@ -48,8 +48,16 @@ pub enum FindingKind {
     /// An engine's dynamic run reports a contact that exact geometry does not have at the
     /// engine's own configuration (an engine's geometric approximation).
     EngineContactNotConfirmed,
+    /// An engine's dynamic run touched something that exact geometry confirms at the engine's
+    /// configuration, while the certified reference keeps the pair apart at the same time: the
+    /// controller's tracking error in that engine, not the design's motion.
+    EngineContactFromTracking,
     /// An engine did not hold a goal within the hold tolerance after the dwell.
     GoalNotHeld,
+    /// An engine did not hold a goal after contacts on the way that are the engine's (exact
+    /// geometry refutes them, or the reference keeps the pair apart): the engine's
+    /// approximation, not the design.
+    GoalNotHeldAfterEngineArtefact,
     /// The two engines disagree on holding a goal.
     EnginesDisagree,
     /// An engine's replay reports a contact on a segment the certified check found free.
@@ -331,27 +339,69 @@ fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
     (contact.start_s.max(0.0) as usize)..=(contact.end_s.max(0.0) as usize)
 }
 
+/// What an engine approximates, for findings that blame it.
+fn approximation(engine: &str) -> &'static str {
+    match engine {
+        "mujoco" => "MuJoCo collides meshes as their convex hulls and cylinders through its general convex solver",
+        "rapier" => "rapier collides in f32, with up to centimetres of phantom depth on cylinders",
+        _ => "the engine's geometric approximation",
+    }
+}
+
+/// How exact geometry judges one engine contact of a dynamic run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ContactClass {
+    /// Exact geometry has the contact at the engine's configuration, and the reference has it too
+    /// (or was not measured): a real contact.
+    Real,
+    /// Exact geometry has it at the engine's configuration, the reference keeps the pair apart.
+    Tracking,
+    /// Exact geometry does not have it at the engine's configuration (or could not measure it).
+    Refuted,
+}
+
+fn classify(contact: &ContactInterval) -> ContactClass {
+    match (contact.parry_distance_m, contact.reference_distance_m) {
+        (Some(exact), _) if exact.is_nan() || exact > 0.0 => ContactClass::Refuted,
+        (None, _) => ContactClass::Refuted,
+        (Some(_), Some(reference)) if reference > 0.0 => ContactClass::Tracking,
+        _ => ContactClass::Real,
+    }
+}
+
 fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRuns, hold: (f64, f64), out: &mut Vec<Finding>) {
     for contact in &runs.dynamic.contacts {
         let exact = contact.parry_distance_m.unwrap_or(f64::NAN);
-        let (kind, severity, verdict) = if exact.is_nan() {
-            (
+        let reference = contact.reference_distance_m.unwrap_or(f64::NAN);
+        let (kind, severity, verdict) = match classify(contact) {
+            ContactClass::Refuted if exact.is_nan() => (
                 FindingKind::EngineContactNotConfirmed,
                 Severity::Warn,
                 "not re-measured in exact geometry (the engine's configuration is unknown)".to_string(),
-            )
-        } else if exact > 0.0 {
-            (
+            ),
+            ContactClass::Refuted => (
                 FindingKind::EngineContactNotConfirmed,
                 Severity::Warn,
-                format!("but {:.2} mm apart in exact geometry at the engine's configuration", exact * 1e3),
-            )
-        } else {
-            (
+                format!(
+                    "but {:.2} mm apart in exact geometry at the engine's configuration ({})",
+                    exact * 1e3,
+                    approximation(name)
+                ),
+            ),
+            ContactClass::Tracking => (
+                FindingKind::EngineContactFromTracking,
+                Severity::Warn,
+                format!(
+                    "exact geometry: {:.3} mm at the engine's configuration, but the certified reference keeps them {:.2} mm apart: {name}'s tracking error, not the planned motion",
+                    exact * 1e3,
+                    reference * 1e3
+                ),
+            ),
+            ContactClass::Real => (
                 FindingKind::EngineContact,
                 Severity::Fail,
                 format!("exact geometry: {:.2} mm", exact * 1e3),
-            )
+            ),
         };
         out.push(finding(
             kind,
@@ -371,25 +421,56 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 ("end_s", contact.end_s),
                 ("depth_m", contact.max_depth_m),
                 ("exact_distance_m", exact),
+                ("reference_distance_m", reference),
             ],
         ));
     }
-    for h in &runs.dynamic.holds {
-        if h.position_error_m > hold.0 || h.orientation_error_rad > hold.1 {
-            out.push(finding(
-                FindingKind::GoalNotHeld,
-                Severity::Fail,
-                Some(h.goal),
-                Some(name),
-                format!(
-                    "{name}: goal {} held {:.2} mm / {:.3} deg from the reference after the dwell",
-                    h.goal,
-                    h.position_error_m * 1e3,
-                    h.orientation_error_rad.to_degrees()
-                ),
-                &[("position_m", h.position_error_m), ("orientation_rad", h.orientation_error_rad)],
-            ));
+    let mut holds: Vec<&crate::engine::GoalHold> = runs.dynamic.holds.iter().collect();
+    holds.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let mut since = f64::NEG_INFINITY;
+    for h in holds {
+        let window = since..=h.time_s;
+        since = h.time_s;
+        if h.position_error_m <= hold.0 && h.orientation_error_rad <= hold.1 {
+            continue;
         }
+        // Contacts between the previous goal's measurement and this one: if every one is the
+        // engine's, so is the miss.
+        let before: Vec<&ContactInterval> = runs
+            .dynamic
+            .contacts
+            .iter()
+            .filter(|c| c.start_s <= *window.end() && c.end_s >= *window.start())
+            .collect();
+        let artefact = !before.is_empty() && before.iter().all(|c| classify(c) != ContactClass::Real);
+        let held = format!(
+            "{name}: goal {} held {:.2} mm / {:.3} deg from the reference after the dwell",
+            h.goal,
+            h.position_error_m * 1e3,
+            h.orientation_error_rad.to_degrees()
+        );
+        let (kind, severity, message) = if artefact {
+            let pairs: Vec<String> = before.iter().map(|c| format!("{} and {}", c.a, c.b)).collect();
+            (
+                FindingKind::GoalNotHeldAfterEngineArtefact,
+                Severity::Warn,
+                format!(
+                    "{held}, after contacts that are {name}'s, not the design's ({}): {}",
+                    pairs.join(", "),
+                    approximation(name)
+                ),
+            )
+        } else {
+            (FindingKind::GoalNotHeld, Severity::Fail, held)
+        };
+        out.push(finding(
+            kind,
+            severity,
+            Some(h.goal),
+            Some(name),
+            message,
+            &[("position_m", h.position_error_m), ("orientation_rad", h.orientation_error_rad)],
+        ));
     }
     for (joint, (peak, model_joint)) in runs.dynamic.peak_effort.iter().zip(&validation.model.joints).enumerate() {
         if let Some(rated) = model_joint.max_effort {
@@ -489,8 +570,11 @@ pub(super) fn verdict(findings: &[Finding], settings: &super::Settings, budget: 
             other => {
                 let what = match other {
                     FindingKind::HomeInCollision => "home configuration in collision",
+                    FindingKind::EngineContact if count == 1 => "contact in the engines' dynamic runs",
                     FindingKind::EngineContact => "contacts in the engines' dynamic runs",
+                    FindingKind::GoalNotHeld if count == 1 => "goal not held by an engine",
                     FindingKind::GoalNotHeld => "goals not held by an engine",
+                    FindingKind::StaticOverload if count == 1 => "joint over its rated torque under gravity",
                     FindingKind::StaticOverload => "joints over their rated torque under gravity",
                     _ => "other failures",
                 };

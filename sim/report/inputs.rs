@@ -22,6 +22,8 @@ pub struct Validation {
     pub pairs: Vec<crate::collide::CheckedPair>,
     /// Excluded pairs with their reasons.
     pub excluded: Vec<crate::collide::ExcludedPair>,
+    /// Shape pairs of checked link pairs that are not measured (with reasons).
+    pub excluded_shapes: Vec<crate::collide::ExcludedShapePair>,
     /// IK solutions per goal.
     pub solutions: Vec<crate::ik::GoalSolutions>,
     /// Per goal, why no configuration can reach it, where that is proven (see

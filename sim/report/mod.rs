@@ -67,6 +67,9 @@ pub struct Criteria {
     pub geometry: &'static str,
     /// Link pairs not checked, with the reason for each.
     pub excluded_pairs: Vec<ExcludedPair>,
+    /// Shape pairs not measured within otherwise checked link pairs (pieces that overlap by
+    /// construction), with the reason for each: the rest of the two links is checked.
+    pub excluded_shapes: Vec<crate::collide::ExcludedShapePair>,
     /// An engine holds a goal when the tool is within this of the reference at the end of the
     /// dwell (m).
     pub hold_position_m: f64,
@@ -205,8 +208,12 @@ pub struct SegmentReport {
     pub certified_clearance_m: Option<f64>,
     /// Closest approach measured, with the pair.
     pub closest: Option<SegmentPoint>,
-    /// Where the closest attempt of a goal without a path stops: pair and configuration.
+    /// Where the planner's closest attempt of a goal without a path stops: pair and
+    /// configuration.
     pub stop: Option<SegmentPoint>,
+    /// Where the straight segment to the nearest solution (the paper heuristic's motion, the one
+    /// the engines replay) of a goal without a path stops: pair and configuration.
+    pub attempt_stop: Option<SegmentPoint>,
     /// Joint-space distance the search for a goal without a path stayed from its goal set.
     pub gap: Option<f64>,
     /// Collision queries of the continuous check.
@@ -261,6 +268,7 @@ pub fn build(validation: &Validation) -> Report {
         collision_margin_m: settings.margin_m,
         geometry: "exact (parry3d-f64: the model's spheres, boxes, cylinders, capsules and triangle meshes as they are)",
         excluded_pairs: validation.excluded.clone(),
+        excluded_shapes: validation.excluded_shapes.clone(),
         hold_position_m: hold.0,
         hold_orientation_deg: hold.1.to_degrees(),
         engine_contact_depth_m: settings.engine_contact_depth_m,
@@ -458,6 +466,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                         .filter_map(|s| s.closest.clone())
                         .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m)),
                     stop: None,
+                    attempt_stop: None,
                     gap: None,
                     queries: segments.iter().map(|s| s.queries).sum(),
                 }
@@ -473,6 +482,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                 certified_clearance_m: None,
                 closest: None,
                 stop: None,
+                attempt_stop: None,
                 gap: None,
                 queries: 0,
             },
@@ -494,6 +504,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                 certified_clearance_m: attempt.as_ref().map(|a| a.segment.certified_clearance_m),
                 closest: attempt.as_ref().and_then(|a| a.segment.closest.clone()),
                 stop: stop.clone(),
+                attempt_stop: attempt.as_ref().and_then(|a| a.segment.touch.clone()),
                 gap: *gap,
                 queries: attempt.as_ref().map_or(0, |a| a.segment.queries),
             },

@@ -43,11 +43,15 @@ pub fn render(report: &Report) -> String {
     }
     let _ = writeln!(
         out,
-        "criteria: reached < {} mm and < {} deg, collision-free with margin {} mm in exact geometry ({} pairs excluded), held within {} mm / {} deg, engines: {}",
+        "criteria: reached < {} mm and < {} deg, collision-free with margin {} mm in exact geometry ({} pairs excluded{}), held within {} mm / {} deg, engines: {}",
         c.position_m * 1e3,
         c.orientation_deg,
         c.collision_margin_m * 1e3,
         c.excluded_pairs.len(),
+        match c.excluded_shapes.len() {
+            0 => String::new(),
+            n => format!(", and {n} shape {} overlapping by construction", if n == 1 { "pair" } else { "pairs" }),
+        },
         c.hold_position_m * 1e3,
         c.hold_orientation_deg,
         if c.engines.is_empty() { "none".to_string() } else { c.engines.join(", ") }

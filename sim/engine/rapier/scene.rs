@@ -33,13 +33,29 @@ pub(super) struct Scene {
     pub(super) filter: PairFilter,
 }
 
-/// Collider `user_data` of a body: the kind in the high 64 bits, the index in the low ones.
+/// Collider `user_data` of a body: the kind in the high 64 bits, the index in the low 32 (a
+/// link collider's index in `Link::colliders` in bits 32 to 63, see [`shape_code`]).
 fn body_code(body: Body) -> u128 {
     match body {
         Body::Link(i) => i as u128,
         Body::Obstacle(k) => (1u128 << 64) | k as u128,
         Body::Floor => 2u128 << 64,
     }
+}
+
+/// Collider `user_data` of collider `element` of link `link`.
+fn shape_code(link: usize, element: usize) -> u128 {
+    ((element as u128) << 32) | link as u128
+}
+
+/// The body code of a collider's `user_data` (its collider index dropped).
+fn body_of(code: u128) -> u128 {
+    code & !(0xFFFF_FFFFu128 << 32)
+}
+
+/// `(link, collider)` of a link collider's `user_data`; `None` for obstacles and the floor.
+fn shape_of(code: u128) -> Option<(usize, usize)> {
+    (code >> 64 == 0).then_some(((code & 0xFFFF_FFFF) as usize, ((code >> 32) & 0xFFFF_FFFF) as usize))
 }
 
 fn ordered(a: u128, b: u128) -> (u128, u128) {
@@ -55,6 +71,8 @@ fn ordered(a: u128, b: u128) -> (u128, u128) {
 /// mounted base on the floor stay out exactly as in the parry check.
 pub(super) struct PairFilter {
     names: PairNames,
+    /// Link collider pairs left out of checked link pairs, as `user_data` codes, ordered.
+    skipped: std::collections::HashSet<(u128, u128)>,
     flags: rp::SolverFlags,
 }
 
@@ -70,12 +88,30 @@ impl PairFilter {
                 )
             })
             .collect();
-        Self { names, flags }
+        let skipped = world
+            .excluded_shapes()
+            .iter()
+            .filter_map(|e| {
+                let link = |name: &str| world.link_index(name);
+                Some(ordered(shape_code(link(&e.a)?, e.a_shape), shape_code(link(&e.b)?, e.b_shape)))
+            })
+            .collect();
+        Self { names, skipped, flags }
     }
 
     /// Names of the checked pair of two colliders' codes, link first.
     pub(super) fn names(&self, a: u128, b: u128) -> Option<&(String, String)> {
-        self.names.get(&ordered(a, b))
+        if !self.lets_through(a, b) {
+            return None;
+        }
+        self.names.get(&ordered(body_of(a), body_of(b)))
+    }
+
+    /// Whether two colliders' contacts count: their bodies' pair is checked and the shape pair
+    /// is not left out.
+    fn lets_through(&self, a: u128, b: u128) -> bool {
+        self.names.contains_key(&ordered(body_of(a), body_of(b)))
+            && (shape_of(a).is_none() || shape_of(b).is_none() || !self.skipped.contains(&ordered(a, b)))
     }
 }
 
@@ -83,7 +119,7 @@ impl rp::PhysicsHooks for PairFilter {
     fn filter_contact_pair(&self, context: &rp::PairFilterContext) -> Option<rp::SolverFlags> {
         let a = context.colliders.get(context.collider1)?.user_data;
         let b = context.colliders.get(context.collider2)?.user_data;
-        self.names.contains_key(&ordered(a, b)).then_some(self.flags)
+        self.lets_through(a, b).then_some(self.flags)
     }
 }
 
@@ -174,9 +210,9 @@ pub(super) fn build(
     model.forward(q, &mut kinematics);
     // Every robot pair with a body that is not dynamic (the base, kinematic links, obstacles)
     // is off by default; the filter decides instead.
-    let robot_collider = |builder: rp::ColliderBuilder, link: usize| {
+    let robot_collider = |builder: rp::ColliderBuilder, link: usize, element: usize| {
         builder
-            .user_data(body_code(Body::Link(link)))
+            .user_data(shape_code(link, element))
             .active_hooks(rp::ActiveHooks::FILTER_CONTACT_PAIRS)
             .active_collision_types(rp::ActiveCollisionTypes::all())
     };
@@ -207,7 +243,7 @@ pub(super) fn build(
         for (k, part) in link.colliders.iter().enumerate() {
             let what = format!("link `{}` collider {k} ({})", link.name, part.label);
             let builder = collider(&part.shape, &part.link_from_shape, &what, model)?;
-            world.insert_collider(robot_collider(builder, index), Some(handle));
+            world.insert_collider(robot_collider(builder, index, k), Some(handle));
         }
         links.push(handle);
     }
