@@ -59,6 +59,7 @@ fn scenarios(c: &mut Criterion) {
         let opts = proving_ground::collide::CollideOptions {
             excluded_pairs: structural.pairs,
             excluded_shapes: structural.shapes,
+            structural_allowances: structural.allowances,
         };
         let world = proving_ground::collide::world(&placed, scenario, &opts).expect("world builds");
         group.bench_function(format!("{}/{}", model.name, scenario.name), |b| {

@@ -133,6 +133,7 @@ fn solve_all(model: &Model, tasks: &[Scenario]) -> Result<Vec<Vec<GoalSolutions>
             let opts = CollideOptions {
                 excluded_pairs: structural.pairs.clone(),
                 excluded_shapes: structural.shapes.clone(),
+                structural_allowances: structural.allowances.clone(),
             };
             let world = collide::world(&placed, task, &opts)?;
             Ok(solve_goals(&placed, task, Some(&world), &IkOptions::default()))

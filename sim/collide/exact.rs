@@ -68,7 +68,7 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
             Other::Obstacle(k) => aabb_bound(a, &world.obstacles[k].aabb),
             Other::Floor => a.mins.z - world.floor.expect("floor pairs exist only with a floor"),
         };
-        scratch.bounds.push(bound - BOUND_ROUNDING_M);
+        scratch.bounds.push(bound + candidate.allowance - BOUND_ROUNDING_M);
         scratch.stages.push(Stage::Boxed);
     }
 
@@ -187,6 +187,11 @@ fn measure(
             });
         }
     }
+    // A shape pair of two links that overlap by construction counts only beyond that overlap.
+    let measured = Measured {
+        distance: measured.distance + candidate.allowance,
+        ..measured
+    };
     record(scratch, index, candidate.pair, measured, part_a, part_b);
     (measured.distance, with_hulls)
 }
@@ -203,7 +208,7 @@ fn tighten(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch) -
         Other::Floor => None,
     };
     if let Some(([other_start, other_end], other_radius)) = other {
-        let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance;
+        let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance + candidate.allowance;
         let bound = &mut scratch.bounds[index];
         *bound = bound.max(capsules - BOUND_ROUNDING_M);
     }
@@ -230,7 +235,7 @@ fn hull_bound(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch
     let gap = measure_convex(&scratch.poses[candidate.a], &**hull_a, pose_b, &**hull_b, false).distance - HULL_SLACK_M;
     let bound = &mut scratch.bounds[index];
     if gap > 0.0 {
-        *bound = bound.max(gap);
+        *bound = bound.max(gap + candidate.allowance);
     }
     scratch.stages[index] = Stage::Hulled;
     *bound

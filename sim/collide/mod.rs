@@ -100,7 +100,7 @@ mod world;
 pub use approx::approximate_distances;
 pub use compare::compare;
 pub use exact::distances;
-pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair};
+pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 pub use structural::{structural_overlaps, StructuralExclusions, StructuralOptions, TOUCHING_M};
 pub use world::{world, CollisionWorld};
 
@@ -116,6 +116,9 @@ pub struct CollideOptions {
     /// Collider pairs of otherwise checked link pairs not to measure, each with its reason;
     /// default none.
     pub excluded_shapes: Vec<ExcludedShapePair>,
+    /// Link pairs whose measured shape pairs count only beyond a depth they overlap by
+    /// construction (m); default none.
+    pub structural_allowances: Vec<StructuralAllowance>,
 }
 
 /// Options for one distance query.

@@ -65,6 +65,22 @@ pub struct ExcludedShapePair {
     pub reason: String,
 }
 
+/// Two links that overlap by construction (some of their shape pairs are in contact at every
+/// configuration), whose other shape pairs are checked but count as in contact only deeper than
+/// that overlap: the depth the slabs around two joints 0.1 m apart share with 0.12 m tubes is no
+/// fold, anything deeper is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StructuralAllowance {
+    /// Name of the first link.
+    pub a: String,
+    /// Name of the second link.
+    pub b: String,
+    /// The deepest overlap of their always-touching shape pairs over the samples (m).
+    pub depth_m: f64,
+    /// Why.
+    pub reason: String,
+}
+
 /// Both lists of a world.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PairLists {

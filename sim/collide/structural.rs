@@ -7,13 +7,19 @@
 //! the "always in collision" category of a MoveIt collision matrix. Pairs that merely touch at the
 //! home configuration are not excluded: one free sample keeps a pair checked.
 
-use super::{distances, world, Body, CollideError, CollideOptions, Distances, ExcludedPair, ExcludedShapePair, QueryOptions};
+use super::{
+    distances, world, Body, CollideError, CollideOptions, Distances, ExcludedPair, ExcludedShapePair, QueryOptions, StructuralAllowance,
+};
 use crate::model::Model;
 use crate::scenario::Scenario;
 use rand::SeedableRng;
 
 /// Signed distance up to which a pair counts as in contact while sampling (m).
 pub const TOUCHING_M: f64 = 1e-9;
+
+/// Added to the deepest overlap sampled to make a structural allowance (m): sampling finds the
+/// deepest overlap of two slabs only approximately, and exactly that depth is construction too.
+pub(super) const DEPTH_SLACK_M: f64 = 1e-3;
 
 /// Sampling settings for [`structural_overlaps`].
 #[derive(Debug, Clone)]
@@ -39,6 +45,9 @@ pub struct StructuralExclusions {
     /// Shape pairs left out of otherwise checked link pairs: the pieces in contact at every
     /// sample (a joint housing inside the next link's tube), the rest of the two links checked.
     pub shapes: Vec<ExcludedShapePair>,
+    /// For those link pairs, the depth their other shape pairs must exceed to count: the
+    /// deepest overlap of the excluded shape pairs.
+    pub allowances: Vec<StructuralAllowance>,
 }
 
 /// Self pairs of `model` in contact at every sampled configuration: for each, the shape pairs
@@ -95,20 +104,28 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
         let shape_pairs: Vec<(usize, usize)> = (0..model.links[i].colliders.len())
             .flat_map(|a| (0..model.links[j].colliders.len()).map(move |b| (a, b)))
             .collect();
-        let touching = |placement: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize)| {
-            world.collider_distance(placement, (i, a), (j, b)).is_some_and(|d| d <= TOUCHING_M)
+        let distance = |placement: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize)| {
+            world.collider_distance(placement, (i, a), (j, b)).unwrap_or(f64::INFINITY)
         };
         let overlapping: Vec<(usize, usize)> = shape_pairs
             .iter()
             .copied()
-            .filter(|&p| placements.iter().all(|placement| touching(placement, p)))
+            .filter(|&p| placements.iter().all(|placement| distance(placement, p) <= TOUCHING_M))
             .collect();
+        // How deep the two links overlap by construction: the rest counts only beyond it, and
+        // beyond the slack 256 samples may fall short of the deepest configuration by.
+        let depth = DEPTH_SLACK_M
+            + overlapping
+                .iter()
+                .flat_map(|&p| placements.iter().map(move |placement| (p, placement)))
+                .map(|(p, placement)| -distance(placement, p))
+                .fold(0.0_f64, f64::max);
         // Without the overlapping pieces, is the rest of the two links free at some sample?
         let rest_free_somewhere = placements.iter().any(|placement| {
             shape_pairs
                 .iter()
                 .filter(|p| !overlapping.contains(p))
-                .all(|&p| !touching(placement, p))
+                .all(|&p| distance(placement, p) + depth > TOUCHING_M)
         });
         let some_rest = overlapping.len() < shape_pairs.len();
         if overlapping.is_empty() || !some_rest || !rest_free_somewhere {
@@ -119,6 +136,15 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
             ));
             continue;
         }
+        exclusions.allowances.push(StructuralAllowance {
+            a: pair.a_name.clone(),
+            b: pair.b_name.clone(),
+            depth_m: depth,
+            reason: format!(
+                "{sampled}, some of their shapes overlap by up to {:.1} mm by construction: the other shape pairs are checked and count as in contact only deeper than that",
+                depth * 1e3
+            ),
+        });
         for (a, b) in overlapping {
             exclusions.shapes.push(ExcludedShapePair {
                 a: pair.a_name.clone(),

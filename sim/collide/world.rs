@@ -1,7 +1,7 @@
 //! The collision world: parry shapes for every link collider, capsule segment, obstacle and the
 //! floor, and the pairs to check, built once per (model, scenario).
 
-use super::pairs::{pair_lists, CheckedPair, ExcludedPair, ExcludedShapePair, FLOOR_NAME};
+use super::pairs::{pair_lists, CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance, FLOOR_NAME};
 use super::{Body, CollideError, CollideOptions};
 use crate::frames::{parry_pose, parry_vector, vector_from_parry};
 use crate::model::{Model, Shape, TriMesh, PAPER_CAPSULE_RADIUS_M};
@@ -28,13 +28,18 @@ pub struct CollisionWorld {
     pub(super) excluded: Vec<ExcludedPair>,
     /// Collider pairs of checked link pairs left out, with their reasons.
     pub(super) excluded_shapes: Vec<ExcludedShapePair>,
+    /// Link pairs whose remaining shape pairs count only beyond their overlap by construction.
+    pub(super) structural_allowances: Vec<StructuralAllowance>,
     /// The same, as `(link, collider)` pairs, lower link first.
-    pub(super) skipped: HashSet<((usize, usize), (usize, usize))>,
+    pub(super) skipped: HashSet<ShapePair>,
     /// The collider pairs of the exact model, pair by pair.
     pub(super) candidates: Vec<Candidate>,
     /// The capsule pairs of the approximate model, pair by pair.
     pub(super) capsule_candidates: Vec<Candidate>,
 }
+
+/// Two colliders as `(link, collider index)`, lower first.
+type ShapePair = ((usize, usize), (usize, usize));
 
 /// A parry shape and what the queries need to know about it.
 pub(super) struct Geometry {
@@ -191,6 +196,9 @@ pub(super) enum Other {
 pub(super) struct Candidate {
     /// Index in [`CollisionWorld::pairs`].
     pub(super) pair: usize,
+    /// Added to the measured distance (m): the depth two links overlap by construction, for the
+    /// shape pairs of such links still checked (0 otherwise).
+    pub(super) allowance: f64,
     /// Collider (or capsule) index on body `a`.
     pub(super) a: usize,
     pub(super) b: Other,
@@ -261,6 +269,8 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
     // Every element pair of every checked pair, so a query only walks flat lists.
     let collider_links: Vec<usize> = colliders.iter().map(|c| c.link).collect();
     let collider_ids: Vec<(usize, usize)> = colliders.iter().map(|c| (c.link, c.element)).collect();
+    let allowances = link_allowances(model, &opts.structural_allowances)?;
+    let allowance = |i: usize, j: usize| allowances.get(&(i.min(j), i.max(j))).copied().unwrap_or(0.0);
     let kept = |a: usize, b: usize| {
         let (x, y) = (collider_ids[a], collider_ids[b]);
         !skipped.contains(&(x.min(y), x.max(y)))
@@ -278,17 +288,27 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
         ] {
             for a in elements(links, link) {
                 match checked.b {
+                    // The paper's capsules of two links that overlap by construction overlap
+                    // everywhere: its model, like its authors', leaves such pairs out.
+                    Body::Link(other) if !exact && allowance(link, other) > 0.0 => {}
                     Body::Link(other) => out.extend(elements(links, other).filter(|&b| !exact || kept(a, b)).map(|b| Candidate {
                         pair,
+                        allowance: if exact { allowance(link, other) } else { 0.0 },
                         a,
                         b: Other::Link(b),
                     })),
                     Body::Obstacle(k) => out.push(Candidate {
                         pair,
+                        allowance: 0.0,
                         a,
                         b: Other::Obstacle(k),
                     }),
-                    Body::Floor => out.push(Candidate { pair, a, b: Other::Floor }),
+                    Body::Floor => out.push(Candidate {
+                        pair,
+                        allowance: 0.0,
+                        a,
+                        b: Other::Floor,
+                    }),
                 }
             }
         }
@@ -304,6 +324,7 @@ pub fn world(model: &Model, scenario: &Scenario, opts: &CollideOptions) -> Resul
         pairs: lists.checked,
         excluded: lists.excluded,
         excluded_shapes: opts.excluded_shapes.clone(),
+        structural_allowances: opts.structural_allowances.clone(),
         skipped,
         candidates,
         capsule_candidates,
@@ -329,6 +350,23 @@ impl CollisionWorld {
     /// Collider pairs of checked link pairs that are not measured, with their reasons.
     pub fn excluded_shapes(&self) -> &[ExcludedShapePair] {
         &self.excluded_shapes
+    }
+
+    /// Link pairs whose other shape pairs count only beyond the depth they overlap by
+    /// construction.
+    pub fn structural_allowances(&self) -> &[StructuralAllowance] {
+        &self.structural_allowances
+    }
+
+    /// Whether the physics engines collide this checked pair: every checked pair but two links
+    /// with a structural allowance. The engines cannot count contacts only beyond a depth, and
+    /// within it they would push apart what overlaps by construction; a fold deeper than the
+    /// allowance is the certified check's to find.
+    pub fn engines_collide(&self, pair: &CheckedPair) -> bool {
+        !self
+            .structural_allowances
+            .iter()
+            .any(|s| (s.a == pair.a_name && s.b == pair.b_name) || (s.a == pair.b_name && s.b == pair.a_name))
     }
 
     /// Whether collider `a.1` of link `a.0` is measured against collider `b.1` of link `b.0`
@@ -386,8 +424,36 @@ impl CollisionWorld {
 }
 
 /// Indices of the elements (colliders or capsules) of `link`, given each element's link.
+/// The allowances by link index pair, lower first.
+fn link_allowances(model: &Model, allowances: &[StructuralAllowance]) -> Result<HashMap<(usize, usize), f64>, CollideError> {
+    let mut out = HashMap::new();
+    for (index, a) in allowances.iter().enumerate() {
+        let find = |name: &str| {
+            model
+                .links
+                .iter()
+                .position(|l| l.name == name)
+                .ok_or_else(|| CollideError::UnknownShape {
+                    index,
+                    link: name.into(),
+                    shape: 0,
+                    count: 0,
+                })
+        };
+        let (i, j) = (find(&a.a)?, find(&a.b)?);
+        if !(a.depth_m.is_finite() && a.depth_m >= 0.0) {
+            return Err(CollideError::InvalidShape {
+                owner: format!("structural allowance of links `{}` and `{}`", a.a, a.b),
+                message: format!("depth {} m must be finite and at least 0", a.depth_m),
+            });
+        }
+        out.insert((i.min(j), i.max(j)), a.depth_m);
+    }
+    Ok(out)
+}
+
 /// The excluded shape pairs as `(link, collider)` index pairs, lower first.
-fn skipped_shapes(model: &Model, exclusions: &[ExcludedShapePair]) -> Result<HashSet<((usize, usize), (usize, usize))>, CollideError> {
+fn skipped_shapes(model: &Model, exclusions: &[ExcludedShapePair]) -> Result<HashSet<ShapePair>, CollideError> {
     let mut out = HashSet::new();
     for (index, e) in exclusions.iter().enumerate() {
         let find = |name: &str, shape: usize| {

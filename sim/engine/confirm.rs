@@ -37,7 +37,7 @@ const REFERENCE_SAMPLES: usize = 16;
 
 /// Fills [`ContactInterval::reference_distance_m`] of each dynamic-run contact: the smallest exact
 /// distance of its pair at the reference configurations over its interval (sampled every 5 ms,
-/// at least [`REFERENCE_SAMPLES`] times). A contact whose pair does not fit the world is left
+/// at least 16 times). A contact whose pair does not fit the world is left
 /// unmeasured.
 pub fn measure_reference(model: &Model, world: &CollisionWorld, timed: &TimedPath, contacts: &mut [ContactInterval]) {
     let mut ws = model.workspace();

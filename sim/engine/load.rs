@@ -1,7 +1,8 @@
 //! The static load check: the gravity torque every joint must hold along a trajectory, from
 //! MuJoCo and from our own statics ([`Model::gravity_torques`]), against each joint's rating.
 
-use super::mujoco_run::{check_lengths, Loaded};
+use super::inputs::check_lengths;
+use super::mujoco_run::Loaded;
 use super::{EngineError, RunOptions};
 use crate::model::Model;
 use serde::Serialize;

@@ -5,6 +5,7 @@
 mod confirm;
 mod crosscheck;
 mod gains;
+mod inputs;
 mod load;
 mod mujoco;
 mod mujoco_run;
@@ -12,7 +13,7 @@ mod rapier;
 mod run;
 
 pub use confirm::{confirm_contacts, measure_reference};
-pub use crosscheck::{compare_kinematics, KinematicsAgreement, ToolElement};
+pub use crosscheck::{check_kinematics, compare_kinematics, KinematicsAgreement, KinematicsCheck, ToolElement, KINEMATICS_AGREEMENT};
 pub use gains::{gains, GainOptions};
 pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
@@ -79,6 +80,34 @@ pub enum EngineError {
         found: usize,
         /// Joints of the robot.
         expected: usize,
+    },
+    /// The model is not one chain of links joined by its joints.
+    #[error("robot `{robot}`: {links} links for {joints} joints, expected one more link than joints")]
+    Chain {
+        /// Robot name.
+        robot: String,
+        /// Links of the model.
+        links: usize,
+        /// Joints of the model.
+        joints: usize,
+    },
+    /// The controller gains do not have one value per joint.
+    #[error("robot `{robot}`: gains for {stiffness} and {damping} joints (stiffness, damping), the model has {expected}")]
+    GainsLength {
+        /// Robot name.
+        robot: String,
+        /// Stiffness values given.
+        stiffness: usize,
+        /// Damping values given.
+        damping: usize,
+        /// Joints of the model.
+        expected: usize,
+    },
+    /// A dynamic run was given a path without a segment.
+    #[error("robot `{robot}`: the path to follow has no segment")]
+    EmptyPath {
+        /// Robot name.
+        robot: String,
     },
     /// A file could not be read.
     #[error("cannot read {path}: {source}")]

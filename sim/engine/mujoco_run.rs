@@ -76,6 +76,7 @@ impl Loaded {
             .map(|w| {
                 w.pairs()
                     .iter()
+                    .filter(|p| w.engines_collide(p))
                     .map(|p| (order(p.a, p.b), (p.a_name.clone(), p.b_name.clone())))
                     .collect()
             })
@@ -272,29 +273,8 @@ pub fn run_mujoco(
     gains: &Gains,
     opts: &RunOptions,
 ) -> Result<EngineRun, EngineError> {
+    super::inputs::check_run(model, path, gains, opts)?;
     let dof = model.dof();
-    if !(opts.timestep_s.is_finite() && opts.timestep_s > 0.0) {
-        return Err(EngineError::InvalidTimestep {
-            timestep_s: opts.timestep_s,
-        });
-    }
-    for (index, segment) in path.segments.iter().enumerate() {
-        let found = if segment.from.len() != dof {
-            segment.from.len()
-        } else {
-            segment.to.len()
-        };
-        if found != dof {
-            let (context, robot, expected) = ("path segment", model.name.clone(), dof);
-            return Err(EngineError::ConfigurationLength {
-                robot,
-                context,
-                index,
-                found,
-                expected,
-            });
-        }
-    }
     let loaded = Loaded::new(model, Some(scenario), Some(world), Some(gains), opts)?;
     let mut data = loaded.model.make_data();
     let h = opts.timestep_s;
@@ -379,7 +359,7 @@ pub fn replay_mujoco(
     samples: &[(f64, Vec<f64>)],
     opts: &RunOptions,
 ) -> Result<EngineRun, EngineError> {
-    check_lengths(model, "sample", samples.iter().map(|(_, q)| q.len()))?;
+    super::inputs::check_replay(model, samples, opts)?;
     let loaded = Loaded::new(model, Some(scenario), Some(world), None, opts)?;
     let mut data = loaded.model.make_data();
     let mut recorder = ContactRecorder::new();
@@ -404,20 +384,4 @@ pub fn replay_mujoco(
         contacts: recorder.finish(),
         peak_effort: vec![0.0; model.dof()],
     })
-}
-
-pub(super) fn check_lengths(model: &Model, context: &'static str, lengths: impl Iterator<Item = usize>) -> Result<(), EngineError> {
-    for (index, found) in lengths.enumerate() {
-        if found != model.dof() {
-            let (robot, expected) = (model.name.clone(), model.dof());
-            return Err(EngineError::ConfigurationLength {
-                robot,
-                context,
-                index,
-                found,
-                expected,
-            });
-        }
-    }
-    Ok(())
 }

@@ -141,17 +141,22 @@ fn reach(checker: &mut SegmentChecker<'_>, tree: &mut Tree, near: usize, from: &
 }
 
 impl RrtConnect {
-    /// Sampling bounds: the limits, or a turn around the start and the goals.
+    /// Sampling bounds per joint: a turn either side of the start and the first goal
+    /// configurations (the nearest equivalents of the goal's solutions), within the limits. A
+    /// joint that turns several times over would otherwise spread the samples over copies of
+    /// the same configurations: every configuration has an equivalent in this window.
     fn bounds(&self, start: &[f64], goals: &[Vec<f64>]) -> Vec<[f64; 2]> {
+        let firsts = &goals[..self.straight_attempts.clamp(1, goals.len().max(1)).min(goals.len())];
         self.limits
             .iter()
             .enumerate()
-            .map(|(j, limits)| match limits {
-                Some([lo, hi]) if hi >= lo => [*lo, *hi],
-                _ => {
-                    let values = goals.iter().map(|g| g[j]).chain([start[j]]);
-                    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
-                    [lo - std::f64::consts::PI, hi + std::f64::consts::PI]
+            .map(|(j, limits)| {
+                let values = firsts.iter().map(|g| g[j]).chain([start[j]]);
+                let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+                let window = [lo - std::f64::consts::PI, hi + std::f64::consts::PI];
+                match limits {
+                    Some([lower, upper]) if upper >= lower => [window[0].max(*lower), window[1].min(*upper)],
+                    _ => window,
                 }
             })
             .collect()

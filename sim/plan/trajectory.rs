@@ -292,12 +292,29 @@ fn nearest_free(checker: &mut SegmentChecker, model: &Model, home: &[f64], thres
     })
 }
 
+/// The first goal's first IK solution that is collision-free with the certified check's
+/// threshold, as a configuration to start a tour from.
+fn first_free_solution(
+    checker: &mut SegmentChecker,
+    model: &Model,
+    solutions: &[GoalSolutions],
+    threshold: f64,
+) -> Option<(usize, Vec<f64>, SegmentPoint)> {
+    solutions.iter().enumerate().find_map(|(goal, found)| {
+        found.solutions.iter().filter(|s| s.reached).find_map(|s| {
+            let q = nearest_equivalent(model, &s.q, &s.q);
+            let clearance = checker.clearance(&q)?;
+            (clearance.distance_m > threshold + super::certify::TOUCH_TOLERANCE_M).then_some((goal, q, clearance))
+        })
+    })
+}
+
 /// Most whole-turn equivalents of one solution put in a goal set (the nearest the start kept).
 const MAX_EQUIVALENTS: usize = 64;
 
 /// `q` and its whole-turn equivalents: each revolute angle moved by whole turns within its
 /// limits (a joint without limits by the one shift nearest `near`), the nearest `near` first, at
-/// most [`MAX_EQUIVALENTS`].
+/// most 64.
 pub fn whole_turn_equivalents(model: &Model, q: &[f64], near: &[f64]) -> Vec<Vec<f64>> {
     let nearest = nearest_equivalent(model, q, near);
     let options: Vec<Vec<f64>> = model
@@ -368,17 +385,29 @@ pub fn plan(
             .as_ref()
             .is_some_and(|c| c.distance_m <= threshold + super::certify::TOUCH_TOLERANCE_M)
     {
+        let colliding = home_clearance
+            .as_ref()
+            .map(|c| format!("{} and {} at {:.1} mm", c.a, c.b, c.distance_m * 1e3))
+            .unwrap_or_default();
+        let earlier = home_replaced.take().map(|reason| format!("{reason}; ")).unwrap_or_default();
+        let default = format!("{earlier}the default home {home:?} is in collision ({colliding})");
         if let Some((free, clearance)) = nearest_free(&mut checker, model, &home, threshold, opts.ik.seed) {
-            let colliding = home_clearance
-                .as_ref()
-                .map(|c| format!("{} and {} at {:.1} mm", c.a, c.b, c.distance_m * 1e3));
-            let earlier = home_replaced.take().map(|reason| format!("{reason}; ")).unwrap_or_default();
             home_replaced = Some(format!(
-                "{earlier}the default home {home:?} is in collision ({}); started from the nearest collision-free of {HOME_SAMPLES} seeded configurations",
-                colliding.unwrap_or_default()
+                "{default}; started from the nearest collision-free of {HOME_SAMPLES} seeded configurations"
             ));
             home = free;
             home_clearance = Some(clearance);
+        } else if let Some((goal, q, clearance)) = first_free_solution(&mut checker, model, solutions, threshold) {
+            // The home is ours to choose, not the design's: a tour that starts in collision
+            // would fail every goal for the harness's choice. Start where the first goal with a
+            // collision-free solution is reached instead.
+            home_replaced = Some(format!(
+                "{default}, and none of {HOME_SAMPLES} seeded configurations is free; started from goal {goal}'s first collision-free IK solution"
+            ));
+            home = q;
+            home_clearance = Some(clearance);
+        } else {
+            home_replaced = Some(default);
         }
     }
     let mut ik = Ik::with_collisions(model, world, opts.ik.clone());

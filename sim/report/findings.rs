@@ -481,9 +481,14 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                     None,
                     Some(name),
                     format!(
-                        "{name}: joint {} ({}) peaks at {peak:.1} N m in motion, rated {rated:.1} N m",
+                        "{name}: joint {} ({}) peaks at {peak:.1} N m in motion, rated {rated:.1} N m{}",
                         joint + 1,
-                        model_joint.name
+                        model_joint.name,
+                        if name == "rapier" {
+                            " (an estimate: rapier does not report multibody motor impulses, so this is the control law evaluated after each step, stiff gains and all)"
+                        } else {
+                            " (MuJoCo's actuator force; the controller's stiffness in motion, not the static load)"
+                        }
                     ),
                     &[("peak", *peak), ("rated", rated)],
                 ));

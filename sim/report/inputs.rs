@@ -22,8 +22,17 @@ pub struct Validation {
     pub pairs: Vec<crate::collide::CheckedPair>,
     /// Excluded pairs with their reasons.
     pub excluded: Vec<crate::collide::ExcludedPair>,
+    /// Per goal, the exact clearance of its configuration (the trajectory's, else IK's best) and
+    /// the pair that sets it.
+    pub goal_clearances: Vec<Option<crate::plan::SegmentPoint>>,
+    /// Warnings about the input files (what was suspicious and what was assumed).
+    pub input_warnings: Vec<String>,
+    /// Our kinematics against MuJoCo's on the MJCF export, when the caller ran the check.
+    pub kinematics_check: Option<crate::engine::KinematicsCheck>,
     /// Shape pairs of checked link pairs that are not measured (with reasons).
     pub excluded_shapes: Vec<crate::collide::ExcludedShapePair>,
+    /// Link pairs whose other shape pairs count only beyond their overlap by construction.
+    pub structural_allowances: Vec<crate::collide::StructuralAllowance>,
     /// IK solutions per goal.
     pub solutions: Vec<crate::ik::GoalSolutions>,
     /// Per goal, why no configuration can reach it, where that is proven (see

@@ -2,15 +2,17 @@
 //! applied, per-goal and trajectory results, each engine's runs, the static load, the paper's
 //! loss, the findings and the verdict. Never fails: a failing design is a verdict.
 
+mod describe;
 mod findings;
 mod inputs;
 mod loss;
 mod render;
 
+pub use describe::{describe, scenario_summary};
 pub use findings::{Finding, FindingKind, Severity};
 pub use inputs::{EngineRuns, Settings, Validation};
 pub use loss::PaperLoss;
-pub use render::render;
+pub use render::{render, verdict_line};
 
 use crate::collide::ExcludedPair;
 use crate::engine::{ContactInterval, StaticLoad};
@@ -20,7 +22,7 @@ use crate::scenario::{Provenance, Tolerance};
 use serde::Serialize;
 
 /// Version of the report's layout; bumped whenever a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The report of one design on one scenario.
 #[derive(Debug, Clone, Serialize)]
@@ -29,6 +31,9 @@ pub struct Report {
     pub schema_version: u32,
     /// What "reached", "free" and "held" meant in this run.
     pub criteria: Criteria,
+    /// What the run was given: warnings about the input files, and our kinematics against
+    /// MuJoCo's on the MJCF export (when the caller ran that check).
+    pub inputs: InputsReport,
     /// The robot.
     pub design: DesignSummary,
     /// The scenario.
@@ -47,6 +52,15 @@ pub struct Report {
     pub findings: Vec<Finding>,
     /// The verdict and its reasons.
     pub verdict: Verdict,
+}
+
+/// What the run was given, beyond the design and the scenario.
+#[derive(Debug, Clone, Serialize)]
+pub struct InputsReport {
+    /// Warnings about the input files (also printed on stderr as they are read).
+    pub warnings: Vec<String>,
+    /// Our kinematics against MuJoCo's on the MJCF export; `None` when not run.
+    pub kinematics_check: Option<crate::engine::KinematicsCheck>,
 }
 
 /// The criteria a verdict was reached under.
@@ -70,6 +84,9 @@ pub struct Criteria {
     /// Shape pairs not measured within otherwise checked link pairs (pieces that overlap by
     /// construction), with the reason for each: the rest of the two links is checked.
     pub excluded_shapes: Vec<crate::collide::ExcludedShapePair>,
+    /// Link pairs with shapes that overlap by construction: their other shape pairs are checked
+    /// and count as in contact only deeper than `depth_m`.
+    pub structural_allowances: Vec<crate::collide::StructuralAllowance>,
     /// An engine holds a goal when the tool is within this of the reference at the end of the
     /// dwell (m).
     pub hold_position_m: f64,
@@ -145,6 +162,8 @@ pub struct GoalReport {
     pub orientation_error_deg: Option<f64>,
     /// Exact clearance of the chosen configuration (m).
     pub exact_clearance_m: Option<f64>,
+    /// The pair that sets that clearance (`a and b`).
+    pub clearance_pair: Option<String>,
     /// The paper's capsule model's clearance of the chosen configuration (m).
     pub approximate_clearance_m: Option<f64>,
     /// The trajectory reaches it by a certified path.
@@ -269,6 +288,7 @@ pub fn build(validation: &Validation) -> Report {
         geometry: "exact (parry3d-f64: the model's spheres, boxes, cylinders, capsules and triangle meshes as they are)",
         excluded_pairs: validation.excluded.clone(),
         excluded_shapes: validation.excluded_shapes.clone(),
+        structural_allowances: validation.structural_allowances.clone(),
         hold_position_m: hold.0,
         hold_orientation_deg: hold.1.to_degrees(),
         engine_contact_depth_m: settings.engine_contact_depth_m,
@@ -315,6 +335,10 @@ pub fn build(validation: &Validation) -> Report {
     Report {
         schema_version: SCHEMA_VERSION,
         criteria,
+        inputs: InputsReport {
+            warnings: validation.input_warnings.clone(),
+            kinematics_check: validation.kinematics_check.clone(),
+        },
         design: design_summary(validation),
         scenario: ScenarioSummary {
             name: validation.scenario.name.clone(),
@@ -413,6 +437,12 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                     Some(GoalStep::Reached { clearance, .. }) => clearance.as_ref().map(|c| c.distance_m),
                     _ => solution.and_then(|s| s.clearance.map(|c| c.exact_m)),
                 },
+                clearance_pair: validation
+                    .goal_clearances
+                    .get(index)
+                    .cloned()
+                    .flatten()
+                    .map(|c| format!("{} and {}", c.a, c.b)),
                 approximate_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.approximate_m)),
                 chosen,
                 on_trajectory,

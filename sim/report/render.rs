@@ -3,6 +3,9 @@
 use super::{FindingKind, Report, Severity};
 use std::fmt::Write;
 
+/// Context findings of one kind printed before the rest are only counted.
+const INFO_PER_KIND: usize = 3;
+
 fn mm(value: Option<f64>) -> String {
     value.map_or_else(|| "-".into(), |v| format!("{:.1}", v * 1e3))
 }
@@ -11,6 +14,12 @@ fn mm(value: Option<f64>) -> String {
 /// findings that matter and the verdict line.
 pub fn render(report: &Report) -> String {
     let mut out = String::new();
+    if let Some(check) = &report.inputs.kinematics_check {
+        let _ = writeln!(out, "{}", check.line());
+    }
+    for warning in &report.inputs.warnings {
+        let _ = writeln!(out, "input {warning}");
+    }
     let design = &report.design;
     let _ = writeln!(
         out,
@@ -59,7 +68,7 @@ pub fn render(report: &Report) -> String {
 
     let _ = writeln!(
         out,
-        "\ngoal                      outcome      pos mm  ori deg  clear mm  capsule mm  held by"
+        "\ngoal                      outcome      pos mm  ori deg  clear mm  capsule mm  held by         closest pair"
     );
     for goal in &report.goals {
         let status = match goal.outcome {
@@ -68,7 +77,7 @@ pub fn render(report: &Report) -> String {
         };
         let _ = writeln!(
             out,
-            "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>8}  {:>10}  {}",
+            "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>8}  {:>10}  {:<14}  {}",
             goal.index,
             truncate(&goal.name, 21),
             status,
@@ -80,7 +89,8 @@ pub fn render(report: &Report) -> String {
                 "-".to_string()
             } else {
                 goal.held_by.join(", ")
-            }
+            },
+            goal.clearance_pair.as_deref().unwrap_or("-")
         );
     }
 
@@ -91,13 +101,14 @@ pub fn render(report: &Report) -> String {
     for engine in &report.engines {
         let _ = writeln!(
             out,
-            "{}: {} goals held (worst {:.3} mm, {:.3} deg), {} contacts, {} in the kinematic replay, peak effort {}",
+            "{}: {} goals held (worst {:.3} mm, {:.3} deg), {} contacts, {} in the kinematic replay, peak effort{} {}",
             engine.engine,
             engine.goals_held,
             engine.worst_hold_position_m * 1e3,
             engine.worst_hold_orientation_deg,
             engine.contacts.len(),
             engine.replay_contacts.len(),
+            if engine.engine == "rapier" { " (control-law estimate)" } else { "" },
             engine
                 .peak_effort
                 .iter()
@@ -142,20 +153,42 @@ pub fn render(report: &Report) -> String {
         let _ = writeln!(out, "paper loss {total:.4}");
     }
 
-    let notable: Vec<_> = report.findings_at_least(Severity::Warn).collect();
-    if !notable.is_empty() {
+    if !report.findings.is_empty() {
         let _ = writeln!(out, "\nfindings:");
-        for f in notable {
-            let tag = if f.severity == Severity::Fail { "FAIL" } else { "warn" };
-            let _ = writeln!(out, "  {tag} {}", f.message);
+        // Every failure and warning; context (info) up to three of a kind, the rest counted.
+        let mut shown: std::collections::BTreeMap<FindingKind, usize> = std::collections::BTreeMap::new();
+        for f in &report.findings {
+            let tag = match f.severity {
+                Severity::Fail => "FAIL",
+                Severity::Warn => "warn",
+                Severity::Info => "info",
+            };
+            let count = shown.entry(f.kind).or_default();
+            *count += 1;
+            if f.severity > Severity::Info || *count <= INFO_PER_KIND {
+                let _ = writeln!(out, "  {tag} {}", f.message);
+            }
+        }
+        for (kind, count) in shown {
+            let info = report
+                .findings
+                .iter()
+                .filter(|f| f.kind == kind && f.severity == Severity::Info)
+                .count();
+            if info > INFO_PER_KIND && count == info {
+                let name = serde_json::to_value(kind)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default();
+                let _ = writeln!(
+                    out,
+                    "  info ... and {} more `{name}` findings (all in the JSON report)",
+                    info - INFO_PER_KIND
+                );
+            }
         }
     }
-    let verdict = &report.verdict;
-    if verdict.passed {
-        let _ = writeln!(out, "\nverdict: PASS");
-    } else {
-        let _ = writeln!(out, "\nverdict: FAIL: {}", verdict.reasons.join("; "));
-    }
+    let _ = writeln!(out, "\n{}", verdict_line(&report.verdict));
     out
 }
 
@@ -210,5 +243,14 @@ fn truncate(text: &str, width: usize) -> String {
         text.to_string()
     } else {
         text.chars().take(width - 1).chain(std::iter::once('~')).collect()
+    }
+}
+
+/// The verdict as one line: `verdict: PASS`, or `verdict: FAIL: ` and the reasons.
+pub fn verdict_line(verdict: &super::Verdict) -> String {
+    if verdict.passed {
+        "verdict: PASS".to_string()
+    } else {
+        format!("verdict: FAIL: {}", verdict.reasons.join("; "))
     }
 }

@@ -86,32 +86,11 @@ pub fn run_rapier(
     gains: &Gains,
     opts: &RunOptions,
 ) -> Result<EngineRun, EngineError> {
+    super::inputs::check_run(model, path, gains, opts)?;
     let dof = model.dof();
-    check_inputs(model, opts)?;
-    if gains.stiffness.len() != dof || gains.damping.len() != dof {
-        return Err(rapier_error(
-            model,
-            format!(
-                "gains for {} and {} joints (stiffness, damping), the model has {dof}",
-                gains.stiffness.len(),
-                gains.damping.len()
-            ),
-        ));
-    }
     let Some(first) = path.segments.first() else {
-        return Err(rapier_error(model, "the path has no segment".into()));
+        return Err(EngineError::EmptyPath { robot: model.name.clone() });
     };
-    if let Some(bad) = path.segments.iter().find(|s| s.from.len() != dof || s.to.len() != dof) {
-        return Err(rapier_error(
-            model,
-            format!(
-                "a path segment starting at {} s has {} joints, the model {dof}",
-                bad.start_s,
-                bad.from.len()
-            ),
-        ));
-    }
-
     let mut scene = build(
         model,
         scenario,
@@ -205,13 +184,7 @@ pub fn replay_rapier(
     opts: &RunOptions,
 ) -> Result<EngineRun, EngineError> {
     let dof = model.dof();
-    check_inputs(model, opts)?;
-    if let Some((t, q)) = samples.iter().find(|(_, q)| q.len() != dof) {
-        return Err(rapier_error(
-            model,
-            format!("the sample at {t} s has {} joint values, the model {dof}", q.len()),
-        ));
-    }
+    super::inputs::check_replay(model, samples, opts)?;
     let start = samples.first().map_or_else(|| vec![0.0; dof], |(_, q)| q.clone());
     let mut scene = build(model, scenario, world, &start, Drive::Placed, opts.timestep_s, opts.gravity_m_s2)?;
     let mut recorder = ContactRecorder::new();
@@ -238,33 +211,6 @@ pub fn replay_rapier(
         contacts: recorder.finish(),
         peak_effort: vec![0.0; dof],
     })
-}
-
-fn rapier_error(model: &Model, message: String) -> EngineError {
-    EngineError::Rapier {
-        model: model.name.clone(),
-        message,
-    }
-}
-
-fn check_inputs(model: &Model, opts: &RunOptions) -> Result<(), EngineError> {
-    if !(opts.timestep_s > 0.0 && opts.timestep_s.is_finite()) {
-        return Err(rapier_error(
-            model,
-            format!("timestep {} s is not a positive number", opts.timestep_s),
-        ));
-    }
-    if model.links.len() != model.dof() + 1 {
-        return Err(rapier_error(
-            model,
-            format!(
-                "{} links for {} joints, expected one more link than joints",
-                model.links.len(),
-                model.dof()
-            ),
-        ));
-    }
-    Ok(())
 }
 
 /// Joint `j`'s multibody link: the base is link 0 and the joints were added in chain order.

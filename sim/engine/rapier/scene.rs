@@ -81,6 +81,7 @@ impl PairFilter {
         let names = world
             .pairs()
             .iter()
+            .filter(|pair| world.engines_collide(pair))
             .map(|pair| {
                 (
                     ordered(body_code(pair.a), body_code(pair.b)),
