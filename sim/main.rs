@@ -9,7 +9,7 @@ use proving_ground::error::Error;
 use proving_ground::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
 use proving_ground::pipeline::{self, LoadOptions};
 use proving_ground::report;
-use proving_ground::scenario::{self, generate, Scenario, ScenarioError, Tolerance};
+use proving_ground::scenario::{self, generate, ScenarioError, Tolerance};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -391,81 +391,22 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
 
 /// `validate-design generate ...`: builds the scenarios and writes them.
 fn generate_scenarios(args: &GenerateArgs) -> Result<ExitCode, ScenarioError> {
-    let name = args
-        .generator
-        .to_possible_value()
-        .map(|v| v.get_name().to_string())
-        .unwrap_or_default();
-    let not_for = |flag: &str, given: bool| -> Result<(), ScenarioError> {
-        if given {
-            return Err(ScenarioError::Parameter {
-                generator: name.clone(),
-                parameter: flag.into(),
-                message: format!("does not apply to the {name} generator"),
-            });
-        }
-        Ok(())
+    let request = generate::Request {
+        generator: match args.generator {
+            Generator::Cluttered => generate::Generator::Cluttered,
+            Generator::Workspace => generate::Generator::Workspace,
+            Generator::Course => generate::Generator::Course,
+        },
+        seed: args.seed,
+        task: args.task,
+        all: args.all,
+        count: args.count,
+        scale: args.scale,
+        tolerance: args.tolerance.map(Tolerance::from),
+        out: args.out.clone(),
+        force: args.force,
     };
-    let workspace_flags = [
-        ("--count", args.count.is_some()),
-        ("--scale", args.scale.is_some()),
-        ("--tolerance", args.tolerance.is_some()),
-    ];
-    let cluttered_flags = [("--task", args.task.is_some()), ("--all", args.all)];
-    let outputs: Vec<(PathBuf, Scenario)> = match args.generator {
-        Generator::Cluttered => {
-            for (flag, given) in workspace_flags {
-                not_for(flag, given)?;
-            }
-            let seed = args.seed.unwrap_or(generate::CLUTTERED_MASTER_SEED);
-            match (args.task, args.all) {
-                (Some(task), _) => vec![(args.out.clone(), generate::cluttered(task, seed))],
-                (None, true) => (0..generate::CLUTTERED_TASKS)
-                    .map(|task| (args.out.join(format!("task-{task:02}.json")), generate::cluttered(task, seed)))
-                    .collect(),
-                (None, false) => {
-                    return Err(ScenarioError::Parameter {
-                        generator: name,
-                        parameter: "--task".into(),
-                        message: format!("is missing: give --task K or --all (tasks 0 to {})", generate::CLUTTERED_TASKS - 1),
-                    })
-                }
-            }
-        }
-        Generator::Workspace => {
-            for (flag, given) in cluttered_flags {
-                not_for(flag, given)?;
-            }
-            let tolerance = match args.tolerance.unwrap_or(ToleranceArg::Pose) {
-                ToleranceArg::Pose => Tolerance::Pose,
-                ToleranceArg::ZSymmetric => Tolerance::ZSymmetric,
-                ToleranceArg::Position => Tolerance::Position,
-            };
-            let scenario = generate::workspace(
-                args.count.unwrap_or(generate::WORKSPACE_GOALS),
-                args.scale.unwrap_or(1.0),
-                tolerance,
-                args.seed.unwrap_or(generate::WORKSPACE_SEED),
-            )?;
-            vec![(args.out.clone(), scenario)]
-        }
-        Generator::Course => {
-            for (flag, given) in workspace_flags.into_iter().chain(cluttered_flags) {
-                not_for(flag, given)?;
-            }
-            vec![(args.out.clone(), generate::course(args.seed.unwrap_or(generate::COURSE_SEED)))]
-        }
-    };
-    // Refuse before writing anything, so a run without --force never leaves half a set behind.
-    if !args.force {
-        if let Some((path, _)) = outputs.iter().find(|(path, _)| path.exists()) {
-            return Err(ScenarioError::Write {
-                path: path.clone(),
-                source: std::io::Error::new(std::io::ErrorKind::AlreadyExists, "the file exists; pass --force to replace it"),
-            });
-        }
-    }
-    for (path, scenario) in &outputs {
+    for (path, scenario) in &generate::outputs(&request)? {
         scenario::save(scenario, path, args.force)?;
         println!(
             "wrote {} ({}: {} obstacles, {} goals)",

@@ -247,12 +247,19 @@ impl<'a> SegmentChecker<'a> {
     /// beyond the threshold or at least the clearance of its closer end: a free edge that does
     /// not come nearer its obstacles than it must. With the check.
     pub fn roomy_free(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck) {
+        let (ok, check, _) = self.roomy_advance(from, to, room);
+        (ok, check)
+    }
+
+    /// [`roomy_free`](Self::roomy_free) and [`advance`](Self::advance) in one check: whether the
+    /// segment is free with room, the check, and how far it is certified with room.
+    pub fn roomy_advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck, Option<f64>) {
         let mut roomy = None;
         let mut ends = [f64::NAN; 2];
         let check = self.advance_inner(from, to, room, &mut roomy, &mut ends);
         let needed = (self.opts.threshold_m + room).min(ends[0]).min(ends[1]);
         let ok = check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed);
-        (ok, check)
+        (ok, check, roomy)
     }
 
     fn advance_inner(&mut self, from: &[f64], to: &[f64], room: f64, roomy: &mut Option<f64>, ends: &mut [f64; 2]) -> SegmentCheck {

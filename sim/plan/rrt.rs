@@ -131,8 +131,22 @@ fn extend(checker: &mut SegmentChecker<'_>, tree: &mut Tree, towards: &[f64]) ->
 /// all of it when free, else up to the last roomy advancement point.
 fn reach(checker: &mut SegmentChecker<'_>, tree: &mut Tree, near: usize, from: &[f64], target: &[f64]) -> Option<usize> {
     let (check, roomy) = checker.advance(from, target, ROOM_M);
+    grow_to(tree, near, from, target, &check, roomy, checker.threshold())
+}
+
+/// Adds to `tree` what `check` (of the edge `from`, node `near`, to `target`) certified with
+/// room: the whole edge, or up to the last roomy advancement point `roomy`.
+fn grow_to(
+    tree: &mut Tree,
+    near: usize,
+    from: &[f64],
+    target: &[f64],
+    check: &super::certify::SegmentCheck,
+    roomy: Option<f64>,
+    threshold: f64,
+) -> Option<usize> {
     let root = tree.root[near];
-    if check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= checker.threshold() + ROOM_M) {
+    if check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= threshold + ROOM_M) {
         return Some(tree.add(target, Some(near), root));
     }
     let s = roomy?;
@@ -212,10 +226,10 @@ impl Planner for RrtConnect {
             let target = grow.config(new).to_vec();
             let near = other.nearest(&target);
             let from = other.config(near).to_vec();
-            let (joined, _) = checker.roomy_free(&from, &target, ROOM_M);
+            let (joined, check, roomy) = checker.roomy_advance(&from, &target, ROOM_M);
             if !joined {
-                // Grow the other tree as far as it is certified towards the new node.
-                reach(checker, other, near, &from, &target);
+                // Grow the other tree as far as the same check certified it towards the new node.
+                grow_to(other, near, &from, &target, &check, roomy, checker.threshold());
                 continue;
             }
             // The two trees meet: start ... meeting edge ... a goal configuration.

@@ -10,6 +10,7 @@
 mod clearance;
 mod cluttered;
 mod course;
+mod request;
 mod workspace;
 
 pub use cluttered::{
@@ -21,6 +22,7 @@ pub use course::{
     course, course_configurations, course_margins, course_obstacles, CourseMargins, COURSE_CLEARANCE_M, COURSE_GOALS_PER_REGION,
     COURSE_HOME, COURSE_MODULES, COURSE_PATH_STEP_RAD, COURSE_SEED,
 };
+pub use request::{outputs, Generator, Request};
 pub use workspace::{workspace, WORKSPACE_BOX_CENTRE_M, WORKSPACE_BOX_SIZE_M, WORKSPACE_GOALS, WORKSPACE_SCALE_RANGE, WORKSPACE_SEED};
 
 use super::Provenance;
