@@ -433,11 +433,9 @@ fn link_allowances(model: &Model, allowances: &[StructuralAllowance]) -> Result<
                 .links
                 .iter()
                 .position(|l| l.name == name)
-                .ok_or_else(|| CollideError::UnknownShape {
-                    index,
-                    link: name.into(),
-                    shape: 0,
-                    count: 0,
+                .ok_or_else(|| CollideError::InvalidShape {
+                    owner: format!("structural allowance {index} (`{}`, `{}`)", a.a, a.b),
+                    message: format!("model `{}` has no link named `{name}`", model.name),
                 })
         };
         let (i, j) = (find(&a.a)?, find(&a.b)?);

@@ -169,7 +169,13 @@ impl RrtConnect {
                 let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
                 let window = [lo - std::f64::consts::PI, hi + std::f64::consts::PI];
                 match limits {
-                    Some([lower, upper]) if upper >= lower => [window[0].max(*lower), window[1].min(*upper)],
+                    // Moved inside the limits rather than cut by them, so it keeps a whole turn
+                    // (or the whole range, when that is shorter).
+                    Some([lower, upper]) if upper >= lower => {
+                        let width = (window[1] - window[0]).min(upper - lower);
+                        let from = window[0].clamp(*lower, upper - width);
+                        [from, from + width]
+                    }
                     _ => window,
                 }
             })
@@ -245,13 +251,15 @@ impl Planner for RrtConnect {
             let target = from_goals.root[goal_node];
             let length_before_shortcut = polyline_length(start, &points[1..]);
             let points = shortcut(checker, &points, &mut rng);
-            return certify_polyline(checker, &points).map(|segments| Path {
-                waypoints: points[1..].to_vec(),
-                segments,
-                target,
-                length_before_shortcut,
-                samples,
-            });
+            return certify_polyline(checker, &points)
+                .map(|segments| Path {
+                    waypoints: points[1..].to_vec(),
+                    segments,
+                    target,
+                    length_before_shortcut,
+                    samples,
+                })
+                .or_else(fallback);
         }
         fallback(closest_attempt(checker, &from_start, goals, self.budget).unwrap_or(Failure {
             samples: self.budget,

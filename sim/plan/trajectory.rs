@@ -300,13 +300,22 @@ fn first_free_solution(
     solutions: &[GoalSolutions],
     threshold: f64,
 ) -> Option<(usize, Vec<f64>, SegmentPoint)> {
-    solutions.iter().enumerate().find_map(|(goal, found)| {
-        found.solutions.iter().filter(|s| s.reached).find_map(|s| {
-            let q = nearest_equivalent(model, &s.q, &s.q);
-            let clearance = checker.clearance(&q)?;
-            (clearance.distance_m > threshold + super::certify::TOUCH_TOLERANCE_M).then_some((goal, q, clearance))
-        })
-    })
+    // The first with the clearance a replacement home keeps, else the clearest one that is free.
+    let mut clearest: Option<(usize, Vec<f64>, SegmentPoint)> = None;
+    for (goal, found) in solutions.iter().enumerate() {
+        for solution in found.solutions.iter().filter(|s| s.reached) {
+            let q = nearest_equivalent(model, &solution.q, &solution.q);
+            let Some(clearance) = checker.clearance(&q) else { continue };
+            if clearance.distance_m > threshold + HOME_CLEARANCE_M {
+                return Some((goal, q, clearance));
+            }
+            let free = clearance.distance_m > threshold + super::certify::TOUCH_TOLERANCE_M;
+            if free && clearest.as_ref().is_none_or(|(_, _, c)| clearance.distance_m > c.distance_m) {
+                clearest = Some((goal, q, clearance));
+            }
+        }
+    }
+    clearest
 }
 
 /// Most whole-turn equivalents of one solution put in a goal set (the nearest the start kept).
