@@ -1061,41 +1061,10 @@ fn mujoco_geom_distance_roughly_agrees_on_cylinders() {
 // ---------------------------------------------------------------------------------------------
 // Meshes and hulls
 
-/// A U-shaped prism (closed, outward-facing): the U is 0.3 x 0.3 m in x-y with a notch 0.1 m
-/// wide and 0.2 m deep opening towards +y, extruded 0.1 m along z.
+/// The U of [`common::u_mesh`] at 0.1 m per unit: 0.3 x 0.3 m in x-y, a notch 0.1 m wide and
+/// 0.2 m deep opening towards +y, 0.1 m thick.
 fn u_mesh() -> TriMesh {
-    let outline = [
-        [0.0, 0.0],
-        [3.0, 0.0],
-        [3.0, 3.0],
-        [2.0, 3.0],
-        [2.0, 1.0],
-        [1.0, 1.0],
-        [1.0, 3.0],
-        [0.0, 3.0],
-    ];
-    let cap = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [0, 4, 5], [0, 5, 7], [5, 6, 7]];
-    let mut vertices = Vec::new();
-    for z in [0.0, 1.0] {
-        vertices.extend(outline.iter().map(|[x, y]| [x * 0.1, y * 0.1, z * 0.1]));
-    }
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for [a, b, c] in cap {
-        triangles.push([a, c, b]); // bottom, facing -z
-        triangles.push([a + 8, b + 8, c + 8]); // top, facing +z
-    }
-    for i in 0..8u32 {
-        let j = (i + 1) % 8;
-        triangles.push([i, j, j + 8]);
-        triangles.push([i, j + 8, i + 8]);
-    }
-    TriMesh {
-        uri: "u.stl".into(),
-        file: PathBuf::from("u.stl"),
-        scale: [1.0; 3],
-        vertices,
-        triangles,
-    }
+    common::u_mesh(0.1)
 }
 
 #[test]

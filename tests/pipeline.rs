@@ -4,7 +4,7 @@ mod common;
 
 use common::repo;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use proving_ground::model::{Shape, TriMesh};
+use proving_ground::model::Shape;
 use proving_ground::pipeline::{load, validate, Engines, LoadOptions, ValidateOptions};
 use proving_ground::report::{self, FindingKind, Severity};
 use proving_ground::scenario::{generate, Goal, Obstacle, Scenario, Tolerance};
@@ -210,43 +210,6 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
     );
 }
 
-/// A U-shaped prism (closed, faces outwards): 0.6 x 0.6 m in x-y with a notch 0.2 m wide
-/// (x in [0.2, 0.4]) and 0.4 m deep opening towards +y, extruded 0.2 m along z.
-fn u_mesh() -> TriMesh {
-    let outline = [
-        [0.0, 0.0],
-        [3.0, 0.0],
-        [3.0, 3.0],
-        [2.0, 3.0],
-        [2.0, 1.0],
-        [1.0, 1.0],
-        [1.0, 3.0],
-        [0.0, 3.0],
-    ];
-    let cap = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [0, 4, 5], [0, 5, 7], [5, 6, 7]];
-    let mut vertices = Vec::new();
-    for z in [0.0, 1.0] {
-        vertices.extend(outline.iter().map(|[x, y]| [x * 0.2, y * 0.2, z * 0.2]));
-    }
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for [a, b, c] in cap {
-        triangles.push([a, c, b]);
-        triangles.push([a + 8, b + 8, c + 8]);
-    }
-    for i in 0..8u32 {
-        let j = (i + 1) % 8;
-        triangles.push([i, j, j + 8]);
-        triangles.push([i, j + 8, i + 8]);
-    }
-    TriMesh {
-        uri: "u.stl".into(),
-        file: std::path::PathBuf::from("u.stl"),
-        scale: [1.0; 3],
-        vertices,
-        triangles,
-    }
-}
-
 #[test]
 fn an_engine_contact_exact_geometry_refutes_does_not_fail_the_design() {
     // One joint swings a 0.6 m tube (0.12 m thick, 0.3 m up) a quarter turn into the notch of a
@@ -264,7 +227,8 @@ fn an_engine_contact_exact_geometry_refutes_does_not_fail_the_design() {
     let u = Obstacle {
         name: "u".into(),
         world_from_shape: Isometry3::from_parts(Translation3::new(-0.3, 0.3, 0.0), UnitQuaternion::from_rotation_matrix(&rotation)),
-        shape: Shape::Mesh(u_mesh()),
+        // 0.6 x 0.6 m, the notch 0.2 m wide (x in [0.2, 0.4]) and 0.4 m deep towards +y, 0.2 m thick.
+        shape: Shape::Mesh(common::u_mesh(0.2)),
     };
     let scenario = Scenario {
         name: "into-a-notch".into(),

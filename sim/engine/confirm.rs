@@ -7,18 +7,20 @@ use crate::collide::{self, CollisionWorld, Distances, QueryOptions};
 use crate::model::Model;
 use crate::plan::TimedPath;
 
+/// Every pair within a kilometre measured exactly, not bounded.
+const EVERY_PAIR_EXACTLY: QueryOptions = QueryOptions {
+    margin: 1e3,
+    hulls: false,
+    exact_depth: true,
+};
+
 /// Fills [`ContactInterval::parry_distance_m`] of each contact: the exact signed distance of its
 /// pair at its configuration (`model` placed as `world` was built). A contact whose pair or
 /// configuration does not fit the world is left unmeasured.
 pub fn confirm_contacts(model: &Model, world: &CollisionWorld, contacts: &mut [ContactInterval]) {
     let mut ws = model.workspace();
     let mut out = Distances::new();
-    // Every pair within a kilometre is measured exactly, not bounded.
-    let query = QueryOptions {
-        margin: 1e3,
-        hulls: false,
-        exact_depth: true,
-    };
+    let query = EVERY_PAIR_EXACTLY;
     for contact in contacts {
         if contact.q.len() != model.dof() {
             continue;
@@ -42,11 +44,7 @@ const REFERENCE_SAMPLES: usize = 16;
 pub fn measure_reference(model: &Model, world: &CollisionWorld, timed: &TimedPath, contacts: &mut [ContactInterval]) {
     let mut ws = model.workspace();
     let mut out = Distances::new();
-    let query = QueryOptions {
-        margin: 1e3,
-        hulls: false,
-        exact_depth: true,
-    };
+    let query = EVERY_PAIR_EXACTLY;
     let mut q = vec![0.0; model.dof()];
     let mut qd = vec![0.0; model.dof()];
     for contact in contacts {

@@ -134,3 +134,40 @@ fn deepen(deepest: &mut Vec<(String, String, f64)>, a: &str, b: &str, depth: f64
         None => deepest.push((a.to_string(), b.to_string(), depth)),
     }
 }
+
+/// A U-shaped prism (closed, faces outwards), `unit` metres per grid step: 3 x 3 units in x-y
+/// with a notch 1 unit wide (x in [1, 2]) and 2 deep opening towards +y, extruded 1 unit along z.
+pub fn u_mesh(unit: f64) -> proving_ground::model::TriMesh {
+    let outline = [
+        [0.0, 0.0],
+        [3.0, 0.0],
+        [3.0, 3.0],
+        [2.0, 3.0],
+        [2.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 3.0],
+        [0.0, 3.0],
+    ];
+    let cap = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [0, 4, 5], [0, 5, 7], [5, 6, 7]];
+    let mut vertices = Vec::new();
+    for z in [0.0, 1.0] {
+        vertices.extend(outline.iter().map(|[x, y]| [x * unit, y * unit, z * unit]));
+    }
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for [a, b, c] in cap {
+        triangles.push([a, c, b]); // bottom, facing -z
+        triangles.push([a + 8, b + 8, c + 8]); // top, facing +z
+    }
+    for i in 0..8u32 {
+        let j = (i + 1) % 8;
+        triangles.push([i, j, j + 8]);
+        triangles.push([i, j + 8, i + 8]);
+    }
+    proving_ground::model::TriMesh {
+        uri: "u.stl".into(),
+        file: PathBuf::from("u.stl"),
+        scale: [1.0; 3],
+        vertices,
+        triangles,
+    }
+}
