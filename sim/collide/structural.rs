@@ -130,15 +130,12 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
                 .flat_map(|&p| placements.iter().map(move |placement| (p, placement)))
                 .map(|(p, placement)| -distance(placement, p))
                 .fold(0.0_f64, f64::max);
+        let rest: Vec<(usize, usize)> = shape_pairs.iter().copied().filter(|p| !overlapping.contains(p)).collect();
         // Without the overlapping pieces, is the rest of the two links free at some sample?
-        let rest_free_somewhere = placements.iter().any(|placement| {
-            shape_pairs
-                .iter()
-                .filter(|p| !overlapping.contains(p))
-                .all(|&p| distance(placement, p) + depth > TOUCHING_M)
-        });
-        let some_rest = overlapping.len() < shape_pairs.len();
-        if overlapping.is_empty() || !some_rest || !rest_free_somewhere {
+        let rest_free_somewhere = placements
+            .iter()
+            .any(|placement| rest.iter().all(|&p| distance(placement, p) + depth > TOUCHING_M));
+        if overlapping.is_empty() || rest.is_empty() || !rest_free_somewhere {
             exclusions.pairs.push(ExcludedPair::new(
                 pair.a_name.clone(),
                 pair.b_name.clone(),
@@ -149,7 +146,6 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
         // Can the rest of the two links fold into each other deeper than the construction does?
         // Where no sample shows it (two `direct` slots: link i + 2 stays in a slab that shares
         // only the construction's depth with link i), checking them would only slow every query.
-        let rest: Vec<(usize, usize)> = shape_pairs.iter().copied().filter(|p| !overlapping.contains(p)).collect();
         let mut fold_rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed ^ FOLD_STREAM);
         let folds = (0..opts.fold_samples).any(|_| {
             model.forward(&model.random_configuration(&mut fold_rng), &mut ws);

@@ -342,11 +342,6 @@ impl CollisionWorld {
         &self.excluded
     }
 
-    /// Index of the link named `name`.
-    pub fn link_index(&self, name: &str) -> Option<usize> {
-        self.link_names.iter().position(|n| n == name)
-    }
-
     /// Collider pairs of checked link pairs that are not measured, with their reasons.
     pub fn excluded_shapes(&self) -> &[ExcludedShapePair] {
         &self.excluded_shapes
@@ -367,6 +362,11 @@ impl CollisionWorld {
             .structural_allowances
             .iter()
             .any(|s| (s.a == pair.a_name && s.b == pair.b_name) || (s.a == pair.b_name && s.b == pair.a_name))
+    }
+
+    /// The excluded shape pairs as `((link, collider), (link, collider))`, lower first.
+    pub fn excluded_shape_indices(&self) -> impl Iterator<Item = ((usize, usize), (usize, usize))> + '_ {
+        self.skipped.iter().copied()
     }
 
     /// Whether collider `a.1` of link `a.0` is measured against collider `b.1` of link `b.0`
@@ -423,7 +423,6 @@ impl CollisionWorld {
     }
 }
 
-/// Indices of the elements (colliders or capsules) of `link`, given each element's link.
 /// The allowances by link index pair, lower first.
 fn link_allowances(model: &Model, allowances: &[StructuralAllowance]) -> Result<HashMap<(usize, usize), f64>, CollideError> {
     let mut out = HashMap::new();
@@ -472,6 +471,7 @@ fn skipped_shapes(model: &Model, exclusions: &[ExcludedShapePair]) -> Result<Has
     Ok(out)
 }
 
+/// Indices of the elements (colliders or capsules) of `link`, given each element's link.
 fn elements(element_links: &[usize], link: usize) -> impl Iterator<Item = usize> + '_ {
     element_links.iter().enumerate().filter(move |(_, &l)| l == link).map(|(k, _)| k)
 }

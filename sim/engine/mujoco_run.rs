@@ -82,9 +82,8 @@ impl Loaded {
             })
             .unwrap_or_default();
         // Every link pair the collision world does not check is excluded, so MuJoCo does not
-        // push apart what our collision model deliberately leaves touching.
-        // A checked link pair with shape pairs left out (pieces that overlap by construction) is
-        // excluded as bodies and its remaining geom pairs collided explicitly.
+        // push apart what our collision model deliberately leaves touching; a checked pair with
+        // shape pairs left out is excluded as bodies and its other geom pairs collided explicitly.
         let mut excluded_body_pairs = Vec::new();
         let mut explicit_geom_pairs = Vec::new();
         if let Some(world) = world {

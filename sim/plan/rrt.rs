@@ -189,16 +189,8 @@ impl Planner for RrtConnect {
         // A straight segment that keeps room first; one that grazes only when no detour with
         // room is found, since an engine's tracking error would turn its graze into a contact.
         let (tight, first_failure) = match straight_with_room(checker, start, firsts) {
-            Straights::Roomy(path) => return Ok(path),
-            Straights::Tight(path) => (
-                Some(path),
-                Failure {
-                    samples: 0,
-                    stop: None,
-                    gap: None,
-                },
-            ),
-            Straights::None(failure) => (None, failure),
+            Ok(path) => return Ok(path),
+            Err(not_roomy) => not_roomy,
         };
         let fallback = |failure: Failure| match &tight {
             Some(path) => Ok(path.clone()),
@@ -268,18 +260,9 @@ impl Planner for RrtConnect {
     }
 }
 
-/// What straight segments to the first goal configurations give.
-enum Straights {
-    /// One keeps [`ROOM_M`] (or its ends' clearance).
-    Roomy(Path),
-    /// None keeps room; this one, the first free, grazes.
-    Tight(Path),
-    /// None is free: where the first one stops.
-    None(Failure),
-}
-
-/// Straight segments to `goals` in order: the first that keeps room, else the first free one.
-fn straight_with_room(checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>]) -> Straights {
+/// Straight segments to `goals` in order: the first that keeps [`ROOM_M`] (or its ends'
+/// clearance); else the first free one, which grazes, if any, and where the first one stops.
+fn straight_with_room(checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>]) -> Result<Path, (Option<Path>, Failure)> {
     let mut tight = None;
     let mut failure = Failure {
         samples: 0,
@@ -299,13 +282,13 @@ fn straight_with_room(checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[
             samples: 0,
         };
         if roomy {
-            return Straights::Roomy(path(segment));
+            return Ok(path(segment));
         }
         if segment.free && tight.is_none() {
             tight = Some(path(segment));
         }
     }
-    tight.map_or(Straights::None(failure), Straights::Tight)
+    Err((tight, failure))
 }
 
 /// After a failed search: the start-tree node nearest the goal set, and where its straight edge

@@ -292,19 +292,17 @@ fn nearest_free(checker: &mut SegmentChecker, model: &Model, home: &[f64], thres
     })
 }
 
-/// The first goal's first IK solution that is collision-free with the certified check's
-/// threshold, as a configuration to start a tour from.
+/// A collision-free IK solution to start a tour from: the first, in goal order, that keeps the
+/// clearance a replacement home keeps, else the clearest that is free of the threshold.
 fn first_free_solution(
     checker: &mut SegmentChecker,
-    model: &Model,
     solutions: &[GoalSolutions],
     threshold: f64,
 ) -> Option<(usize, Vec<f64>, SegmentPoint)> {
-    // The first with the clearance a replacement home keeps, else the clearest one that is free.
     let mut clearest: Option<(usize, Vec<f64>, SegmentPoint)> = None;
     for (goal, found) in solutions.iter().enumerate() {
         for solution in found.solutions.iter().filter(|s| s.reached) {
-            let q = nearest_equivalent(model, &solution.q, &solution.q);
+            let q = solution.q.clone();
             let Some(clearance) = checker.clearance(&q) else { continue };
             if clearance.distance_m > threshold + HOME_CLEARANCE_M {
                 return Some((goal, q, clearance));
@@ -406,7 +404,7 @@ pub fn plan(
             ));
             home = free;
             home_clearance = Some(clearance);
-        } else if let Some((goal, q, clearance)) = first_free_solution(&mut checker, model, solutions, threshold) {
+        } else if let Some((goal, q, clearance)) = first_free_solution(&mut checker, solutions, threshold) {
             // The home is ours to choose, not the design's: a tour that starts in collision
             // would fail every goal for the harness's choice. Start where the first goal with a
             // collision-free solution is reached instead.

@@ -90,12 +90,8 @@ impl PairFilter {
             })
             .collect();
         let skipped = world
-            .excluded_shapes()
-            .iter()
-            .filter_map(|e| {
-                let link = |name: &str| world.link_index(name);
-                Some(ordered(shape_code(link(&e.a)?, e.a_shape), shape_code(link(&e.b)?, e.b_shape)))
-            })
+            .excluded_shape_indices()
+            .map(|((i, a), (j, b))| ordered(shape_code(i, a), shape_code(j, b)))
             .collect();
         Self { names, skipped, flags }
     }
