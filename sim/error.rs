@@ -43,7 +43,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// An output file would overwrite an input.
-    #[error("refusing to write {path}: it is an input of this run")]
+    #[error("refusing to write {path}: this run read that file (the design, the scenario, a mesh, an included file, or a link to one)")]
     WouldOverwriteInput {
         /// The file.
         path: PathBuf,

@@ -49,7 +49,8 @@ Environment:
     about,
     after_help = AFTER_HELP,
     args_conflicts_with_subcommands = true,
-    subcommand_negates_reqs = true
+    subcommand_negates_reqs = true,
+    allow_negative_numbers = true
 )]
 struct Cli {
     #[command(subcommand)]
@@ -73,8 +74,8 @@ struct Cli {
     #[arg(long, value_name = "FILE")]
     export_mjcf: Option<PathBuf>,
     /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips).
-    #[arg(long, value_name = "N", default_value_t = 100)]
-    mujoco_checks: usize,
+    #[arg(long, value_name = "N", default_value_t = 100, value_parser = clap::value_parser!(u64).range(0..=100_000))]
+    mujoco_checks: u64,
     /// Seed of IK's random starts and of the kinematics check's random configurations.
     #[arg(long, value_name = "N", default_value_t = 0)]
     seed: u64,
@@ -101,7 +102,7 @@ struct Cli {
     #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
     engines: EnginesArg,
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
-    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=1000))]
     ik_seeds: u64,
     /// Judge every goal by this tolerance mode instead of the scenario's.
     #[arg(long, value_name = "MODE")]
@@ -125,7 +126,7 @@ struct Cli {
     #[arg(long, conflicts_with_all = ["engines", "planner", "plan_budget"])]
     reach_only: bool,
     /// Worker threads [default: the number of cores]; the report is the same for any number.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
     threads: Option<u64>,
 }
 
@@ -182,6 +183,7 @@ enum Command {
 }
 
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 struct GenerateArgs {
     /// Which generator.
     generator: Generator,
@@ -195,8 +197,8 @@ struct GenerateArgs {
     #[arg(long)]
     all: bool,
     /// workspace: number of poses [default: 1000].
-    #[arg(long, value_name = "N")]
-    count: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_GOALS as u64))]
+    count: Option<u64>,
     /// workspace: box scale factor, 0.5 to 1.5 [default: 1].
     #[arg(long, value_name = "S")]
     scale: Option<f64>,
@@ -245,6 +247,12 @@ impl From<ToleranceArg> for Tolerance {
 }
 
 fn main() -> ExitCode {
+    // A file-size limit (`ulimit -f`) then fails the write with an error, which leaves the old
+    // file intact and removes the temporary, instead of killing the process mid-write.
+    // SAFETY: setting a signal to SIG_IGN has no handler to run and happens before any thread.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let cli = Cli::parse();
     let result = match &cli.command {
         Some(Command::Generate(args)) => generate_scenarios(args).map_err(Error::from),
@@ -295,17 +303,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         println!("{}", report::scenario_summary(&scenario));
     }
 
-    let mut inputs = vec![design_path];
-    inputs.extend(cli.scenario.as_deref());
     let mjcf = to_mjcf(model, &MjcfOptions::default())?;
     if let Some(path) = &cli.export_urdf {
-        pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?, &inputs)?;
+        pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?)?;
         if !cli.quiet {
             println!("wrote URDF {}", path.display());
         }
     }
     if let Some(path) = &cli.export_mjcf {
-        pipeline::write_output(path, &mjcf, &inputs)?;
+        pipeline::write_output(path, &mjcf)?;
         if !cli.quiet {
             println!("wrote MJCF {}", path.display());
         }
@@ -320,7 +326,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     let mut kinematics_check = None;
     if cli.mujoco_checks > 0 {
         let source = format!("the MJCF export of {}", design_path.display());
-        let check = check_kinematics(model, &mjcf, &source, cli.mujoco_checks, cli.seed)?;
+        let check = check_kinematics(model, &mjcf, &source, usize::try_from(cli.mujoco_checks).unwrap_or(usize::MAX), cli.seed)?;
         // A full run prints the line with the report; a disagreement stops here.
         if cli.kinematics_only || !check.agree {
             println!("{}", check.line());
@@ -375,7 +381,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     let report = report::build(&validation);
     if let Some(path) = &cli.json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Report { message: e.to_string() })?;
-        pipeline::write_output(path, &(text + "\n"), &inputs)?;
+        pipeline::write_output(path, &(text + "\n"))?;
     }
     if cli.quiet {
         println!("{}", report::verdict_line(&report.verdict));
@@ -400,7 +406,7 @@ fn generate_scenarios(args: &GenerateArgs) -> Result<ExitCode, ScenarioError> {
         seed: args.seed,
         task: args.task,
         all: args.all,
-        count: args.count,
+        count: args.count.map(|n| usize::try_from(n).unwrap_or(usize::MAX)),
         scale: args.scale,
         tolerance: args.tolerance.map(Tolerance::from),
         out: args.out.clone(),

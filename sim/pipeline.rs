@@ -126,20 +126,19 @@ pub fn scenario_or_default(path: Option<&Path>) -> Result<crate::scenario::Scena
     }
 }
 
-/// Writes text to `path`, refusing to overwrite any of `inputs`.
+/// Writes text to `path` atomically (see [`crate::files::write_atomic`]), replacing an existing
+/// output but never a file this process has read (the design, the scenario, a mesh, a file an
+/// MJCF includes, or a link to any of them).
 ///
 /// # Errors
-/// [`Error::WouldOverwriteInput`] or [`Error::Write`].
-pub fn write_output(path: &Path, text: &str, inputs: &[&Path]) -> Result<(), Error> {
-    let canonical = |p: &Path| p.canonicalize().ok();
-    if let Some(target) = canonical(path) {
-        if inputs.iter().any(|input| canonical(input).as_ref() == Some(&target)) {
-            return Err(Error::WouldOverwriteInput { path: path.to_path_buf() });
-        }
-    }
-    std::fs::write(path, text).map_err(|source| Error::Write {
-        path: path.to_path_buf(),
-        source,
+/// [`Error::WouldOverwriteInput`] or [`Error::Write`] (the old file is then intact).
+pub fn write_output(path: &Path, text: &str) -> Result<(), Error> {
+    crate::files::write_atomic(path, text.as_bytes(), true).map_err(|error| match error {
+        crate::files::WriteError::Input => Error::WouldOverwriteInput { path: path.to_path_buf() },
+        other => Error::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(other.to_string()),
+        },
     })
 }
 

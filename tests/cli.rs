@@ -362,7 +362,7 @@ fn bad_options_exit_2_naming_what_is_wrong() {
         .output()
         .expect("runs");
     assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("it is an input of this run"));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("this run read that file"));
 }
 
 #[test]

@@ -5,6 +5,7 @@
 pub mod catalog;
 
 use crate::frames::PoseSpec;
+use crate::limits;
 use catalog::{Preset, SlotOption};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -192,7 +193,7 @@ struct PresetFile {
 /// [`DesignError`] naming the file and the field: unreadable file, malformed JSON, unknown mode or
 /// field, non-finite or out-of-range numbers, economic violations.
 pub fn load(path: &Path) -> Result<Design, DesignError> {
-    let text = std::fs::read_to_string(path).map_err(|source| DesignError::Read {
+    let text = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES).map_err(|source| DesignError::Read {
         path: path.to_path_buf(),
         source,
     })?;
@@ -299,6 +300,9 @@ fn module_joint(row: [f64; 3], rated_torque: Option<f64>) -> DhJoint {
     }
 }
 
+/// Largest rated torque (N m) a design may state; beyond it the number is a typo, not a rating.
+const MAX_RATING: f64 = 1e6;
+
 fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
     let invalid = |field: String, message: String| DesignError::Invalid {
         path: path.to_path_buf(),
@@ -309,12 +313,24 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
     if design.joints.is_empty() {
         return Err(invalid(list.into(), "is empty; a design needs at least one joint".into()));
     }
+    if design.joints.len() > limits::MAX_JOINTS {
+        return Err(invalid(
+            list.into(),
+            format!("has {} joints; the limit is {}", design.joints.len(), limits::MAX_JOINTS),
+        ));
+    }
     if design.name.trim().is_empty() {
         return Err(invalid("name".into(), "is empty".into()));
     }
     for (field, pose) in [("base", &design.base), ("tool", &design.tool)] {
         if !pose.is_finite() {
             return Err(invalid(field.into(), "has a non-finite number".into()));
+        }
+        if pose.position.iter().chain(&pose.rpy).any(|v| v.abs() > limits::MAX_LENGTH_M) {
+            return Err(invalid(
+                field.into(),
+                format!("has a number beyond +-{}", limits::MAX_LENGTH_M),
+            ));
         }
     }
     for (index, joint) in design.joints.iter().enumerate() {
@@ -330,12 +346,27 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
                     format!("{value} is not a finite number"),
                 ));
             }
+            if value.abs() > limits::MAX_LENGTH_M {
+                return Err(invalid(
+                    format!("joints[{index}].{name}"),
+                    format!("{value}: expected at most {} in absolute value", limits::MAX_LENGTH_M),
+                ));
+            }
         }
         let [lower, upper] = joint.limits;
         if !(lower.is_finite() && upper.is_finite() && lower < upper) {
             return Err(invalid(
                 format!("joints[{index}].limits"),
                 format!("[{lower}, {upper}] rad: expected finite lower < upper"),
+            ));
+        }
+        if lower.abs().max(upper.abs()) > limits::MAX_JOINT_LIMIT {
+            return Err(invalid(
+                format!("joints[{index}].limits"),
+                format!(
+                    "[{lower}, {upper}] rad: expected limits within +-{} rad",
+                    limits::MAX_JOINT_LIMIT
+                ),
             ));
         }
         if joint.max_velocity <= 0.0 {
@@ -345,10 +376,10 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
             ));
         }
         if let Some(torque) = joint.rated_torque {
-            if !(torque.is_finite() && torque > 0.0) {
+            if !(torque.is_finite() && torque > 0.0 && torque <= MAX_RATING) {
                 return Err(invalid(
                     format!("joints[{index}].rated_torque"),
-                    format!("{torque} N m: expected > 0"),
+                    format!("{torque} N m: expected > 0 and at most {MAX_RATING}"),
                 ));
             }
         }

@@ -14,6 +14,7 @@
 //! frame is the site named `tool` when there is one (on the last moving body or a jointless body
 //! below it), else the last moving body's frame.
 
+mod checks;
 mod geoms;
 mod joint;
 
@@ -46,6 +47,7 @@ pub fn from_mjcf(path: &Path) -> Result<Model, ModelError> {
             message: format!("the linked MuJoCo library is version {linked}, mujoco-rs expects {mjVERSION_HEADER}"),
         });
     }
+    checks::before_load(path)?;
     let mj = MjModel::from_xml(path).map_err(|e| ModelError::MjcfLoad {
         path: path.to_path_buf(),
         message: {
@@ -123,6 +125,7 @@ impl Reader<'_> {
     }
 
     fn build(&self) -> Result<Model, ModelError> {
+        self.check_numbers()?;
         let mj = self.mj;
         let body_count = mj.ffi().nbody as usize;
         let parent = |b: usize| mj.body_parentid()[b] as usize;

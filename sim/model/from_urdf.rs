@@ -38,7 +38,7 @@ pub const PACKAGE_PATH_ENV: &str = "ROS_PACKAGE_PATH";
 /// a graph that is not a tree, an ambiguous tip, unsupported joints on the chain, missing limits,
 /// missing or unreadable meshes, non-physical or missing mass on a moving link.
 pub fn from_urdf(path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read {
+    let text = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES).map_err(|source| ModelError::Read {
         path: path.to_path_buf(),
         source,
     })?;
@@ -50,13 +50,16 @@ pub fn from_urdf(path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`from_urdf`].
 pub fn from_urdf_str(text: &str, path: &Path, opts: &UrdfOptions) -> Result<Model, ModelError> {
+    // Our own XML pass first: limits, lines, names and numbers; urdf-rs then reads a file that
+    // only its own schema can still reject.
+    let doc = crate::limits::parse_xml(text).map_err(|message| ModelError::UrdfParse {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    super::urdf_xml::check(&doc, path)?;
     let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfParse {
         path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    let doc = roxmltree::Document::parse(text).map_err(|e| ModelError::UrdfParse {
-        path: path.to_path_buf(),
-        message: e.to_string(),
+        message: format!("{e} (urdf-rs, which gives no line)"),
     })?;
     let facts = XmlFacts::read(&doc);
     let mut package_paths = opts.package_paths.clone();
@@ -187,6 +190,27 @@ impl<'a> Builder<'a> {
             }
         };
 
+        // One root does not make a tree: joints can also close a cycle among the other links.
+        let mut reached = std::collections::HashSet::from([root]);
+        let mut stack = vec![root];
+        while let Some(link) = stack.pop() {
+            for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                if reached.insert(joint.child.link.as_str()) {
+                    stack.push(joint.child.link.as_str());
+                }
+            }
+        }
+        if reached.len() < links.len() {
+            let detached: Vec<&str> = links.keys().copied().filter(|l| !reached.contains(l)).collect();
+            return Err(ModelError::NotATree {
+                path: self.path.to_path_buf(),
+                message: format!(
+                    "links {} cannot be reached from the root `{root}`: their joints form a cycle",
+                    detached.join(", ")
+                ),
+            });
+        }
+
         let base = match &opts.base_link {
             Some(name) if !links.contains_key(name.as_str()) => {
                 return Err(ModelError::UnknownLink {
@@ -266,6 +290,12 @@ impl<'a> Builder<'a> {
             } else {
                 pending *= origin;
             }
+        }
+        if joints.len() > crate::limits::MAX_JOINTS {
+            return Err(self.invalid(
+                format!("the chain from `{base}` to `{tip}`"),
+                format!("has {} movable joints; the limit is {}", joints.len(), crate::limits::MAX_JOINTS),
+            ));
         }
         if joints.is_empty() {
             return Err(ModelError::NoMovableJoint {

@@ -1,6 +1,7 @@
 //! Mesh files: finding them (`package://`, `file://`, relative paths) and loading them (STL, OBJ,
 //! DAE through mesh-loader).
 
+use crate::limits;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -64,15 +65,39 @@ pub fn package_paths_from_env(value: Option<&str>) -> Vec<PathBuf> {
 /// Loads a mesh file and applies `scale`.
 ///
 /// # Errors
-/// The loader's message when the file is unreadable, of an unknown format or has no triangles.
+/// The loader's message when the file is unreadable, not a regular file, over
+/// [`limits::MAX_MESH_BYTES`], of an unknown format, inconsistent or has no triangles.
 pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, String> {
+    let bytes = crate::files::read_bytes(file, limits::MAX_MESH_BYTES).map_err(|e| e.to_string())?;
+    load_mesh_bytes(uri, &bytes, file, scale)
+}
+
+/// Reads a mesh from the bytes of `file` (the format is taken from its extension) and applies
+/// `scale`. Files the mesh refers to (an OBJ's materials) are read through the same checks.
+///
+/// # Errors
+/// As [`load_mesh`], and more than [`limits::MAX_MESH_TRIANGLES`] triangles, a binary STL whose
+/// header disagrees with its size, a vertex beyond [`limits::MAX_LENGTH_M`].
+pub fn load_mesh_bytes(uri: &str, bytes: &[u8], file: &Path, scale: [f64; 3]) -> Result<TriMesh, String> {
+    let is_stl = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    if is_stl {
+        check_binary_stl(bytes)?;
+    }
     let scene = mesh_loader::Loader::default()
         .merge_meshes(true)
-        .load(file)
+        .load_from_slice_with_reader(bytes, file, |path| {
+            crate::files::read_bytes(path, limits::MAX_MESH_BYTES)
+        })
         .map_err(|e| e.to_string())?;
     let mesh = scene.meshes.into_iter().next().ok_or("the file holds no mesh")?;
     if mesh.faces.is_empty() {
         return Err("the mesh has no triangles".into());
+    }
+    if mesh.faces.len() > limits::MAX_MESH_TRIANGLES {
+        return Err(too_many_triangles(mesh.faces.len()));
     }
     let vertices: Vec<[f64; 3]> = mesh
         .vertices
@@ -82,7 +107,13 @@ pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, Str
     if vertices.iter().flatten().any(|c| !c.is_finite()) {
         return Err("a vertex coordinate is not finite".into());
     }
-    let count = vertices.len() as u32;
+    if let Some(c) = vertices.iter().flatten().find(|c| c.abs() > limits::MAX_LENGTH_M) {
+        return Err(format!(
+            "a vertex coordinate is {c} m after scaling; expected at most {} m in absolute value",
+            limits::MAX_LENGTH_M
+        ));
+    }
+    let count = u32::try_from(vertices.len()).map_err(|_| "more vertices than fit in 32 bits".to_string())?;
     if mesh.faces.iter().flatten().any(|&i| i >= count) {
         return Err("a face refers to a vertex that does not exist".into());
     }
@@ -93,6 +124,50 @@ pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, Str
         vertices,
         triangles: mesh.faces,
     })
+}
+
+fn too_many_triangles(count: usize) -> String {
+    format!(
+        "{count} triangles; the limit is {} per mesh (use a simplified collision mesh)",
+        limits::MAX_MESH_TRIANGLES
+    )
+}
+
+/// A binary STL's header states its triangle count; a count the file's size contradicts is a
+/// truncated or corrupt file (0, written by some exporters, is accepted). ASCII STL is checked
+/// by the parser.
+fn check_binary_stl(bytes: &[u8]) -> Result<(), String> {
+    const HEADER: usize = 84;
+    const TRIANGLE: usize = 50;
+    let trimmed = bytes.iter().position(|b| !b.is_ascii_whitespace()).map_or(&[][..], |i| &bytes[i..]);
+    let held = bytes.len().saturating_sub(HEADER) / TRIANGLE;
+    let stated = bytes
+        .get(80..HEADER)
+        .and_then(|b| <[u8; 4]>::try_from(b).ok())
+        .map(|b| u32::from_le_bytes(b) as usize);
+    let Some(stated) = stated else {
+        // Shorter than a binary header: only ASCII STL can be that small.
+        return if trimmed.starts_with(b"solid") {
+            Ok(())
+        } else {
+            Err(format!("{} bytes: too short for an STL file", bytes.len()))
+        };
+    };
+    let consistent = stated == held && (bytes.len() - HEADER) % TRIANGLE == 0;
+    // "solid" opens ASCII STL, but some binary exporters write it into the header too.
+    if trimmed.starts_with(b"solid") && !consistent {
+        return Ok(());
+    }
+    if held > limits::MAX_MESH_TRIANGLES {
+        return Err(too_many_triangles(held));
+    }
+    if stated != held && stated != 0 {
+        return Err(format!(
+            "binary STL header states {stated} triangles but the file holds {held} ({} bytes); the file is truncated or corrupt",
+            bytes.len()
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -112,6 +187,28 @@ mod tests {
     fn package_root_named_like_the_package_is_used_directly() {
         let searched = resolve_mesh_uri("package://arm/m.stl", Path::new("/x"), &[PathBuf::from("/ws/arm")]).unwrap_err();
         assert!(searched.contains(&PathBuf::from("/ws/arm/m.stl")));
+    }
+
+    fn binary_stl(stated: u32, held: usize) -> Vec<u8> {
+        let mut bytes = vec![0u8; 80];
+        bytes.extend_from_slice(&stated.to_le_bytes());
+        for k in 0..held {
+            let mut triangle = vec![0u8; 50];
+            for (i, value) in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, k as f32].iter().enumerate() {
+                triangle[12 + 4 * i..16 + 4 * i].copy_from_slice(&value.to_le_bytes());
+            }
+            bytes.extend(triangle);
+        }
+        bytes
+    }
+
+    #[test]
+    fn stl_header_claiming_more_triangles_than_held_is_refused() {
+        let file = Path::new("m.stl");
+        assert!(load_mesh_bytes("m.stl", &binary_stl(2, 2), file, [1.0; 3]).is_ok());
+        let error = load_mesh_bytes("m.stl", &binary_stl(3, 2), file, [1.0; 3]).expect_err("truncated");
+        assert!(error.contains("states 3 triangles but the file holds 2"), "{error}");
+        assert!(load_mesh_bytes("m.stl", &binary_stl(0, 2), file, [1.0; 3]).is_ok());
     }
 
     #[test]

@@ -11,6 +11,7 @@ mod inertia;
 mod kinematics;
 mod mesh;
 mod trig;
+mod urdf_xml;
 
 pub use from_design::from_design;
 pub use from_mjcf::{from_mjcf, TOOL_SITE};
@@ -19,7 +20,7 @@ pub use geometry::{Collider, Shape};
 
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;
-pub use mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri, TriMesh};
+pub use mesh::{load_mesh, load_mesh_bytes, package_paths_from_env, resolve_mesh_uri, TriMesh};
 pub use trig::sin_cos;
 
 use nalgebra::{Isometry3, Unit, Vector3};

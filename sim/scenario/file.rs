@@ -1,6 +1,7 @@
 //! Scenario files: the JSON schema and its validation (`load`, `parse`). Writing is in `write.rs`.
 
 use super::{Floor, Goal, Obstacle, Provenance, Scenario, ScenarioError, Tolerance};
+use crate::limits;
 use crate::model::{load_mesh, Shape};
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde::Deserialize;
@@ -90,7 +91,7 @@ struct GoalFile {
 /// that are not unit, rotation matrices that are not rotations, both or neither goal orientation,
 /// missing or unreadable mesh files, an empty goal list.
 pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+    let text = crate::files::read_text(path, limits::MAX_TEXT_BYTES).map_err(|source| ScenarioError::Read {
         path: path.to_path_buf(),
         source,
     })?;
@@ -133,6 +134,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
         }
     }
 
+    for (field, count, limit) in [
+        ("obstacles", file.obstacles.len(), limits::MAX_OBSTACLES),
+        ("goals", file.goals.len(), limits::MAX_GOALS),
+    ] {
+        if count > limit {
+            return Err(check.invalid(field, format!("has {count} entries; the limit is {limit}")));
+        }
+    }
     let mut obstacles = Vec::with_capacity(file.obstacles.len());
     for (index, obstacle) in file.obstacles.iter().enumerate() {
         let obstacle = check.obstacle(index, obstacle)?;
@@ -221,20 +230,26 @@ impl Checker<'_> {
         }
     }
 
+    /// A finite number within +-[`limits::MAX_LENGTH_M`] (a height, a home joint position).
     fn finite(&self, field: &str, value: f64) -> Result<f64, ScenarioError> {
-        if value.is_finite() {
-            Ok(value)
-        } else {
+        if !value.is_finite() {
             Err(self.invalid(field, format!("{value} is not a finite number")))
+        } else if value.abs() > limits::MAX_LENGTH_M {
+            Err(self.invalid(field, format!("{value}: expected at most {} in absolute value", limits::MAX_LENGTH_M)))
+        } else {
+            Ok(value)
         }
     }
 
     /// A length that must be finite and strictly positive (m, or a unitless scale factor).
     fn positive(&self, field: &str, value: f64, unit: &str) -> Result<f64, ScenarioError> {
-        if value.is_finite() && value > 0.0 {
+        if value.is_finite() && value > 0.0 && value <= limits::MAX_LENGTH_M {
             Ok(value)
         } else {
-            Err(self.invalid(field, format!("{value}{unit}: expected a finite number > 0")))
+            Err(self.invalid(
+                field,
+                format!("{value}{unit}: expected a finite number > 0 and at most {}", limits::MAX_LENGTH_M),
+            ))
         }
     }
 
@@ -242,6 +257,12 @@ impl Checker<'_> {
         for (axis, value) in ["x", "y", "z"].iter().zip(xyz) {
             if !value.is_finite() {
                 return Err(self.invalid(field, format!("{axis} = {value} is not a finite number")));
+            }
+            if value.abs() > limits::MAX_LENGTH_M {
+                return Err(self.invalid(
+                    field,
+                    format!("{axis} = {value} m: expected at most {} m in absolute value", limits::MAX_LENGTH_M),
+                ));
             }
         }
         Ok(Vector3::from(xyz))

@@ -9,7 +9,6 @@ use super::file::{default_goal_name, default_obstacle_name};
 use super::{Scenario, ScenarioError, Tolerance};
 use crate::model::Shape;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use std::io::Write;
 use std::path::Path;
 
 /// One JSON value under construction: scalars already formatted.
@@ -227,22 +226,14 @@ pub fn save(scenario: &Scenario, path: &Path, overwrite: bool) -> Result<(), Sce
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(write_error)?;
     }
-    let mut options = std::fs::OpenOptions::new();
-    options.write(true);
-    if overwrite {
-        options.create(true).truncate(true);
-    } else {
-        // Atomic refusal: no window between checking and creating the file.
-        options.create_new(true);
-    }
-    let mut file = options.open(path).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::AlreadyExists {
-            write_error(std::io::Error::new(e.kind(), "the file exists; pass --force to replace it"))
-        } else {
-            write_error(e)
-        }
-    })?;
-    file.write_all(to_json(scenario).as_bytes()).map_err(write_error)
+    crate::files::write_atomic(path, to_json(scenario).as_bytes(), overwrite).map_err(|error| match error {
+        crate::files::WriteError::Exists => write_error(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "the file exists; pass --force to replace it",
+        )),
+        crate::files::WriteError::Input => write_error(std::io::Error::other("it is an input of this run")),
+        crate::files::WriteError::Io(e) => write_error(e),
+    })
 }
 
 #[cfg(test)]

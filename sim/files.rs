@@ -1,0 +1,279 @@
+//! The file boundary. Every input is read through [`read_text`] or [`read_bytes`]: regular files
+//! only, within a size limit, and remembered; every output is written through [`write_atomic`]:
+//! a temporary file in the target's folder, flushed, then renamed over the target, never over a
+//! file this process has read (same canonical path or same inode, so hard and symbolic links to
+//! an input are refused too).
+//!
+//! The set of files read is process-wide because inputs are read deep inside the stages (a URDF's
+//! meshes, a scenario's meshes, the files an MJCF `<include>`s): whichever stage read a file,
+//! no output of the same process may replace it.
+
+use crate::limits;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// One file that was read: where it is and which inode it is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Identity {
+    device: u64,
+    inode: u64,
+    canonical: PathBuf,
+}
+
+static READ: Mutex<Vec<Identity>> = Mutex::new(Vec::new());
+
+fn identity(path: &Path) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt;
+    let meta = std::fs::metadata(path).ok()?;
+    Some(Identity {
+        device: meta.dev(),
+        inode: meta.ino(),
+        canonical: path.canonicalize().ok()?,
+    })
+}
+
+/// Remembers `path` as an input of this process (for files read by others, such as MuJoCo).
+pub fn record_input(path: &Path) {
+    if let Some(id) = identity(path) {
+        let mut read = READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !read.contains(&id) {
+            read.push(id);
+        }
+    }
+}
+
+/// Every file this process has read, by canonical path, in the order first read.
+pub fn inputs_read() -> Vec<PathBuf> {
+    let read = READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    read.iter().map(|id| id.canonical.clone()).collect()
+}
+
+/// Whether writing `path` would replace a file this process has read.
+pub fn is_input(path: &Path) -> bool {
+    let Some(target) = identity(path) else { return false };
+    let read = READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    read.iter()
+        .any(|id| (id.device, id.inode) == (target.device, target.inode) || id.canonical == target.canonical)
+}
+
+/// What a path is when it is not a regular file, for messages.
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let kind = meta.file_type();
+    if kind.is_dir() {
+        "a directory"
+    } else if kind.is_fifo() {
+        "a FIFO"
+    } else if kind.is_char_device() || kind.is_block_device() {
+        "a device"
+    } else if kind.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+fn other(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
+}
+
+/// Checks that `path` is a regular file of at most `limit` bytes, without opening it (opening a
+/// FIFO blocks until a writer comes).
+///
+/// # Errors
+/// An I/O error saying what the path is instead, or how large it is.
+pub fn check_regular(path: &Path, limit: u64) -> std::io::Result<u64> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(other(format!("{}: expected a regular file", kind_of(&meta))));
+    }
+    if meta.len() > limit {
+        return Err(other(format!(
+            "{} bytes: larger than the limit of {} for this kind of file",
+            meta.len(),
+            limits::bytes(limit)
+        )));
+    }
+    Ok(meta.len())
+}
+
+/// Reads a regular file of at most `limit` bytes and remembers it as an input.
+///
+/// # Errors
+/// An I/O error: missing or unreadable, not a regular file (directory, FIFO, device), or larger
+/// than `limit`.
+pub fn read_bytes(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let expected = check_regular(path, limit)?;
+    let file = std::fs::File::open(path)?;
+    // The file may have changed between the check and the open: check what was opened.
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(other(format!("{}: expected a regular file", kind_of(&meta))));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(expected.min(limit)).unwrap_or(0));
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(other(format!("larger than the limit of {} for this kind of file", limits::bytes(limit))));
+    }
+    record_input(path);
+    Ok(bytes)
+}
+
+/// Reads a regular UTF-8 text file of at most `limit` bytes and remembers it as an input.
+///
+/// # Errors
+/// As [`read_bytes`], and invalid UTF-8 (naming the line and column).
+pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
+    let bytes = read_bytes(path, limit)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let before = &e.as_bytes()[..valid];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = valid - before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1) + 1;
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("line {line}, column {column}: invalid UTF-8 (expected a UTF-8 text file)"),
+        )
+    })
+}
+
+/// Why an output was not written.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The target is a file this process read.
+    #[error("it is an input of this run (same file or a link to it)")]
+    Input,
+    /// The target exists and replacing was not asked for.
+    #[error("the file exists")]
+    Exists,
+    /// The file system refused; the old file, if any, is intact.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, flushed to disk, then renamed
+/// over it, so a failed write leaves the old file intact and no partial file. An existing file is
+/// replaced only when `replace` is true (and never when it is an input of this process); a
+/// replaced file keeps its permissions.
+///
+/// # Errors
+/// [`WriteError`].
+pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), WriteError> {
+    if is_input(path) {
+        return Err(WriteError::Input);
+    }
+    let existing = std::fs::metadata(path).ok();
+    if existing.is_some() && !replace {
+        return Err(WriteError::Exists);
+    }
+    if let Some(meta) = &existing {
+        if !meta.is_file() {
+            return Err(WriteError::Io(other(format!("{}: expected a regular file or a new name", kind_of(meta)))));
+        }
+    }
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().ok_or_else(|| other("expected a file name".into()))?;
+    let (temp, mut file) = create_temp(&dir, &name.to_string_lossy())?;
+    let written = (|| -> std::io::Result<()> {
+        file.write_all(bytes)?;
+        if let Some(meta) = &existing {
+            file.set_permissions(meta.permissions())?;
+        }
+        file.sync_all()?;
+        drop(file);
+        if replace {
+            std::fs::rename(&temp, path)
+        } else {
+            // A hard link fails when the name exists, so a file created meanwhile is not lost.
+            std::fs::hard_link(&temp, path).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::AlreadyExists {
+                    other("the file exists".into())
+                } else {
+                    e
+                }
+            })?;
+            std::fs::remove_file(&temp)
+        }
+    })();
+    if let Err(error) = written {
+        let _ = std::fs::remove_file(&temp);
+        return Err(error.into());
+    }
+    Ok(())
+}
+
+fn create_temp(dir: &Path, name: &str) -> std::io::Result<(PathBuf, std::fs::File)> {
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    loop {
+        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let temp = dir.join(format!(".{name}.{}.{n}.tmp", std::process::id()));
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&temp) {
+            Ok(file) => return Ok((temp, file)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_are_remembered_and_refused_as_outputs_through_links() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let input = dir.path().join("in.json");
+        std::fs::write(&input, "{}").expect("write");
+        let hard = dir.path().join("hard.json");
+        std::fs::hard_link(&input, &hard).expect("hard link");
+        let soft = dir.path().join("soft.json");
+        std::os::unix::fs::symlink(&input, &soft).expect("symlink");
+        read_text(&input, 100).expect("read");
+        for target in [&input, &hard, &soft] {
+            assert!(matches!(write_atomic(target, b"x", true), Err(WriteError::Input)), "{}", target.display());
+        }
+        assert_eq!(std::fs::read_to_string(&input).expect("read"), "{}");
+    }
+
+    #[test]
+    fn fifo_and_directory_are_refused_without_blocking() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let fifo = dir.path().join("pipe.stl");
+        let status = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+        assert!(status.success());
+        let error = read_bytes(&fifo, 100).expect_err("a FIFO is refused");
+        assert!(error.to_string().contains("a FIFO"), "{error}");
+        let error = read_bytes(dir.path(), 100).expect_err("a directory is refused");
+        assert!(error.to_string().contains("a directory"), "{error}");
+    }
+
+    #[test]
+    fn size_limit_and_invalid_utf8_are_named() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let big = dir.path().join("big.json");
+        std::fs::write(&big, vec![b' '; 101]).expect("write");
+        assert!(read_bytes(&big, 100).expect_err("too large").to_string().contains("101 bytes"));
+        let bad = dir.path().join("bad.xml");
+        std::fs::write(&bad, b"<a>\n<b name=\"\xff\"/>").expect("write");
+        let error = read_text(&bad, 100).expect_err("not UTF-8");
+        assert!(error.to_string().contains("line 2, column 10"), "{error}");
+    }
+
+    #[test]
+    fn no_replace_keeps_an_existing_file_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path().join("out.json");
+        std::fs::write(&out, "old").expect("write");
+        assert!(matches!(write_atomic(&out, b"new", false), Err(WriteError::Exists)));
+        write_atomic(&out, b"new", true).expect("replace");
+        assert_eq!(std::fs::read_to_string(&out).expect("read"), "new");
+        let fresh = dir.path().join("fresh.json");
+        write_atomic(&fresh, b"n", false).expect("create");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+    }
+}
