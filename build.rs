@@ -10,6 +10,9 @@
 //! 3. An importable Python `mujoco` of the pinned version: its library is copied (hash checked).
 //! 4. The official wheel is fetched with `python3 -m pip download`, hash checked, and unpacked.
 //!
+//! Except with 1, the binaries do not depend on the library at start-up: it is loaded at first
+//! use (see `sim/engine/library.rs`).
+//!
 //! Failures end the build with one message saying what to install or set.
 
 use sha2::{Digest, Sha256};
@@ -40,7 +43,10 @@ fn main() {
 
 fn run(manifest: &Path, pin_path: &Path) -> Result<(), String> {
     if let Ok(dir) = std::env::var("MUJOCO_DYNAMIC_LINK_DIR") {
+        // mujoco-rs links the real library from there: a start-up dependency, not lazy.
         println!("cargo::rustc-link-arg=-Wl,-rpath,{dir}");
+        let version = read_pin(pin_path, "x86_64").map(|p| p.version).unwrap_or_default();
+        println!("cargo::rustc-env=MUJOCO_SONAME=libmujoco.so.{version}");
         return Ok(());
     }
     let arch = std::env::var("CARGO_CFG_TARGET_ARCH").unwrap_or_default();
@@ -67,12 +73,42 @@ fn run(manifest: &Path, pin_path: &Path) -> Result<(), String> {
         }
     }
 
-    // The linker looks for the unversioned name; the binaries ask for the soname.
+    // MuJoCo is loaded at first use (sim/engine/library.rs), so a binary without it still runs
+    // everything else. mujoco-rs links `-lmujoco` from this folder: an empty linker script of that
+    // name satisfies it without a DT_NEEDED entry; the MuJoCo symbols stay undefined and are bound
+    // lazily through the PLT, which needs `-C relro-level=partial` (.cargo/config.toml).
+    lazy_flags_present()?;
     let link = lib_dir.join("libmujoco.so");
     let _ = fs::remove_file(&link);
-    std::os::unix::fs::symlink(&lib_name, &link).map_err(|e| format!("cannot create {}: {e}", link.display()))?;
+    fs::write(
+        &link,
+        "/* MuJoCo is loaded at run time (sim/engine/library.rs); -lmujoco links nothing. */\n",
+    )
+    .map_err(|e| format!("cannot write {}: {e}", link.display()))?;
+    println!("cargo::rustc-link-arg=-Wl,--unresolved-symbols=ignore-all");
+    println!("cargo::rustc-link-arg=-Wl,-z,lazy");
+    // dlopen of the soname searches the binary's RUNPATH.
     println!("cargo::rustc-link-arg=-Wl,-rpath,{}", lib_dir.display());
+    println!("cargo::rustc-env=MUJOCO_SONAME={lib_name}");
     Ok(())
+}
+
+/// Without partial RELRO rustc calls foreign functions through GOT slots bound at start-up, and a
+/// binary with unresolved MuJoCo symbols would not start. A `RUSTFLAGS` variable replaces the
+/// flags of `.cargo/config.toml`, so say so instead of building such a binary.
+fn lazy_flags_present() -> Result<(), String> {
+    let flags = std::env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
+    let flags: Vec<&str> = flags.split('\x1f').collect();
+    let wanted = |f: &str| f == "relro-level=partial" || f == "relro-level=off";
+    let found = flags.windows(2).any(|w| w[0] == "-C" && wanted(w[1]))
+        || flags.iter().any(|f| f.strip_prefix("-C").is_some_and(wanted));
+    if found {
+        Ok(())
+    } else {
+        Err("MuJoCo is loaded at first use and needs `-C relro-level=partial` in the rust flags (.cargo/config.toml sets it); \
+             a RUSTFLAGS environment variable replaces that setting: add `-C relro-level=partial` to it"
+            .into())
+    }
 }
 
 fn read_pin(path: &Path, arch: &str) -> Result<Pin, String> {

@@ -57,6 +57,8 @@ fn gravity_torques_and_reflected_inertia_match_mujoco_on_every_design() {
         // The diagonal of MuJoCo's joint-space mass matrix (the export has one dof per joint,
         // in chain order).
         let xml = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+        // Direct mujoco-rs calls need the library loaded first (it is loaded at first use).
+        proving_ground::engine::check_version().expect("MuJoCo is available");
         let mj = MjModel::from_xml_string(&xml).expect("MuJoCo loads the export");
         let mut data = mj.make_data();
         let dof = model.dof();

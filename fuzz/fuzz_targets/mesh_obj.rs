@@ -2,9 +2,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
-    // load_mesh_bytes does not exist yet: load_mesh reads the same bytes from a scratch file.
-    let path = proving_ground_fuzz::scratch_file("fuzz.obj", data);
-    let _ = proving_ground::model::load_mesh("fuzz.obj", &path, [1.0, 1.0, 1.0]);
+    let _ = proving_ground::model::load_mesh_bytes("fuzz.obj", data, Path::new("fuzz.obj"), [1.0, 1.0, 1.0]);
 });

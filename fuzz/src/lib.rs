@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 /// A scratch file `name` in a folder of this process's own (`$TMPDIR/proving-ground-fuzz-PID`),
-/// created once and then overwritten with `bytes` on every call.
+/// written anew with `bytes` on every call.
 ///
 /// # Panics
 /// When the scratch folder or file cannot be written: that is the harness failing, not a finding.
@@ -16,6 +16,9 @@ pub fn scratch_file(name: &str, bytes: &[u8]) -> PathBuf {
         dir
     });
     let path = dir.join(name);
+    // A new file each time: on ext4, rewriting a file truncated to zero flushes it to disk at close
+    // (auto_da_alloc), which made every run take milliseconds.
+    let _ = std::fs::remove_file(&path);
     std::fs::write(&path, bytes).expect("fuzz harness: cannot write its scratch file");
     path
 }

@@ -6,6 +6,7 @@ mod confirm;
 mod crosscheck;
 mod gains;
 mod inputs;
+pub mod library;
 mod load;
 mod mujoco;
 mod mujoco_run;
@@ -43,6 +44,12 @@ pub enum EngineError {
         kind: &'static str,
         /// The name looked for.
         name: String,
+    },
+    /// The MuJoCo library could not be loaded.
+    #[error("{message}")]
+    Unavailable {
+        /// What was tried and what to install.
+        message: String,
     },
     /// The linked MuJoCo is not the version the project pins.
     #[error("linked MuJoCo is {found}, proving-ground was built and verified against {expected} (mujoco/PIN)")]

@@ -221,11 +221,13 @@ impl MujocoGeomDistance {
     }
 }
 
-/// Fails when the MuJoCo library found at run time is not the pinned version.
+/// Loads MuJoCo (first call only) and fails when it is missing or not the pinned version; every
+/// use of MuJoCo starts here.
 ///
 /// # Errors
-/// [`EngineError::Version`].
+/// [`EngineError::Unavailable`] or [`EngineError::Version`].
 pub fn check_version() -> Result<(), EngineError> {
+    super::library::ensure().map_err(|message| EngineError::Unavailable { message })?;
     // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
     let found = unsafe { std::ffi::CStr::from_ptr(mujoco_rs::mujoco_c::mj_versionString()) }
         .to_string_lossy()

@@ -19,7 +19,7 @@ mod geoms;
 mod joint;
 
 use super::{Diagnostic, Inertial, Joint, Link, Model, ModelError, ModelSource, Segment};
-use mujoco_rs::mujoco_c::{mjVERSION_HEADER, mj_deleteModel, mj_loadXML, mj_version, mjtJoint};
+use mujoco_rs::mujoco_c::{mj_deleteModel, mj_loadXML, mjtJoint};
 use mujoco_rs::prelude::*;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -38,15 +38,11 @@ pub const TOOL_SITE: &str = "tool";
 /// the last joint does not move, or no joint at all; [`ModelError::BadInertia`] for a moving link
 /// without usable mass.
 pub fn from_mjcf(path: &Path) -> Result<Model, ModelError> {
-    // mujoco-rs panics on a version mismatch; check first so it is an error instead.
-    // SAFETY: mj_version only reads a constant of the loaded library.
-    let linked = unsafe { mj_version() } as u32;
-    if linked != mjVERSION_HEADER {
-        return Err(ModelError::MjcfLoad {
-            path: path.to_path_buf(),
-            message: format!("the linked MuJoCo library is version {linked}, mujoco-rs expects {mjVERSION_HEADER}"),
-        });
-    }
+    // Loads MuJoCo, and checks its version first: mujoco-rs panics on a mismatch.
+    crate::engine::check_version().map_err(|e| ModelError::MjcfLoad {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
     checks::before_load(path)?;
     let mj = MjModel::from_xml(path).map_err(|e| ModelError::MjcfLoad {
         path: path.to_path_buf(),
