@@ -100,14 +100,15 @@ fn lazy_flags_present() -> Result<(), String> {
     let flags = std::env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
     let flags: Vec<&str> = flags.split('\x1f').collect();
     let wanted = |f: &str| f == "relro-level=partial" || f == "relro-level=off";
-    let found = flags.windows(2).any(|w| w[0] == "-C" && wanted(w[1]))
-        || flags.iter().any(|f| f.strip_prefix("-C").is_some_and(wanted));
+    let found = flags.windows(2).any(|w| w[0] == "-C" && wanted(w[1])) || flags.iter().any(|f| f.strip_prefix("-C").is_some_and(wanted));
     if found {
         Ok(())
     } else {
-        Err("MuJoCo is loaded at first use and needs `-C relro-level=partial` in the rust flags (.cargo/config.toml sets it); \
+        Err(
+            "MuJoCo is loaded at first use and needs `-C relro-level=partial` in the rust flags (.cargo/config.toml sets it); \
              a RUSTFLAGS environment variable replaces that setting: add `-C relro-level=partial` to it"
-            .into())
+                .into(),
+        )
     }
 }
 

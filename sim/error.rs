@@ -66,6 +66,16 @@ pub enum Error {
         /// serde_json's message.
         message: String,
     },
+    /// A snapshot suite file is unusable.
+    #[error("{path}: {field}: {message}")]
+    Suite {
+        /// The suite file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
     /// Warnings were found and `--strict` was given.
     #[error("{count} warning(s) and --strict was given:\n{list}")]
     Strict {

@@ -114,7 +114,10 @@ pub fn read_bytes(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     let mut bytes = Vec::with_capacity(usize::try_from(expected.min(limit)).unwrap_or(0));
     file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
-        return Err(other(format!("larger than the limit of {} for this kind of file", limits::bytes(limit))));
+        return Err(other(format!(
+            "larger than the limit of {} for this kind of file",
+            limits::bytes(limit)
+        )));
     }
     record_input(path);
     Ok(bytes)
@@ -169,7 +172,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
     }
     if let Some(meta) = &existing {
         if !meta.is_file() {
-            return Err(WriteError::Io(other(format!("{}: expected a regular file or a new name", kind_of(meta)))));
+            return Err(WriteError::Io(other(format!(
+                "{}: expected a regular file or a new name",
+                kind_of(meta)
+            ))));
         }
     }
     let dir = match path.parent() {
@@ -234,7 +240,11 @@ mod tests {
         std::os::unix::fs::symlink(&input, &soft).expect("symlink");
         read_text(&input, 100).expect("read");
         for target in [&input, &hard, &soft] {
-            assert!(matches!(write_atomic(target, b"x", true), Err(WriteError::Input)), "{}", target.display());
+            assert!(
+                matches!(write_atomic(target, b"x", true), Err(WriteError::Input)),
+                "{}",
+                target.display()
+            );
         }
         assert_eq!(std::fs::read_to_string(&input).expect("read"), "{}");
     }
@@ -273,7 +283,10 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&out).expect("read"), "new");
         let fresh = dir.path().join("fresh.json");
         write_atomic(&fresh, b"n", false).expect("create");
-        let names: Vec<_> = std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("list")
+            .map(|e| e.expect("entry").file_name())
+            .collect();
         assert_eq!(names.len(), 2, "{names:?}");
     }
 }

@@ -60,3 +60,4 @@ pub mod pipeline;
 pub mod plan;
 pub mod report;
 pub mod scenario;
+pub mod suite;

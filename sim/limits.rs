@@ -54,7 +54,9 @@ pub fn parse_xml(text: &str) -> Result<roxmltree::Document<'_>, String> {
     // Document order visits a parent before its children: one pass gives every depth.
     let mut depth = vec![0usize; doc.descendants().count()];
     for node in doc.descendants() {
-        let own = node.parent().map_or(0, |parent| depth[parent.id().get_usize()] + usize::from(node.is_element()));
+        let own = node
+            .parent()
+            .map_or(0, |parent| depth[parent.id().get_usize()] + usize::from(node.is_element()));
         depth[node.id().get_usize()] = own;
         if own > MAX_XML_DEPTH {
             let pos = doc.text_pos_at(node.range().start);

@@ -180,6 +180,20 @@ enum Command {
     /// Write a generated scenario (the paper's cluttered tasks, its workspace task, or the course
     /// for its real-world robot); an existing file is only replaced with --force.
     Generate(GenerateArgs),
+    /// Run a suite (designs x scenarios x options, a JSON file) and compare every report with its
+    /// snapshot in the suite's folder: exit 1 with a diff on any difference, missing snapshot
+    /// (written as .snap.new) or orphan; --accept records them.
+    Snapshot(SnapshotArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct SnapshotArgs {
+    /// The suite file (JSON: snapshots, designs, scenarios, options).
+    #[arg(long, value_name = "FILE")]
+    suite: PathBuf,
+    /// Record this run's snapshots (and delete orphans) instead of failing on a difference.
+    #[arg(long)]
+    accept: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -256,6 +270,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Some(Command::Generate(args)) => generate_scenarios(args).map_err(Error::from),
+        Some(Command::Snapshot(args)) => snapshot_suite(args),
         None => run(&cli),
     };
     match result {
@@ -326,7 +341,13 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     let mut kinematics_check = None;
     if cli.mujoco_checks > 0 {
         let source = format!("the MJCF export of {}", design_path.display());
-        let check = check_kinematics(model, &mjcf, &source, usize::try_from(cli.mujoco_checks).unwrap_or(usize::MAX), cli.seed)?;
+        let check = check_kinematics(
+            model,
+            &mjcf,
+            &source,
+            usize::try_from(cli.mujoco_checks).unwrap_or(usize::MAX),
+            cli.seed,
+        )?;
         // A full run prints the line with the report; a disagreement stops here.
         if cli.kinematics_only || !check.agree {
             println!("{}", check.line());
@@ -423,4 +444,50 @@ fn generate_scenarios(args: &GenerateArgs) -> Result<ExitCode, ScenarioError> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `validate-design snapshot --suite FILE [--accept]`.
+fn snapshot_suite(args: &SnapshotArgs) -> Result<ExitCode, Error> {
+    use proving_ground::suite::{self, Outcome};
+    let result = suite::run(&args.suite, args.accept)?;
+    for entry in &result.entries {
+        let status = match (&entry.outcome, result.accepted) {
+            (Outcome::Same, _) => "same",
+            (Outcome::New, true) => "written",
+            (Outcome::Changed(_), true) => "updated",
+            (Outcome::New, false) => "NEW",
+            (Outcome::Changed(_), false) => "CHANGED",
+        };
+        println!("{status:<8} {}  {}", entry.name, entry.verdict);
+        if let (Outcome::Changed(diff), false) = (&entry.outcome, result.accepted) {
+            print!("{diff}");
+        }
+    }
+    for orphan in &result.orphans {
+        let what = if result.accepted {
+            "deleted orphan"
+        } else {
+            "ORPHAN (no run writes it)"
+        };
+        println!("{what} {}", orphan.display());
+    }
+    let differing = result.entries.iter().filter(|e| e.outcome != Outcome::Same).count();
+    println!(
+        "{} snapshots: {} same, {} {}, {} orphans{}",
+        result.entries.len(),
+        result.entries.len() - differing,
+        differing,
+        if result.accepted {
+            "recorded"
+        } else {
+            "differ (new ones written as .snap.new)"
+        },
+        result.orphans.len(),
+        if result.passed() || result.accepted {
+            ""
+        } else {
+            "; review the diffs, then run again with --accept"
+        }
+    );
+    Ok(if result.passed() { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

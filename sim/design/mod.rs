@@ -327,10 +327,7 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
             return Err(invalid(field.into(), "has a non-finite number".into()));
         }
         if pose.position.iter().chain(&pose.rpy).any(|v| v.abs() > limits::MAX_LENGTH_M) {
-            return Err(invalid(
-                field.into(),
-                format!("has a number beyond +-{}", limits::MAX_LENGTH_M),
-            ));
+            return Err(invalid(field.into(), format!("has a number beyond +-{}", limits::MAX_LENGTH_M)));
         }
     }
     for (index, joint) in design.joints.iter().enumerate() {
@@ -349,7 +346,7 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
             if value.abs() > limits::MAX_LENGTH_M {
                 return Err(invalid(
                     format!("joints[{index}].{name}"),
-                    format!("{value}: expected at most {} in absolute value", limits::MAX_LENGTH_M),
+                    format!("{value:e}: expected at most {} in absolute value", limits::MAX_LENGTH_M),
                 ));
             }
         }
@@ -364,7 +361,7 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
             return Err(invalid(
                 format!("joints[{index}].limits"),
                 format!(
-                    "[{lower}, {upper}] rad: expected limits within +-{} rad",
+                    "[{lower:e}, {upper:e}] rad: expected limits within +-{} rad",
                     limits::MAX_JOINT_LIMIT
                 ),
             ));

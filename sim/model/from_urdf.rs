@@ -454,6 +454,14 @@ impl<'a> Builder<'a> {
             Some([limit.lower, limit.upper])
         };
         // URDF requires effort and velocity; 0 is the common way of writing "not specified".
+        for (what, value) in [("effort", limit.effort), ("velocity", limit.velocity)] {
+            if value < 0.0 {
+                return Err(self.invalid(
+                    format!("{element} <limit>"),
+                    format!("{what} {value}: expected a positive rating (0 means not specified)"),
+                ));
+            }
+        }
         let positive = |value: f64, what: &str, diagnostics: &mut Vec<Diagnostic>| {
             if value.is_finite() && value > 0.0 {
                 Some(value)

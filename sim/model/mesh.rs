@@ -52,7 +52,8 @@ pub fn resolve_mesh_uri(uri: &str, description_dir: &Path, package_paths: &[Path
         let plain = uri.strip_prefix("file://").unwrap_or(uri);
         vec![description_dir.join(plain)]
     };
-    candidates.iter().find(|path| path.is_file()).cloned().ok_or(candidates)
+    // `exists`, not `is_file`: a directory or FIFO of that name is reported as what it is.
+    candidates.iter().find(|path| path.exists()).cloned().ok_or(candidates)
 }
 
 /// Package search roots from a `ROS_PACKAGE_PATH`-style variable (`:`-separated).
@@ -88,9 +89,7 @@ pub fn load_mesh_bytes(uri: &str, bytes: &[u8], file: &Path, scale: [f64; 3]) ->
     }
     let scene = mesh_loader::Loader::default()
         .merge_meshes(true)
-        .load_from_slice_with_reader(bytes, file, |path| {
-            crate::files::read_bytes(path, limits::MAX_MESH_BYTES)
-        })
+        .load_from_slice_with_reader(bytes, file, |path| crate::files::read_bytes(path, limits::MAX_MESH_BYTES))
         .map_err(|e| e.to_string())?;
     let mesh = scene.meshes.into_iter().next().ok_or("the file holds no mesh")?;
     if mesh.faces.is_empty() {

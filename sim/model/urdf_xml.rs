@@ -51,6 +51,12 @@ const NUMBERS: &[(&str, &str, usize, Range)] = &[
     ("color", "rgba", 4, Range::Other),
 ];
 
+/// Joint types URDF defines.
+const JOINT_TYPES: [&str; 7] = ["revolute", "continuous", "prismatic", "fixed", "floating", "planar", "spherical"];
+
+/// Shapes a `<geometry>` may hold (capsule: a common extension urdf-rs reads).
+const SHAPES: [&str; 5] = ["box", "cylinder", "capsule", "sphere", "mesh"];
+
 /// Checks structure, counts, names and numbers of a parsed URDF document.
 ///
 /// # Errors
@@ -72,7 +78,10 @@ pub(super) fn check(doc: &roxmltree::Document, path: &Path) -> Result<(), ModelE
     for (tag, limit) in [("link", limits::MAX_LINKS), ("joint", limits::MAX_LINKS)] {
         let count = root.children().filter(|n| n.has_tag_name(tag)).count();
         if count > limit {
-            return Err(invalid("<robot>".into(), format!("has {count} <{tag}> elements; the limit is {limit}")));
+            return Err(invalid(
+                "<robot>".into(),
+                format!("has {count} <{tag}> elements; the limit is {limit}"),
+            ));
         }
         let mut first_line: HashMap<&str, u32> = HashMap::new();
         for node in root.children().filter(|n| n.has_tag_name(tag)) {
@@ -85,6 +94,40 @@ pub(super) fn check(doc: &roxmltree::Document, path: &Path) -> Result<(), ModelE
                     format!("a second {tag} named `{name}` (the first is at line {first}); names must be unique"),
                 ));
             }
+        }
+    }
+    for joint in root.children().filter(|n| n.has_tag_name("joint")) {
+        let kind = joint.attribute("type").unwrap_or("");
+        if !JOINT_TYPES.contains(&kind) {
+            return Err(invalid(
+                format!(
+                    "<joint name=\"{}\"> (line {}) type",
+                    joint.attribute("name").unwrap_or(""),
+                    line(joint)
+                ),
+                format!("`{kind}`: expected one of {}", JOINT_TYPES.join(", ")),
+            ));
+        }
+    }
+    for geometry in doc.descendants().filter(|n| n.has_tag_name("geometry")) {
+        let shapes: Vec<&str> = geometry
+            .children()
+            .filter(|n| n.is_element())
+            .map(|n| n.tag_name().name())
+            .collect();
+        if shapes.len() != 1 || !SHAPES.contains(&shapes[0]) {
+            return Err(invalid(
+                format!(
+                    "link `{}` <geometry> (line {})",
+                    geometry
+                        .ancestors()
+                        .find(|n| n.has_tag_name("link"))
+                        .and_then(|n| n.attribute("name"))
+                        .unwrap_or("?"),
+                    line(geometry)
+                ),
+                format!("holds {shapes:?}: expected exactly one of {}", SHAPES.join(", ")),
+            ));
         }
     }
     for node in doc.descendants().filter(|n| n.is_element()) {
@@ -134,12 +177,16 @@ mod tests {
     #[test]
     fn bad_float_names_element_attribute_and_line() {
         let message = error("<robot name=\"r\">\n<link name=\"a\">\n<inertial><mass value=\"1,5\"/></inertial></link></robot>");
-        assert!(message.contains("<mass value=\"1,5\"> (line 3)") && message.contains("`1,5` is not a number"), "{message}");
+        assert!(
+            message.contains("<mass value=\"1,5\"> (line 3)") && message.contains("`1,5` is not a number"),
+            "{message}"
+        );
     }
 
     #[test]
     fn huge_joint_limits_are_refused() {
-        let message = error("<robot name=\"r\"><joint name=\"j\" type=\"revolute\"><limit lower=\"-1e308\" upper=\"1e308\"/></joint></robot>");
+        let message =
+            error("<robot name=\"r\"><joint name=\"j\" type=\"revolute\"><limit lower=\"-1e308\" upper=\"1e308\"/></joint></robot>");
         assert!(message.contains("lower=\"-1e308\""), "{message}");
     }
 

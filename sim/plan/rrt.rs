@@ -173,7 +173,8 @@ impl RrtConnect {
                     // (or the whole range, when that is shorter).
                     Some([lower, upper]) if upper >= lower => {
                         let width = (window[1] - window[0]).min(upper - lower);
-                        let from = window[0].clamp(*lower, upper - width);
+                        // Not `clamp`: `upper - (upper - lower)` can round below `lower`.
+                        let from = window[0].min(upper - width).max(*lower);
                         [from, from + width]
                     }
                     _ => window,

@@ -163,7 +163,7 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
                     Some(hold_a.goal),
                     None,
                     format!(
-                        "goal {}: {a} {} it ({:.2} mm, {:.3} deg), {b} {} it ({:.2} mm, {:.3} deg)",
+                        "goal {}: {a} {} it ({:.1} mm, {:.2} deg), {b} {} it ({:.1} mm, {:.2} deg)",
                         hold_a.goal,
                         if held(hold_a) { "holds" } else { "misses" },
                         hold_a.position_error_m * 1e3,
@@ -273,7 +273,7 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
                     clearance * 1e3
                 ),
                 _ => format!(
-                    "no solution from {} IK starts (seed {}), closest miss {:.2} mm, {:.2} deg; not proven",
+                    "no solution from {} IK starts (seed {}), closest miss {:.1} mm, {:.2} deg; not proven",
                     settings.ik_seeds,
                     settings.seed,
                     position * 1e3,
@@ -383,7 +383,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 FindingKind::EngineContactNotConfirmed,
                 Severity::Warn,
                 format!(
-                    "but {:.2} mm apart in exact geometry at the engine's configuration ({})",
+                    "but {:.1} mm apart in exact geometry at the engine's configuration ({})",
                     exact * 1e3,
                     approximation(name)
                 ),
@@ -392,7 +392,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 FindingKind::EngineContactFromTracking,
                 Severity::Warn,
                 format!(
-                    "exact geometry: {:.3} mm at the engine's configuration, but the certified reference keeps them {:.2} mm apart: {name}'s tracking error, not the planned motion",
+                    "exact geometry: {:.1} mm at the engine's configuration, but the certified reference keeps them {:.1} mm apart: {name}'s tracking error, not the planned motion",
                     exact * 1e3,
                     reference * 1e3
                 ),
@@ -400,7 +400,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
             ContactClass::Real => (
                 FindingKind::EngineContact,
                 Severity::Fail,
-                format!("exact geometry: {:.2} mm", exact * 1e3),
+                format!("exact geometry: {:.1} mm", exact * 1e3),
             ),
         };
         out.push(finding(
@@ -409,7 +409,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
             None,
             Some(name),
             format!(
-                "{name}: {} and {} in contact from {:.3} s to {:.3} s, {:.2} mm deep, {verdict}",
+                "{name}: {} and {} in contact from {:.3} s to {:.3} s, {:.1} mm deep, {verdict}",
                 contact.a,
                 contact.b,
                 contact.start_s,
@@ -444,7 +444,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
             .collect();
         let artefact = !before.is_empty() && before.iter().all(|c| classify(c) != ContactClass::Real);
         let held = format!(
-            "{name}: goal {} held {:.2} mm / {:.3} deg from the reference after the dwell",
+            "{name}: goal {} held {:.1} mm / {:.2} deg from the reference after the dwell",
             h.goal,
             h.position_error_m * 1e3,
             h.orientation_error_rad.to_degrees()
@@ -506,7 +506,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 Some(segment.goal),
                 Some(name),
                 format!(
-                    "{name} replay: {} and {} in contact ({:.3} mm) on the segment to goal {} that parry3d certified free ({:.3} mm apart there)",
+                    "{name} replay: {} and {} in contact ({:.1} mm) on the segment to goal {} that parry3d certified free ({:.1} mm apart there)",
                     contact.a,
                     contact.b,
                     contact.max_depth_m * 1e3,
@@ -536,7 +536,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                 Some(segment.goal),
                 Some(name),
                 format!(
-                    "{name} replay confirms the contact on the segment to goal {}: {} and {}, {:.2} mm deep",
+                    "{name} replay confirms the contact on the segment to goal {}: {} and {}, {:.1} mm deep",
                     segment.goal,
                     contact.a,
                     contact.b,

@@ -7,6 +7,7 @@ mod findings;
 mod inputs;
 mod loss;
 mod render;
+pub mod snapshot;
 
 pub use describe::{describe, scenario_summary};
 pub use findings::{Finding, FindingKind, Severity};

@@ -216,6 +216,15 @@ pub(crate) fn default_obstacle_name(index: usize) -> String {
     format!("obstacle {index}")
 }
 
+/// A number for a message: plain when short, scientific when huge.
+fn short(value: f64) -> String {
+    if value.abs() >= 1e6 {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
 /// Validation helpers that know the file they report about.
 struct Checker<'a> {
     path: &'a Path,
@@ -235,7 +244,10 @@ impl Checker<'_> {
         if !value.is_finite() {
             Err(self.invalid(field, format!("{value} is not a finite number")))
         } else if value.abs() > limits::MAX_LENGTH_M {
-            Err(self.invalid(field, format!("{value}: expected at most {} in absolute value", limits::MAX_LENGTH_M)))
+            Err(self.invalid(
+                field,
+                format!("{value:e}: expected at most {} in absolute value", limits::MAX_LENGTH_M),
+            ))
         } else {
             Ok(value)
         }
@@ -248,7 +260,11 @@ impl Checker<'_> {
         } else {
             Err(self.invalid(
                 field,
-                format!("{value}{unit}: expected a finite number > 0 and at most {}", limits::MAX_LENGTH_M),
+                format!(
+                    "{}{unit}: expected a finite number > 0 and at most {}",
+                    short(value),
+                    limits::MAX_LENGTH_M
+                ),
             ))
         }
     }
@@ -261,7 +277,10 @@ impl Checker<'_> {
             if value.abs() > limits::MAX_LENGTH_M {
                 return Err(self.invalid(
                     field,
-                    format!("{axis} = {value} m: expected at most {} m in absolute value", limits::MAX_LENGTH_M),
+                    format!(
+                        "{axis} = {value:e} m: expected at most {} m in absolute value",
+                        limits::MAX_LENGTH_M
+                    ),
                 ));
             }
         }
@@ -431,7 +450,7 @@ impl Checker<'_> {
             mesh: resolved.clone(),
             message,
         };
-        if !resolved.is_file() {
+        if !resolved.exists() {
             return Err(mesh_error("not found (mesh paths are relative to the scenario file)".into()));
         }
         Ok(Shape::Mesh(load_mesh(uri, &resolved, scale).map_err(mesh_error)?))

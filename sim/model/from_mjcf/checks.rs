@@ -30,13 +30,20 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
         let doc = xml(&file, &text)?;
         for node in doc.descendants().filter(|n| n.has_tag_name("include")) {
             let Some(name) = node.attribute("file") else { continue };
-            let included = dir.join(name);
+            // MuJoCo 3.17 resolves an include against the including file's folder.
+            let here = file.parent().map_or_else(|| dir.clone(), Path::to_path_buf);
+            let included = here.join(name);
             if texts.iter().any(|(seen, _)| seen == &included) || !included.exists() {
                 // A cycle or a missing file: MuJoCo reports both with its own message.
                 continue;
             }
             if texts.len() > limits::MAX_MJCF_INCLUDES {
-                return Err(unsupported(&file, &doc, node, format!("more than {} included files (the limit)", limits::MAX_MJCF_INCLUDES)));
+                return Err(unsupported(
+                    &file,
+                    &doc,
+                    node,
+                    format!("more than {} included files (the limit)", limits::MAX_MJCF_INCLUDES),
+                ));
             }
             let included_text = read(&included, limits::MAX_TEXT_BYTES)?;
             texts.push((included, included_text));
@@ -57,17 +64,52 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
     for (file, text) in &texts {
         let doc = xml(file, text)?;
         for node in doc.descendants().filter(|n| n.is_element() && !n.has_tag_name("include")) {
+            check_numbers(file, &doc, node)?;
             for attribute in FILE_ATTRIBUTES {
                 let Some(name) = node.attribute(*attribute) else { continue };
-                for candidate in folders.iter().map(|folder| folder.join(name)) {
+                let here = file.parent().map_or_else(|| dir.clone(), Path::to_path_buf);
+                let candidates: Vec<PathBuf> = folders.iter().chain([&here]).map(|folder| folder.join(name)).collect();
+                if !candidates.iter().any(|c| std::fs::symlink_metadata(c).is_ok()) {
+                    let searched: Vec<String> = candidates.iter().map(|c| c.display().to_string()).collect();
+                    return Err(unsupported(
+                        file,
+                        &doc,
+                        node,
+                        format!("{attribute}=\"{name}\": not found; searched {}", searched.join(", ")),
+                    ));
+                }
+                for candidate in candidates {
                     if std::fs::symlink_metadata(&candidate).is_err() {
                         continue;
                     }
-                    files::check_regular(&candidate, limits::MAX_MESH_BYTES).map_err(|e| {
-                        unsupported(file, &doc, node, format!("{attribute}=\"{name}\": {}: {e}", candidate.display()))
-                    })?;
+                    files::check_regular(&candidate, limits::MAX_MESH_BYTES)
+                        .map_err(|e| unsupported(file, &doc, node, format!("{attribute}=\"{name}\": {}: {e}", candidate.display())))?;
                     files::record_input(&candidate);
                 }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Attributes holding lengths, checked before MuJoCo compiles them: MuJoCo turns a NaN, an
+/// infinite or a huge size into a complaint about mass on another line.
+const LENGTH_ATTRIBUTES: [&str; 3] = ["pos", "size", "fromto"];
+/// Attributes holding other numbers: finite, within +-1e9.
+const NUMBER_ATTRIBUTES: [&str; 7] = ["quat", "euler", "axis", "range", "mass", "diaginertia", "fullinertia"];
+
+fn check_numbers(file: &Path, doc: &roxmltree::Document, node: roxmltree::Node) -> Result<(), ModelError> {
+    for (attributes, bound) in [(&LENGTH_ATTRIBUTES[..], limits::MAX_LENGTH_M), (&NUMBER_ATTRIBUTES[..], 1e9)] {
+        for attribute in attributes {
+            let Some(text) = node.attribute(*attribute) else { continue };
+            for word in text.split_whitespace() {
+                let problem = match word.parse::<f64>() {
+                    Err(_) => format!("`{word}` is not a number"),
+                    Ok(v) if !v.is_finite() => format!("`{word}` is not a finite number"),
+                    Ok(v) if v.abs() > bound => format!("`{word}`: expected at most {bound} in absolute value"),
+                    Ok(_) => continue,
+                };
+                return Err(unsupported(file, doc, node, format!("{attribute}=\"{text}\": {problem}")));
             }
         }
     }
@@ -92,7 +134,14 @@ fn xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>, ModelE
 fn unsupported(path: &Path, doc: &roxmltree::Document, node: roxmltree::Node, problem: String) -> ModelError {
     ModelError::UnsupportedMjcf {
         path: path.to_path_buf(),
-        element: format!("<{}> (line {})", node.tag_name().name(), doc.text_pos_at(node.range().start).row),
+        element: match node.attribute("name") {
+            Some(name) => format!(
+                "<{} name=\"{name}\"> (line {})",
+                node.tag_name().name(),
+                doc.text_pos_at(node.range().start).row
+            ),
+            None => format!("<{}> (line {})", node.tag_name().name(), doc.text_pos_at(node.range().start).row),
+        },
         problem,
     }
 }
@@ -121,7 +170,10 @@ impl Reader<'_> {
                 ("inertia", &mj.body_inertia()[body], 1e9),
             ];
             if let Some((what, values, _)) = checks.iter().find(|(_, values, bound)| bad(values, *bound)) {
-                return Err(self.unsupported(self.body(body), format!("{what} {values:?}: expected finite numbers within the limits")));
+                return Err(self.unsupported(
+                    self.body(body),
+                    format!("{what} {values:?}: expected finite numbers within the limits"),
+                ));
             }
         }
         for joint in 0..joints {
@@ -133,11 +185,14 @@ impl Reader<'_> {
             if let Some((what, values, _)) = checks.iter().find(|(_, values, bound)| bad(values, *bound)) {
                 return Err(self.unsupported(
                     self.joint_element(joint),
-                    format!("{what} {values:?}: expected finite numbers within the limits (range within +-{})", limits::MAX_JOINT_LIMIT),
+                    format!(
+                        "{what} {values:?}: expected finite numbers within the limits (range within +-{})",
+                        limits::MAX_JOINT_LIMIT
+                    ),
                 ));
             }
             let [lower, upper] = mj.jnt_range()[joint];
-            if mj.jnt_limited()[joint] && lower > upper {
+            if lower > upper {
                 return Err(self.unsupported(
                     self.joint_element(joint),
                     format!("range [{lower}, {upper}] is reversed: expected lower <= upper"),
@@ -170,7 +225,10 @@ impl Reader<'_> {
             if faces > limits::MAX_MESH_TRIANGLES {
                 return Err(self.unsupported(
                     format!("mesh `{}`", self.name(MjtObjBase::mjOBJ_MESH, mesh)),
-                    format!("{faces} triangles; the limit is {} per mesh (use a simplified collision mesh)", limits::MAX_MESH_TRIANGLES),
+                    format!(
+                        "{faces} triangles; the limit is {} per mesh (use a simplified collision mesh)",
+                        limits::MAX_MESH_TRIANGLES
+                    ),
                 ));
             }
         }

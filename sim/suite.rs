@@ -1,0 +1,337 @@
+//! Users' own golden suites: `validate-design snapshot --suite FILE` runs every design of a small
+//! JSON file on every scenario of it, writes each report as an insta-compatible snapshot into the
+//! user's repository, and fails on a difference with a readable diff; `--accept` records the new
+//! snapshots. Snapshot text is [`crate::report::snapshot::snapshot_text`], as in our own goldens.
+//!
+//! ```json
+//! {
+//!   "snapshots": "golden",
+//!   "designs": ["designs/ur5e.json", {"path": "robots/panda.urdf", "tip": "panda_hand"}],
+//!   "scenarios": ["scenarios/course.json"],
+//!   "options": {"seed": 0, "engines": ["rapier", "mujoco"], "plan_budget": 20000}
+//! }
+//! ```
+//! Paths are relative to the suite file; `snapshots` defaults to `snapshots`.
+
+use crate::error::Error;
+use crate::pipeline::{self, Engines, LoadOptions, ValidateOptions};
+use crate::report::{self, snapshot};
+use crate::{files, limits};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A suite file, as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SuiteFile {
+    snapshots: Option<PathBuf>,
+    designs: Vec<DesignEntry>,
+    scenarios: Vec<PathBuf>,
+    #[serde(default)]
+    options: OptionsFile,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum DesignEntry {
+    Path(PathBuf),
+    Full(DesignFull),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DesignFull {
+    path: PathBuf,
+    name: Option<String>,
+    base: Option<String>,
+    tip: Option<String>,
+    #[serde(default)]
+    package_paths: Vec<PathBuf>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OptionsFile {
+    seed: Option<u64>,
+    ik_seeds: Option<u64>,
+    engines: Option<Vec<String>>,
+    planner: Option<String>,
+    plan_budget: Option<u64>,
+    margin: Option<f64>,
+    contact_depth: Option<f64>,
+    reach_only: Option<bool>,
+}
+
+/// Most runs one suite may ask for.
+pub const MAX_SUITE_RUNS: usize = 10_000;
+
+/// What one run of the suite found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    /// The snapshot matches.
+    Same,
+    /// There was no snapshot (written as `.snap.new`, or `.snap` with accept).
+    New,
+    /// The snapshot differs; the unified diff.
+    Changed(String),
+}
+
+/// One snapshot of the suite.
+#[derive(Debug, Clone)]
+pub struct Entry {
+    /// `DESIGN__SCENARIO`.
+    pub name: String,
+    /// The snapshot file.
+    pub file: PathBuf,
+    /// The run's verdict line.
+    pub verdict: String,
+    /// Against the recorded snapshot.
+    pub outcome: Outcome,
+}
+
+/// The whole suite's result.
+#[derive(Debug, Clone)]
+pub struct SuiteResult {
+    /// Per run, suite order.
+    pub entries: Vec<Entry>,
+    /// Snapshots in the folder that no run of the suite writes (deleted with accept).
+    pub orphans: Vec<PathBuf>,
+    /// Whether the snapshots were accepted.
+    pub accepted: bool,
+}
+
+impl SuiteResult {
+    /// Whether every snapshot matched and none is an orphan (always true after accept).
+    pub fn passed(&self) -> bool {
+        self.accepted || (self.orphans.is_empty() && self.entries.iter().all(|e| e.outcome == Outcome::Same))
+    }
+}
+
+fn invalid(path: &Path, field: &str, message: String) -> Error {
+    Error::Suite {
+        path: path.to_path_buf(),
+        field: field.into(),
+        message,
+    }
+}
+
+/// A run's options from the suite's `options`, checked as the command line checks them.
+fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
+    let mut opts = ValidateOptions::default();
+    if let Some(seed) = file.seed {
+        opts.ik.seed = seed;
+        opts.planner.seed = seed;
+    }
+    if let Some(k) = file.ik_seeds {
+        if !(1..=1000).contains(&k) {
+            return Err(invalid(path, "options.ik_seeds", format!("{k}: expected 1 to 1000")));
+        }
+        opts.ik.seeds = k as usize;
+    }
+    if let Some(list) = &file.engines {
+        let mut engines = Engines {
+            rapier: false,
+            mujoco: false,
+        };
+        for name in list {
+            match name.as_str() {
+                "rapier" => engines.rapier = true,
+                "mujoco" => engines.mujoco = true,
+                other => {
+                    return Err(invalid(
+                        path,
+                        "options.engines",
+                        format!("unknown engine `{other}`; expected rapier or mujoco"),
+                    ))
+                }
+            }
+        }
+        opts.engines = engines;
+    }
+    if let Some(planner) = &file.planner {
+        opts.planner.kind = match planner.as_str() {
+            "rrt-connect" => crate::plan::PlannerKind::RrtConnect,
+            "straight" => crate::plan::PlannerKind::Straight,
+            other => {
+                return Err(invalid(
+                    path,
+                    "options.planner",
+                    format!("`{other}`: expected rrt-connect or straight"),
+                ))
+            }
+        };
+    }
+    if let Some(budget) = file.plan_budget {
+        if !(1..=100_000_000).contains(&budget) {
+            return Err(invalid(path, "options.plan_budget", format!("{budget}: expected 1 to 100000000")));
+        }
+        opts.planner.budget = budget as usize;
+    }
+    for (field, value) in [("options.margin", file.margin), ("options.contact_depth", file.contact_depth)] {
+        if let Some(v) = value {
+            if !(v.is_finite() && (0.0..=limits::MAX_LENGTH_M).contains(&v)) {
+                return Err(invalid(path, field, format!("{v} m: expected a finite length of at least 0")));
+            }
+        }
+    }
+    opts.certify.threshold_m = file.margin.unwrap_or(0.0);
+    opts.engine.contact_depth_m = file.contact_depth.unwrap_or(0.0);
+    opts.reach_only = file.reach_only.unwrap_or(false);
+    Ok(opts)
+}
+
+/// Runs the suite at `suite_path`, compares with (or, with `accept`, records) its snapshots.
+///
+/// # Errors
+/// [`Error::Suite`] for a bad suite file; any stage's error for a design or scenario it names.
+pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
+    let text = files::read_text(suite_path, limits::MAX_TEXT_BYTES)
+        .map_err(|e| invalid(suite_path, "the file", format!("cannot read it: {e}")))?;
+    let suite: SuiteFile = serde_json::from_str(&text).map_err(|e| invalid(suite_path, "the JSON", e.to_string()))?;
+    let dir = suite_path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    if suite.designs.is_empty() || suite.scenarios.is_empty() {
+        return Err(invalid(suite_path, "designs, scenarios", "need at least one entry each".into()));
+    }
+    if suite.designs.len() * suite.scenarios.len() > MAX_SUITE_RUNS {
+        return Err(invalid(
+            suite_path,
+            "designs, scenarios",
+            format!("more than {MAX_SUITE_RUNS} runs (the limit)"),
+        ));
+    }
+    let opts = options(suite_path, &suite.options)?;
+    let folder = dir.join(suite.snapshots.clone().unwrap_or_else(|| PathBuf::from("snapshots")));
+    std::fs::create_dir_all(&folder).map_err(|source| Error::Write {
+        path: folder.clone(),
+        source,
+    })?;
+    let source_line = format!(
+        "validate-design snapshot --suite {}",
+        suite_path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    );
+
+    let scenarios = suite
+        .scenarios
+        .iter()
+        .map(|p| {
+            let scenario = pipeline::load_scenario(&dir.join(p))?;
+            Ok((stem(p), scenario))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    let mut entries = Vec::new();
+    for (index, design) in suite.designs.iter().enumerate() {
+        let (path, name, load_opts) = match design {
+            DesignEntry::Path(p) => (dir.join(p), stem(p), LoadOptions::default()),
+            DesignEntry::Full(full) => (
+                dir.join(&full.path),
+                full.name.clone().unwrap_or_else(|| stem(&full.path)),
+                LoadOptions {
+                    base_link: full.base.clone(),
+                    tip_link: full.tip.clone(),
+                    package_paths: full.package_paths.iter().map(|p| dir.join(p)).collect(),
+                },
+            ),
+        };
+        if name.is_empty() || name.contains(['/', '\\']) {
+            return Err(invalid(
+                suite_path,
+                &format!("designs[{index}].name"),
+                format!("`{name}`: expected a file-name-safe name"),
+            ));
+        }
+        for (scenario_name, scenario) in &scenarios {
+            let loaded = pipeline::load(&path, &load_opts)?;
+            let validation = pipeline::validate(loaded, scenario.clone(), &opts)?;
+            let built = report::build(&validation);
+            let body = snapshot::snapshot_text(&built).map_err(|message| Error::Report { message })?;
+            let snapshot_name = format!("{name}__{scenario_name}");
+            let file = folder.join(format!("{snapshot_name}.snap"));
+            let contents = format!(
+                "---\nsource: {source_line}\ndescription: {}\n---\n{body}",
+                serde_json::to_string(&snapshot::description(&built)).unwrap_or_default()
+            );
+            let outcome = record(&file, &contents, &body, accept)?;
+            entries.push(Entry {
+                name: snapshot_name,
+                file,
+                verdict: report::verdict_line(&built.verdict),
+                outcome,
+            });
+        }
+    }
+    let written: std::collections::BTreeSet<&Path> = entries.iter().map(|e| e.file.as_path()).collect();
+    let mut orphans: Vec<PathBuf> = std::fs::read_dir(&folder)
+        .map_err(|source| Error::Write {
+            path: folder.clone(),
+            source,
+        })?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "snap") && !written.contains(p.as_path()))
+        .collect();
+    orphans.sort();
+    if accept {
+        for orphan in &orphans {
+            std::fs::remove_file(orphan).map_err(|source| Error::Write {
+                path: orphan.clone(),
+                source,
+            })?;
+        }
+    }
+    Ok(SuiteResult {
+        entries,
+        orphans,
+        accepted: accept,
+    })
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned())
+}
+
+/// The body of a snapshot file: what follows insta's `---` header.
+fn body_of(text: &str) -> &str {
+    text.strip_prefix("---\n")
+        .and_then(|rest| rest.find("\n---\n").map(|end| &rest[end + 5..]))
+        .unwrap_or(text)
+}
+
+/// Compares with the snapshot at `file`; writes `.snap.new` (insta's pending file, for `cargo
+/// insta review`) when it differs, or the `.snap` itself with `accept`.
+fn record(file: &Path, contents: &str, body: &str, accept: bool) -> Result<Outcome, Error> {
+    let pending = file.with_extension("snap.new");
+    let write = |path: &Path| pipeline::write_output(path, contents);
+    let outcome = match std::fs::read_to_string(file) {
+        Ok(old) if body_of(&old) == body => Outcome::Same,
+        Ok(old) => Outcome::Changed(
+            similar::TextDiff::from_lines(body_of(&old), body)
+                .unified_diff()
+                .context_radius(2)
+                .header(&file.display().to_string(), "this run")
+                .to_string(),
+        ),
+        Err(_) => Outcome::New,
+    };
+    match (&outcome, accept) {
+        (Outcome::Same, _) => {}
+        (_, true) => write(file)?,
+        (_, false) => write(&pending)?,
+    }
+    if outcome == Outcome::Same || accept {
+        let _ = std::fs::remove_file(&pending);
+    }
+    Ok(outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn body_follows_the_header() {
+        assert_eq!(body_of("---\nsource: x\ndescription: \"y\"\n---\nsummary:\n"), "summary:\n");
+        assert_eq!(body_of("no header"), "no header");
+    }
+}
