@@ -87,9 +87,24 @@ pub fn load_mesh_bytes(uri: &str, bytes: &[u8], file: &Path, scale: [f64; 3]) ->
     if is_stl {
         check_binary_stl(bytes)?;
     }
-    let scene = mesh_loader::Loader::default()
-        .merge_meshes(true)
-        .load_from_slice_with_reader(bytes, file, |path| crate::files::read_bytes(path, limits::MAX_MESH_BYTES))
+    let is_collada = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("dae"));
+    if is_collada {
+        check_collada(bytes)?;
+    }
+    let load = || {
+        mesh_loader::Loader::default()
+            .merge_meshes(true)
+            .load_from_slice_with_reader(bytes, file, |path| crate::files::read_bytes(path, limits::MAX_MESH_BYTES))
+    };
+    // mesh-loader 0.1 panics (`todo!`, map lookups) on some malformed COLLADA files; the checks
+    // above refuse the known cases, this turns any other into an error too.
+    let scene = std::panic::catch_unwind(load)
+        .map_err(|_| {
+            "the mesh loader (mesh-loader) could not read this file: it is malformed or uses a feature it does not support".to_string()
+        })?
         .map_err(|e| e.to_string())?;
     let mesh = scene.meshes.into_iter().next().ok_or("the file holds no mesh")?;
     if mesh.faces.is_empty() {
@@ -130,6 +145,59 @@ fn too_many_triangles(count: usize) -> String {
         "{count} triangles; the limit is {} per mesh (use a simplified collision mesh)",
         limits::MAX_MESH_TRIANGLES
     )
+}
+
+/// COLLADA references that mesh-loader follows without checking: every `#id` an `<input>` or
+/// `<accessor>` names exists, and a primitive's VERTEX input names its mesh's `<vertices>`.
+fn check_collada(bytes: &[u8]) -> Result<(), String> {
+    let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
+    let doc = limits::parse_xml(text)?;
+    let line = |node: roxmltree::Node| doc.text_pos_at(node.range().start).row;
+    let ids: std::collections::HashMap<&str, roxmltree::Node> =
+        doc.descendants().filter_map(|n| n.attribute("id").map(|id| (id, n))).collect();
+    for node in doc.descendants().filter(|n| n.has_tag_name("input") || n.has_tag_name("accessor")) {
+        let Some(source) = node.attribute("source") else { continue };
+        let id = source.strip_prefix('#').unwrap_or(source);
+        let Some(target) = ids.get(id) else {
+            return Err(format!(
+                "line {}: <{} source=\"{source}\"> names no element of this file",
+                line(node),
+                node.tag_name().name()
+            ));
+        };
+        if id.is_empty() {
+            return Err(format!(
+                "line {}: <{} source=\"{source}\"> names no id",
+                line(node),
+                node.tag_name().name()
+            ));
+        }
+        // Data inputs read a <source> through its accessor, which must read a float array.
+        if target.has_tag_name("source") {
+            let array = target
+                .descendants()
+                .find(|n| n.has_tag_name("accessor"))
+                .and_then(|a| a.attribute("source"))
+                .and_then(|s| ids.get(s.strip_prefix('#').unwrap_or(s)));
+            if !array.is_some_and(|a| a.has_tag_name("float_array")) {
+                return Err(format!(
+                    "line {}: <source id=\"{id}\"> has no <accessor> of a <float_array> of this file",
+                    line(*target)
+                ));
+            }
+        }
+        let in_primitive = node
+            .parent()
+            .is_some_and(|p| !p.has_tag_name("vertices") && !p.has_tag_name("sampler"));
+        if node.attribute("semantic") == Some("VERTEX") && in_primitive && !target.has_tag_name("vertices") {
+            return Err(format!(
+                "line {}: the VERTEX input names <{}>; expected the mesh's <vertices>",
+                line(node),
+                target.tag_name().name()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A binary STL's header states its triangle count; a count the file's size contradicts is a
@@ -208,6 +276,21 @@ mod tests {
         let error = load_mesh_bytes("m.stl", &binary_stl(3, 2), file, [1.0; 3]).expect_err("truncated");
         assert!(error.contains("states 3 triangles but the file holds 2"), "{error}");
         assert!(load_mesh_bytes("m.stl", &binary_stl(0, 2), file, [1.0; 3]).is_ok());
+    }
+
+    #[test]
+    fn collada_with_a_dangling_source_is_an_error_not_a_panic() {
+        let dae = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/meshes/tetrahedron.dae")).expect("fixture");
+        let file = Path::new("m.dae");
+        assert!(load_mesh_bytes("m.dae", dae.as_bytes(), file, [1.0; 3]).is_ok());
+        let source = dae
+            .split("source=\"#")
+            .nth(1)
+            .and_then(|rest| rest.split('"').next())
+            .expect("a source reference");
+        let broken = dae.replacen(&format!("source=\"#{source}\""), "source=\"#nowhere\"", 1);
+        let error = load_mesh_bytes("m.dae", broken.as_bytes(), file, [1.0; 3]).expect_err("refused");
+        assert!(error.contains("#nowhere"), "{error}");
     }
 
     #[test]
