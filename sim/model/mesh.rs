@@ -197,6 +197,137 @@ fn check_collada(bytes: &[u8]) -> Result<(), String> {
             ));
         }
     }
+    check_collada_indices(&doc, &ids)
+}
+
+/// Elements an accessor's or a `<p>`'s numbers are read from.
+type Ids<'a, 'input> = std::collections::HashMap<&'a str, roxmltree::Node<'a, 'input>>;
+
+/// How many items the `<source>` `id` holds (its accessor's `count`), after checking that its
+/// array has the numbers the accessor reads.
+fn source_count(ids: &Ids, id: &str, line: &dyn Fn(roxmltree::Node) -> u32) -> Result<usize, String> {
+    let Some(source) = ids.get(id) else {
+        return Err(format!("`#{id}` names no element of this file"));
+    };
+    if source.has_tag_name("vertices") {
+        let position = source
+            .children()
+            .find(|n| n.attribute("semantic") == Some("POSITION"))
+            .and_then(|n| n.attribute("source"))
+            .ok_or_else(|| format!("line {}: <vertices> without a POSITION input", line(*source)))?;
+        let id = position.strip_prefix('#').unwrap_or(position);
+        let count = source_count(ids, id, line)?;
+        // mesh-loader reads positions only through an accessor of float X, Y, Z (and otherwise
+        // indexes an empty list).
+        let accessor = ids.get(id).and_then(|s| s.descendants().find(|n| n.has_tag_name("accessor")));
+        if let Some(accessor) = accessor {
+            let params: Vec<_> = accessor.children().filter(|n| n.has_tag_name("param")).collect();
+            let stride: usize = accessor.attribute("stride").unwrap_or("1").parse().unwrap_or(0);
+            if stride < 3 || params.len() < 3 || params.iter().any(|p| p.attribute("type") != Some("float")) {
+                return Err(format!(
+                    "line {}: the positions' <accessor> needs stride 3 or more and three float <param>s (X, Y, Z)",
+                    line(accessor)
+                ));
+            }
+        }
+        return Ok(count);
+    }
+    let accessor = source
+        .descendants()
+        .find(|n| n.has_tag_name("accessor"))
+        .ok_or_else(|| format!("line {}: <{}> without an <accessor>", line(*source), source.tag_name().name()))?;
+    let number = |name: &str| -> Result<usize, String> {
+        accessor
+            .attribute(name)
+            .unwrap_or("1")
+            .parse::<usize>()
+            .map_err(|_| format!("line {}: <accessor {name}>: expected a whole number", line(accessor)))
+    };
+    let (count, stride) = (number("count")?, number("stride")?.max(1));
+    let array = accessor
+        .attribute("source")
+        .and_then(|s| ids.get(s.strip_prefix('#').unwrap_or(s)))
+        .ok_or_else(|| format!("line {}: <accessor> names no array of this file", line(accessor)))?;
+    let held = array.text().unwrap_or("").split_whitespace().count();
+    if count.checked_mul(stride).is_none_or(|needed| needed > held) {
+        return Err(format!(
+            "line {}: <accessor count=\"{count}\" stride=\"{stride}\"> reads more numbers than its array holds ({held})",
+            line(accessor)
+        ));
+    }
+    Ok(count)
+}
+
+/// Every index of a primitive's `<p>` points into the source its input reads.
+fn check_collada_indices(doc: &roxmltree::Document, ids: &Ids) -> Result<(), String> {
+    let line = |node: roxmltree::Node| doc.text_pos_at(node.range().start).row;
+    const PRIMITIVES: [&str; 7] = ["triangles", "polylist", "polygons", "trifans", "tristrips", "lines", "linestrips"];
+    for primitive in doc.descendants().filter(|n| PRIMITIVES.iter().any(|p| n.has_tag_name(*p))) {
+        let mut inputs = Vec::new();
+        for input in primitive.children().filter(|n| n.has_tag_name("input")) {
+            let offset: usize = input
+                .attribute("offset")
+                .unwrap_or("0")
+                .parse()
+                .map_err(|_| format!("line {}: <input offset>: expected a whole number", line(input)))?;
+            let source = input.attribute("source").unwrap_or("");
+            let count = source_count(ids, source.strip_prefix('#').unwrap_or(source), &line)?;
+            inputs.push((offset, count));
+        }
+        let stride = inputs.iter().map(|(offset, _)| offset + 1).max().unwrap_or(1);
+        // mesh-loader reads `count` triangles (or the polygons of `<vcount>`) without checking
+        // that `<p>` holds them.
+        let held: usize = primitive
+            .descendants()
+            .filter(|n| n.has_tag_name("p"))
+            .map(|p| p.text().unwrap_or("").split_whitespace().count())
+            .sum();
+        let whole = |text: &str, what: &str| -> Result<usize, String> {
+            text.parse::<usize>()
+                .map_err(|_| format!("line {}: {what}: `{text}` is not a whole number", line(primitive)))
+        };
+        let count = whole(primitive.attribute("count").unwrap_or("0"), "count")?;
+        let corners = if primitive.has_tag_name("triangles") {
+            Some(count.saturating_mul(3))
+        } else if primitive.has_tag_name("polylist") {
+            let mut sum = 0usize;
+            for vc in primitive.children().filter(|n| n.has_tag_name("vcount")) {
+                for word in vc.text().unwrap_or("").split_whitespace() {
+                    let n = whole(word, "<vcount>")?;
+                    if n == 0 {
+                        return Err(format!("line {}: <vcount> has a polygon of 0 vertices", line(vc)));
+                    }
+                    sum = sum.saturating_add(n);
+                }
+            }
+            Some(sum)
+        } else {
+            None
+        };
+        if let Some(corners) = corners {
+            if corners.saturating_mul(stride) > held {
+                return Err(format!(
+                    "line {}: <{}> needs {} indices in <p>, it holds {held}",
+                    line(primitive),
+                    primitive.tag_name().name(),
+                    corners.saturating_mul(stride)
+                ));
+            }
+        }
+        for p in primitive.descendants().filter(|n| n.has_tag_name("p")) {
+            for (k, word) in p.text().unwrap_or("").split_whitespace().enumerate() {
+                let index: usize = word
+                    .parse()
+                    .map_err(|_| format!("line {}: <p>: `{word}` is not an index", line(p)))?;
+                if let Some((_, count)) = inputs.iter().find(|(offset, count)| *offset == k % stride && index >= *count) {
+                    return Err(format!(
+                        "line {}: <p>: index {index} is past the {count} items of its source",
+                        line(p)
+                    ));
+                }
+            }
+        }
+    }
     Ok(())
 }
 
