@@ -29,6 +29,8 @@ Examples:
   validate-design designs/ur5e.json --describe --export-urdf ur5e.urdf --export-mjcf ur5e.xml
   validate-design generate cluttered --all --out scenarios/cluttered --force
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
+  validate-design snapshot --suite proving-ground.json             # your own golden suite
+  validate-design snapshot --suite proving-ground.json --accept    # record its new snapshots
 
 Exit codes:
   0  the design passes the scenario (every goal reached by a certified collision-free path,
@@ -36,10 +38,14 @@ Exit codes:
      --describe or --kinematics-only: the model was built (and MuJoCo agrees with our kinematics)
   1  the design fails: the verdict line lists the reasons (or MuJoCo disagrees with our
      kinematics on the export by more than 1e-9 m / rad)
-  2  bad input or usage: the message names the file and the field or line
+  2  bad input or usage: the message names the file and the field or line (also a limit
+     passed, an output that is a file the run read, a failed write, MuJoCo missing)
+  snapshot: 0 every snapshot matches (or was accepted), 1 a difference, new snapshot or
+     orphan, 2 bad input
 
 Environment:
-  ROS_PACKAGE_PATH  extra ':'-separated roots for package:// mesh URIs";
+  ROS_PACKAGE_PATH  extra ':'-separated roots for package:// mesh URIs
+  MUJOCO_LIBRARY    the MuJoCo library file to load instead of the one the build fetched";
 
 /// Proves or disproves a robot manipulator design in simulation.
 #[derive(Debug, Parser)]

@@ -339,7 +339,7 @@ fn generate_never_overwrites_without_force_and_checks_its_parameters() {
         ),
         (
             &["workspace", "--count", "0", "--out", "w.json"][..],
-            "workspace generator: count 0",
+            "invalid value '0' for '--count <N>': 0 is not in 1..=10000",
         ),
         (
             &["course", "--count", "5", "--out", "c.json"][..],
