@@ -80,18 +80,15 @@ pub fn load_mesh(uri: &str, file: &Path, scale: [f64; 3]) -> Result<TriMesh, Str
 /// As [`load_mesh`], and more than [`limits::MAX_MESH_TRIANGLES`] triangles, a binary STL whose
 /// header disagrees with its size, a vertex beyond [`limits::MAX_LENGTH_M`].
 pub fn load_mesh_bytes(uri: &str, bytes: &[u8], file: &Path, scale: [f64; 3]) -> Result<TriMesh, String> {
-    let is_stl = file
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
-    if is_stl {
+    let has_extension = |wanted: &str| {
+        file.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case(wanted))
+    };
+    if has_extension("stl") {
         check_binary_stl(bytes)?;
     }
-    let is_collada = file
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("dae"));
-    if is_collada {
+    if has_extension("dae") {
         check_collada(bytes)?;
     }
     let load = || {
