@@ -150,8 +150,14 @@ fn check_collada(bytes: &[u8]) -> Result<(), String> {
     let text = std::str::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.valid_up_to()))?;
     let doc = limits::parse_xml(text)?;
     let line = |node: roxmltree::Node| doc.text_pos_at(node.range().start).row;
-    let ids: std::collections::HashMap<&str, roxmltree::Node> =
-        doc.descendants().filter_map(|n| n.attribute("id").map(|id| (id, n))).collect();
+    let mut ids: std::collections::HashMap<&str, roxmltree::Node> = std::collections::HashMap::new();
+    for node in doc.descendants() {
+        let Some(id) = node.attribute("id") else { continue };
+        // Ids are unique in XML; with two, mesh-loader and this check could follow different ones.
+        if let Some(first) = ids.insert(id, node) {
+            return Err(format!("line {}: id `{id}` is also the id of line {}", line(node), line(first)));
+        }
+    }
     for node in doc.descendants().filter(|n| n.has_tag_name("input") || n.has_tag_name("accessor")) {
         let Some(source) = node.attribute("source") else { continue };
         let id = source.strip_prefix('#').unwrap_or(source);
@@ -419,6 +425,22 @@ mod tests {
         let broken = dae.replacen(&format!("source=\"#{source}\""), "source=\"#nowhere\"", 1);
         let error = load_mesh_bytes("m.dae", broken.as_bytes(), file, [1.0; 3]).expect_err("refused");
         assert!(error.contains("#nowhere"), "{error}");
+    }
+
+    /// Inputs on which mesh-loader 0.1.13 panicked (found by `fuzz/run`, target mesh_dae).
+    #[test]
+    fn collada_inputs_that_made_mesh_loader_panic_are_errors() {
+        let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/meshes/fuzz-dae"));
+        let mut count = 0;
+        for entry in std::fs::read_dir(dir).expect("fixtures") {
+            let path = entry.expect("entry").path();
+            let bytes = std::fs::read(&path).expect("read");
+            let error = load_mesh_bytes("m.dae", &bytes, Path::new("m.dae"), [1.0; 3]).expect_err("refused");
+            // Refused by the checks, not by the backstop around a panic.
+            assert!(!error.contains("(mesh-loader) could not read"), "{}: {error}", path.display());
+            count += 1;
+        }
+        assert!(count >= 10, "{count} fixtures");
     }
 
     #[test]
