@@ -337,3 +337,29 @@ fn negative_option_values_name_the_option() {
     assert_eq!(output.status.code(), Some(2));
     assert!(stderr(&output).contains("--count"), "{}", stderr(&output));
 }
+
+#[test]
+fn a_device_as_design_or_scenario_is_refused_without_reading_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let design = dir.path().join("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &design).expect("symlink");
+    let output = validate_design()
+        .timeout(Duration::from_secs(20))
+        .arg(&design)
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("a device: expected a regular file"), "{}", stderr(&output));
+    let output = validate_design()
+        .timeout(Duration::from_secs(20))
+        .arg(repo().join("designs/paper-real-world.json"))
+        .args(["--scenario", "/dev/zero"])
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("/dev/zero") && stderr(&output).contains("a device"),
+        "{}",
+        stderr(&output)
+    );
+}
