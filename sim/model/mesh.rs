@@ -427,6 +427,16 @@ mod tests {
         assert!(error.contains("#nowhere"), "{error}");
     }
 
+    #[test]
+    fn a_mesh_over_the_triangle_limit_is_refused_before_parsing() {
+        let held = limits::MAX_MESH_TRIANGLES + 1;
+        let mut bytes = vec![0u8; 80];
+        bytes.extend_from_slice(&(held as u32).to_le_bytes());
+        bytes.resize(84 + 50 * held, 0);
+        let error = load_mesh_bytes("big.stl", &bytes, Path::new("big.stl"), [1.0; 3]).expect_err("refused");
+        assert!(error.contains("200001 triangles; the limit is 200000"), "{error}");
+    }
+
     /// Inputs on which mesh-loader 0.1.13 panicked (found by `fuzz/run`, target mesh_dae).
     #[test]
     fn collada_inputs_that_made_mesh_loader_panic_are_errors() {
