@@ -241,9 +241,9 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
                 format!("`{name}`: expected a file-name-safe name"),
             ));
         }
+        let loaded = pipeline::load(&path, &load_opts)?;
         for (scenario_name, scenario) in &scenarios {
-            let loaded = pipeline::load(&path, &load_opts)?;
-            let validation = pipeline::validate(loaded, scenario.clone(), &opts)?;
+            let validation = pipeline::validate(loaded.clone(), scenario.clone(), &opts)?;
             let built = report::build(&validation);
             let body = snapshot::snapshot_text(&built).map_err(|message| Error::Report { message })?;
             let snapshot_name = format!("{name}__{scenario_name}");

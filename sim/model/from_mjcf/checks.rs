@@ -49,10 +49,13 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
             texts.push((included, included_text));
         }
     }
+    let docs = texts
+        .iter()
+        .map(|(file, text)| Ok((file, xml(file, text)?)))
+        .collect::<Result<Vec<_>, ModelError>>()?;
     // Asset folders may be set in any of the files.
     let mut folders = vec![dir.clone()];
-    for (file, text) in &texts {
-        let doc = xml(file, text)?;
+    for (_, doc) in &docs {
         for node in doc.descendants().filter(|n| n.has_tag_name("compiler")) {
             for attribute in ["meshdir", "texturedir", "assetdir"] {
                 if let Some(sub) = node.attribute(attribute) {
@@ -61,10 +64,9 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
             }
         }
     }
-    for (file, text) in &texts {
-        let doc = xml(file, text)?;
+    for (file, doc) in &docs {
         for node in doc.descendants().filter(|n| n.is_element() && !n.has_tag_name("include")) {
-            check_numbers(file, &doc, node)?;
+            check_numbers(file, doc, node)?;
             for attribute in FILE_ATTRIBUTES {
                 let Some(name) = node.attribute(*attribute) else { continue };
                 let here = file.parent().map_or_else(|| dir.clone(), Path::to_path_buf);
@@ -73,7 +75,7 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
                     let searched: Vec<String> = candidates.iter().map(|c| c.display().to_string()).collect();
                     return Err(unsupported(
                         file,
-                        &doc,
+                        doc,
                         node,
                         format!("{attribute}=\"{name}\": not found; searched {}", searched.join(", ")),
                     ));
@@ -83,7 +85,7 @@ pub(super) fn before_load(path: &Path) -> Result<(), ModelError> {
                         continue;
                     }
                     files::check_regular(&candidate, limits::MAX_MESH_BYTES)
-                        .map_err(|e| unsupported(file, &doc, node, format!("{attribute}=\"{name}\": {}: {e}", candidate.display())))?;
+                        .map_err(|e| unsupported(file, doc, node, format!("{attribute}=\"{name}\": {}: {e}", candidate.display())))?;
                     files::record_input(&candidate);
                 }
             }
