@@ -22,6 +22,10 @@ pub const MAX_LINKS: usize = 1024;
 pub const MAX_GOALS: usize = 10_000;
 /// Most obstacles of a scenario.
 pub const MAX_OBSTACLES: usize = 10_000;
+/// Most IK starts per goal (`--ik-seeds`, a suite's `options.ik_seeds`).
+pub const MAX_IK_SEEDS: u64 = 1000;
+/// Largest planner sample budget per goal (`--plan-budget`, a suite's `options.plan_budget`).
+pub const MAX_PLAN_BUDGET: u64 = 100_000_000;
 /// Largest length (m) anywhere in a design, scenario or robot description, as an absolute value.
 pub const MAX_LENGTH_M: f64 = 1000.0;
 /// Largest joint limit, as an absolute value (rad or m): wider than that, a joint is continuous.

@@ -108,7 +108,7 @@ struct Cli {
     #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
     engines: EnginesArg,
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
-    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     ik_seeds: u64,
     /// Judge every goal by this tolerance mode instead of the scenario's.
     #[arg(long, value_name = "MODE")]
@@ -125,7 +125,7 @@ struct Cli {
     #[arg(long, value_name = "PLANNER", default_value = "rrt-connect")]
     planner: PlannerArg,
     /// Random samples per goal before the planner reports `no_path` (rrt-connect).
-    #[arg(long, value_name = "N", default_value_t = proving_ground::plan::DEFAULT_PLAN_BUDGET as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    #[arg(long, value_name = "N", default_value_t = proving_ground::plan::DEFAULT_PLAN_BUDGET as u64, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_PLAN_BUDGET))]
     plan_budget: u64,
     /// The paper's static metric only: a collision-free IK solution per goal; no trajectory, no
     /// engines (the fastest mode).
@@ -152,21 +152,14 @@ struct EnginesArg(pipeline::Engines);
 impl std::str::FromStr for EnginesArg {
     type Err = String;
     fn from_str(text: &str) -> Result<Self, Self::Err> {
-        let mut engines = pipeline::Engines {
-            rapier: false,
-            mujoco: false,
+        let names: Vec<&str> = if text == "none" {
+            vec![]
+        } else {
+            text.split(',').map(str::trim).collect()
         };
-        if text == "none" {
-            return Ok(Self(engines));
-        }
-        for name in text.split(',') {
-            match name.trim() {
-                "rapier" => engines.rapier = true,
-                "mujoco" => engines.mujoco = true,
-                other => return Err(format!("unknown engine `{other}`; expected rapier,mujoco, rapier, mujoco or none")),
-            }
-        }
-        Ok(Self(engines))
+        pipeline::Engines::from_names(names)
+            .map(Self)
+            .map_err(|other| format!("unknown engine `{other}`; expected rapier,mujoco, rapier, mujoco or none"))
     }
 }
 

@@ -181,6 +181,27 @@ pub struct Engines {
     pub mujoco: bool,
 }
 
+impl Engines {
+    /// The engines named (`rapier`, `mujoco`); no name gives no engine.
+    ///
+    /// # Errors
+    /// The first name that is not an engine.
+    pub fn from_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Result<Self, String> {
+        let mut engines = Self {
+            rapier: false,
+            mujoco: false,
+        };
+        for name in names {
+            match name {
+                "rapier" => engines.rapier = true,
+                "mujoco" => engines.mujoco = true,
+                other => return Err(other.to_string()),
+            }
+        }
+        Ok(engines)
+    }
+}
+
 impl Default for Engines {
     fn default() -> Self {
         Self {

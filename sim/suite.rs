@@ -123,30 +123,23 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
         opts.planner.seed = seed;
     }
     if let Some(k) = file.ik_seeds {
-        if !(1..=1000).contains(&k) {
-            return Err(invalid(path, "options.ik_seeds", format!("{k}: expected 1 to 1000")));
+        if !(1..=limits::MAX_IK_SEEDS).contains(&k) {
+            return Err(invalid(
+                path,
+                "options.ik_seeds",
+                format!("{k}: expected 1 to {}", limits::MAX_IK_SEEDS),
+            ));
         }
         opts.ik.seeds = k as usize;
     }
     if let Some(list) = &file.engines {
-        let mut engines = Engines {
-            rapier: false,
-            mujoco: false,
-        };
-        for name in list {
-            match name.as_str() {
-                "rapier" => engines.rapier = true,
-                "mujoco" => engines.mujoco = true,
-                other => {
-                    return Err(invalid(
-                        path,
-                        "options.engines",
-                        format!("unknown engine `{other}`; expected rapier or mujoco"),
-                    ))
-                }
-            }
-        }
-        opts.engines = engines;
+        opts.engines = Engines::from_names(list.iter().map(String::as_str)).map_err(|other| {
+            invalid(
+                path,
+                "options.engines",
+                format!("unknown engine `{other}`; expected rapier or mujoco"),
+            )
+        })?;
     }
     if let Some(planner) = &file.planner {
         opts.planner.kind = match planner.as_str() {
@@ -162,8 +155,12 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
         };
     }
     if let Some(budget) = file.plan_budget {
-        if !(1..=100_000_000).contains(&budget) {
-            return Err(invalid(path, "options.plan_budget", format!("{budget}: expected 1 to 100000000")));
+        if !(1..=limits::MAX_PLAN_BUDGET).contains(&budget) {
+            return Err(invalid(
+                path,
+                "options.plan_budget",
+                format!("{budget}: expected 1 to {}", limits::MAX_PLAN_BUDGET),
+            ));
         }
         opts.planner.budget = budget as usize;
     }
