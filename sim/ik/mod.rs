@@ -1,7 +1,9 @@
 //! Consumes a [`Model`], a [`Goal`] and optionally a collision checker.
-//! Produces every distinct IK solution found for the goal (from K seeded starts), each with its
-//! errors, clearance and verdict. Never fails: an unreachable goal is a result, not an error.
+//! Produces every distinct IK solution found for the goal (in closed form for UR-type arms and
+//! `pose` goals, else from K seeded starts), each with its errors, clearance and verdict, and
+//! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
+pub mod analytic;
 mod dls;
 mod error;
 mod loss;
@@ -14,12 +16,15 @@ pub use reach::{reach_bound, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;
-use crate::model::Model;
-use crate::scenario::{Goal, Scenario};
+use crate::model::{JointKind, KinematicsWorkspace, Model};
+use crate::scenario::{Goal, Scenario, Tolerance};
+use analytic::{AnalyticSolutions, UrArm};
 use dls::{Convergence, Solver};
+use nalgebra::{Isometry3, Matrix6, Translation3};
 use rand::SeedableRng;
 use refine::Checker;
 use serde::Serialize;
+use std::f64::consts::TAU;
 
 /// Position error below which a goal is reached (m): the paper's 1 mm.
 pub const REACHED_POSITION_M: f64 = 1e-3;
@@ -44,6 +49,9 @@ pub struct IkOptions {
     /// Clearance a solution must keep to count as collision-free (m; default 0): the validation's
     /// collision margin, so IK and the trajectory judge alike.
     pub clearance_m: f64,
+    /// Solve `pose` goals of UR-type arms in closed form (default true); false forces the
+    /// numeric solver (to compare the two).
+    pub analytic: bool,
 }
 
 impl Default for IkOptions {
@@ -55,6 +63,7 @@ impl Default for IkOptions {
             distinct_tolerance: 1e-3,
             refinement_steps: 200,
             clearance_m: 0.0,
+            analytic: true,
         }
     }
 }
@@ -79,12 +88,20 @@ pub struct IkSolution {
 #[derive(Debug, Clone, Serialize)]
 pub struct GoalSolutions {
     /// Every distinct solution that reaches the pose, reached ones (collision-free) first, then
-    /// by error; when none reaches the pose, the single closest attempt.
+    /// by error (closed form: by clearance, then branch); when none reaches the pose, the single
+    /// closest attempt.
     pub solutions: Vec<IkSolution>,
-    /// Starts tried.
+    /// Numeric starts tried (0 when the closed form found every solution within the limits).
     pub starts: usize,
-    /// Jacobian evaluations spent.
+    /// Jacobian evaluations spent (closed form: the Newton steps polishing its solutions).
     pub iterations: usize,
+    /// Every solution of the pose is known and each one within the joint limits is listed
+    /// (closed form at a non-singular pose, or a pose proven out of reach): then an unreachable
+    /// goal is proven, see `proof`.
+    pub complete: bool,
+    /// Why no configuration reaches the goal, when the complete set proves it: out of reach, none
+    /// within the joint limits, or every solution in collision. `None` otherwise.
+    pub proof: Option<String>,
 }
 
 impl GoalSolutions {
@@ -101,7 +118,19 @@ pub struct Ik<'a> {
     solver: Solver<'a>,
     checker: Option<Checker<'a>>,
     opts: IkOptions,
+    /// The closed form, when the model is a UR-type arm.
+    analytic: Option<UrArm>,
+    ws: KinematicsWorkspace,
 }
+
+/// Pose error (m and rad) the closed form's solutions are polished to with Newton steps on the
+/// model's own FK.
+const POLISHED: f64 = 1e-12;
+/// Newton steps at most per closed-form solution (one usually suffices, often none).
+const POLISH_STEPS: usize = 3;
+/// A closed-form solution whose polished error stays above this (m and rad) is not exact: the
+/// pose sits on a workspace boundary where rounding decides, and the set is not called complete.
+const EXACT: f64 = 1e-9;
 
 impl<'a> Ik<'a> {
     /// A solver for `model` that ignores collisions.
@@ -110,6 +139,8 @@ impl<'a> Ik<'a> {
             model,
             solver: Solver::new(model),
             checker: None,
+            analytic: UrArm::detect(model),
+            ws: model.workspace(),
             opts,
         }
     }
@@ -121,29 +152,233 @@ impl<'a> Ik<'a> {
             model,
             solver: Solver::new(model),
             checker: Some(Checker::new(model, world)),
+            analytic: UrArm::detect(model),
+            ws: model.workspace(),
             opts,
         }
     }
 
-    /// Solves `goal` (number `goal_index` of its scenario, which seeds its random starts) from
-    /// `first_seed` (e.g. the previous goal's solution) and random starts within the limits.
+    /// The closed-form parametrisation, when the model is a UR-type arm.
+    pub fn closed_form(&self) -> Option<&UrArm> {
+        self.analytic.as_ref()
+    }
+
+    /// Solves `goal` (number `goal_index` of its scenario, which seeds its random starts).
+    ///
+    /// A `pose` goal of a UR-type arm gets every solution in closed form, each whole turn moved
+    /// into the joint limits nearest `first_seed` (else zero), so the set is complete. Elsewhere:
+    /// from `first_seed` (e.g. the previous goal's solution) and random starts within the limits;
+    /// the closed form's solutions join as extra starts where it applies but cannot list every
+    /// solution (singular poses, poses just beyond reach that the tolerance may still accept).
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.opts.seed ^ (goal_index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let done = Convergence {
-            position_m: 1e-6,
-            orientation_rad: 1e-6,
+        let exact = match (&self.analytic, goal.tolerance) {
+            (Some(arm), Tolerance::Pose) if self.opts.analytic => {
+                arm.solve(&Isometry3::from_parts(Translation3::from(goal.position), goal.rotation))
+            }
+            _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
         };
-        let mut found: Vec<IkSolution> = Vec::new();
-        let mut closest: Option<IkSolution> = None;
+        if exact.finite && !exact.configurations.is_empty() {
+            return self.solve_closed_form(goal, goal_index, first_seed, &exact);
+        }
+        let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+        if let Some(proof) = exact.out_of_reach {
+            // Proven beyond the tolerance: no start can have reached it.
+            result.complete = !result.solutions.iter().any(|s| s.pose_reached);
+            result.proof = result.complete.then_some(proof);
+        }
+        result
+    }
+
+    /// The closed form's solutions, polished, moved into the limits and judged; exact solutions
+    /// no whole turn brings within the limits start the numeric solver from their clamped
+    /// configuration (a configuration at the limit may still be within the tolerance).
+    fn solve_closed_form(
+        &mut self,
+        goal: &Goal,
+        goal_index: usize,
+        first_seed: Option<&[f64]>,
+        exact: &AnalyticSolutions,
+    ) -> GoalSolutions {
+        let margin = self.margin();
         let mut iterations = 0;
-        // A NaN or negative margin means none: a NaN would call every configuration colliding.
-        let margin = if self.opts.clearance_m.is_finite() {
+        let mut complete = true;
+        let mut distinct: Vec<Vec<f64>> = Vec::with_capacity(exact.configurations.len());
+        let mut found: Vec<IkSolution> = Vec::with_capacity(exact.configurations.len());
+        let mut outside: Vec<Vec<f64>> = Vec::new();
+        for configuration in &exact.configurations {
+            let mut q = configuration.to_vec();
+            let (steps, error) = self.polish(goal, &mut q);
+            iterations += steps;
+            complete &= error <= EXACT;
+            if distinct.iter().any(|d| self.same_configuration(d, &q)) {
+                continue;
+            }
+            distinct.push(q.clone());
+            if self.shift_into_limits(&mut q, first_seed) {
+                found.push(self.judge(goal, q, margin));
+            } else {
+                outside.push(q);
+            }
+        }
+        let mut starts = 0;
+        let mut closest: Option<IkSolution> = None;
+        if !outside.is_empty() {
+            let mut rng = self.rng(goal_index);
+            let done = CONVERGED;
+            for mut q in outside.iter().cloned() {
+                starts += 1;
+                iterations += self.solver.solve(goal, &mut q, self.opts.max_iterations, done, &mut rng);
+                let solution = self.judge(goal, q, margin);
+                if solution.pose_reached {
+                    if !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
+                        found.push(solution);
+                    }
+                } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
+                    closest = Some(solution);
+                }
+            }
+        }
+        // The errors are all rounding: order by clearance (the best attempt first when none is
+        // free), else keep the branch order.
+        found.sort_by(|a, b| {
+            b.reached.cmp(&a.reached).then_with(|| {
+                let clearance = |s: &IkSolution| s.clearance.map_or(0.0, |c| c.exact_m);
+                clearance(b).total_cmp(&clearance(a))
+            })
+        });
+        let poses = found.len();
+        if found.is_empty() {
+            found.extend(closest);
+        }
+        let reached = found.first().is_some_and(|s| s.reached);
+        let proof = (complete && !reached).then(|| {
+            let total = distinct.len();
+            let within = total - outside.len();
+            let limits = if outside.is_empty() {
+                String::new()
+            } else {
+                format!(" ({within} of the {total} within the joint limits)")
+            };
+            if poses == 0 {
+                format!("closed-form IK: none of the pose's {total} solutions is within the joint limits")
+            } else if margin > 0.0 {
+                format!("closed-form IK: all {poses} solutions of the pose{limits} collide or keep less than the {margin} m margin")
+            } else {
+                format!("closed-form IK: all {poses} solutions of the pose{limits} collide")
+            }
+        });
+        GoalSolutions {
+            solutions: found,
+            starts,
+            iterations,
+            complete,
+            proof,
+        }
+    }
+
+    /// Newton steps on the model's own FK until the pose error is below [`POLISHED`]; returns the
+    /// steps taken and the larger of the final position (m) and orientation (rad) errors.
+    fn polish(&mut self, goal: &Goal, q: &mut [f64]) -> (usize, f64) {
+        let error_of = |ws: &KinematicsWorkspace| {
+            let e = task_error(goal, &ws.tool_in_world);
+            (e, e.fixed_rows::<3>(0).norm().max(e.fixed_rows::<3>(3).norm()))
+        };
+        self.model.tool_jacobian(q, &mut self.ws);
+        let (mut e, mut size) = error_of(&self.ws);
+        let mut steps = 0;
+        let mut previous = q.to_vec();
+        while size > POLISHED && steps < POLISH_STEPS {
+            let jacobian = Matrix6::from_fn(|r, c| self.ws.jacobian[(r, c)]);
+            let Some(step) = jacobian.lu().solve(&e) else { break };
+            previous.copy_from_slice(q);
+            for (value, delta) in q.iter_mut().zip(step.iter()) {
+                *value += delta;
+            }
+            steps += 1;
+            self.model.tool_jacobian(q, &mut self.ws);
+            let (new_e, new_size) = error_of(&self.ws);
+            if new_size >= size {
+                // Near a singularity Newton may overshoot: keep the closed form's answer.
+                q.copy_from_slice(&previous);
+                break;
+            }
+            (e, size) = (new_e, new_size);
+        }
+        for value in q.iter_mut() {
+            *value = wrap_angle(*value);
+        }
+        (steps, size)
+    }
+
+    /// Moves each revolute angle of `q` by whole turns into its limits, to the equivalent nearest
+    /// `near` (else zero); false when some joint has no equivalent within its limits.
+    fn shift_into_limits(&self, q: &mut [f64], near: Option<&[f64]>) -> bool {
+        let near = near.filter(|n| n.len() == q.len());
+        for (i, (value, joint)) in q.iter_mut().zip(&self.model.joints).enumerate() {
+            if joint.kind == JointKind::Prismatic {
+                if joint.limits.is_some_and(|[lower, upper]| *value < lower || *value > upper) {
+                    return false;
+                }
+                continue;
+            }
+            let target = near.map_or(0.0, |n| n[i]);
+            let mut turns = ((target - *value) / TAU).round();
+            if let Some([lower, upper]) = joint.limits {
+                let (fewest, most) = (((lower - *value) / TAU).ceil(), ((upper - *value) / TAU).floor());
+                if fewest > most {
+                    return false;
+                }
+                turns = turns.clamp(fewest, most);
+            }
+            if turns != 0.0 {
+                *value += turns * TAU;
+            }
+        }
+        true
+    }
+
+    /// The solution record of configuration `q`: errors, exact clearance, verdict.
+    fn judge(&mut self, goal: &Goal, q: Vec<f64>, margin: f64) -> IkSolution {
+        let clearance = self.checker.as_mut().map(|checker| checker.clearance(&q, true));
+        let error = goal_error(goal, &self.model.tool_pose(&q));
+        let pose_reached = is_reached(&error);
+        IkSolution {
+            reached: pose_reached && clearance.is_none_or(|c| c.exact_m > margin),
+            q,
+            error,
+            pose_reached,
+            clearance,
+        }
+    }
+
+    /// The clearance a solution must keep; a NaN or negative margin means none (a NaN would call
+    /// every configuration colliding).
+    fn margin(&self) -> f64 {
+        if self.opts.clearance_m.is_finite() {
             self.opts.clearance_m.max(0.0)
         } else {
             0.0
-        };
-        for start in 0..self.opts.seeds {
+        }
+    }
+
+    /// The random stream of goal `goal_index`.
+    fn rng(&self, goal_index: usize) -> rand_chacha::ChaCha8Rng {
+        rand_chacha::ChaCha8Rng::seed_from_u64(self.opts.seed ^ (goal_index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+    }
+
+    /// The numeric solver: `first_seed`, random starts and then `extra` starts (closed-form
+    /// configurations).
+    fn solve_numeric(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>, extra: &[[f64; 6]]) -> GoalSolutions {
+        let mut rng = self.rng(goal_index);
+        let done = CONVERGED;
+        let mut found: Vec<IkSolution> = Vec::new();
+        let mut closest: Option<IkSolution> = None;
+        let mut iterations = 0;
+        let margin = self.margin();
+        let starts = self.opts.seeds + extra.len();
+        for start in 0..starts {
             let mut q = match (start, first_seed) {
+                _ if start >= self.opts.seeds => extra[start - self.opts.seeds].to_vec(),
                 (0, Some(seed)) if seed.len() == self.model.dof() => seed.to_vec(),
                 _ => self.model.random_configuration(&mut rng),
             };
@@ -194,8 +429,10 @@ impl<'a> Ik<'a> {
         }
         GoalSolutions {
             solutions: found,
-            starts: self.opts.seeds,
+            starts,
             iterations,
+            complete: false,
+            proof: None,
         }
     }
 
@@ -217,6 +454,12 @@ impl<'a> Ik<'a> {
         })
     }
 }
+
+/// Convergence of the numeric solver: far tighter than "reached" (1 mm, 1 degree).
+const CONVERGED: Convergence = Convergence {
+    position_m: 1e-6,
+    orientation_rad: 1e-6,
+};
 
 /// `angle` wrapped into (-pi, pi].
 pub fn wrap_angle(angle: f64) -> f64 {

@@ -1,0 +1,318 @@
+//! Closed-form IK for UR-type arms: every solution of a pose, and proofs that a pose is out of
+//! reach.
+//!
+//! Detection fits the UR kinematics to any model, whatever its source: joint `i`'s world axis
+//! line at `q = 0`, read from the model's own FK, fixes a DH base frame (origin where axes 1 and
+//! 2 cross, z along axis 1), the link lengths `a2`, `a3`, the offsets `d4` (every offset along
+//! the parallel axes 2 to 4, summed) and `d5`, the joint angle at `q = 0` of each joint and the
+//! sign of each axis; `d1` and `d6` go into the base and tool transforms. A model is UR-type only
+//! when the fitted parametrisation's FK agrees with the model's own at 20 seeded configurations
+//! to 1e-9 m and 1e-9 rad: the fit assumes the UR structure, the check proves it.
+//!
+//! The fitted chain is `base * A1 .. A6 * tool`, `A_i = Rot_z(theta_i) Trans_z(d_i) Trans_x(a_i)
+//! Rot_x(alpha_i)` with `alpha = (pi/2, 0, 0, pi/2, -pi/2, 0)`, `d = (0, 0, 0, d4, d5, 0)`,
+//! `a = (0, a2, a3, 0, 0, 0)` and `theta_i = offset_i + sign_i q_i`. Frames 5 and 6 share their
+//! origin, the wrist centre, which fixes joint 1 (two ways), then joint 5 from the tool axis
+//! (two ways), joint 6, and the planar three-link problem of joints 2 to 4 (elbow up or down).
+
+use crate::model::{JointKind, Model};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::SeedableRng;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Agreement the fitted FK must reach with the model's (m and rad).
+const FIT_TOLERANCE: f64 = 1e-9;
+/// Configurations the fit is checked at.
+const FIT_CONFIGURATIONS: usize = 20;
+/// Axis directions further than this from parallel or perpendicular (sine or cosine) cannot be
+/// UR-type: the fit is not even tried.
+const AXIS_TOLERANCE: f64 = 1e-6;
+/// Link lengths below this (m) degenerate the planar sub-problem.
+const MIN_LINK_M: f64 = 1e-6;
+/// Sine of joint 5 below which the wrist is singular: joints 4 and 6 turn about one line and only
+/// their sum or difference is fixed, a continuum of solutions.
+const WRIST_SINGULAR: f64 = 1e-7;
+/// Distances (m) below which the wrist centre is on joint 1's axis or joint 4's origin on joint
+/// 2's: a continuum of solutions.
+const SHOULDER_SINGULAR_M: f64 = 1e-9;
+/// Slack on the cosines of the closed form before a branch counts as out of reach: a pose at the
+/// boundary of the workspace (arm stretched) keeps its solution despite rounding.
+const COSINE_SLACK: f64 = 1e-10;
+
+/// A UR-type 6R arm: the fitted closed-form parametrisation of a model.
+#[derive(Debug, Clone)]
+pub struct UrArm {
+    /// World pose of the DH base frame (frame 0).
+    base: Isometry3<f64>,
+    base_inverse: Isometry3<f64>,
+    /// The model's tool frame in DH frame 6.
+    tool: Isometry3<f64>,
+    tool_inverse: Isometry3<f64>,
+    a2: f64,
+    a3: f64,
+    d4: f64,
+    d5: f64,
+    /// DH angle of each joint at `q = 0`.
+    offset: [f64; 6],
+    /// `+1` or `-1`: the model's axis along or against the DH z axis.
+    sign: [f64; 6],
+}
+
+/// Every solution of one pose.
+#[derive(Debug, Clone, Default)]
+pub struct AnalyticSolutions {
+    /// Joint configurations in the model's convention, each angle in (-pi, pi], unrefined (the
+    /// closed form in f64: errors around 1e-15 m). Duplicates (at the boundary of the workspace
+    /// two branches meet) are not removed.
+    pub configurations: Vec<[f64; 6]>,
+    /// The pose has finitely many solutions and every one is listed; false at a singular pose,
+    /// where a continuum of solutions exists and one representative of it is listed.
+    pub finite: bool,
+    /// Why no configuration reaches the pose within the 1 mm and 1 degree tolerance, when the
+    /// wrist centre proves it.
+    pub out_of_reach: Option<String>,
+}
+
+/// `Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)`.
+fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> Isometry3<f64> {
+    let (sin, cos) = theta.sin_cos();
+    Isometry3::from_parts(
+        Translation3::new(a * cos, a * sin, d),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), theta) * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), alpha),
+    )
+}
+
+/// Closest point of line `(p, u)` to line `(q, v)` (unit directions, not parallel).
+fn closest_on_first(p: &Vector3<f64>, u: &Vector3<f64>, q: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
+    let w = p - q;
+    let b = u.dot(v);
+    let denominator = 1.0 - b * b;
+    let t = (b * v.dot(&w) - u.dot(&w)) / denominator;
+    p + u * t
+}
+
+/// `angle` wrapped into (-pi, pi].
+fn wrap(angle: f64) -> f64 {
+    super::wrap_angle(angle)
+}
+
+impl UrArm {
+    /// The closed-form parametrisation of `model` when it is a UR-type 6R arm (see the module
+    /// documentation); `None` for any other model, prismatic joints and other dof counts included.
+    pub fn detect(model: &Model) -> Option<UrArm> {
+        if model.dof() != 6 || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+            return None;
+        }
+        let mut ws = model.workspace();
+        model.forward(&[0.0; 6], &mut ws);
+        let lines: Vec<(Vector3<f64>, Vector3<f64>)> = model
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(i, joint)| {
+                let frame = &ws.link_in_world[i + 1];
+                (frame.translation.vector, frame.rotation * joint.axis.into_inner())
+            })
+            .collect();
+        let w = |i: usize| lines[i].1;
+        let p = |i: usize| lines[i].0;
+        let perpendicular = |i: usize, j: usize| w(i).dot(&w(j)).abs() < AXIS_TOLERANCE;
+        let parallel = |i: usize, j: usize| w(i).cross(&w(j)).norm() < AXIS_TOLERANCE;
+        if !(perpendicular(0, 1) && parallel(1, 2) && parallel(1, 3) && perpendicular(3, 4) && perpendicular(4, 5)) {
+            return None;
+        }
+        // DH base: z along axis 1, axis 2 along -y at theta_1 = 0 (alpha_1 = pi/2), origin where
+        // axes 1 and 2 cross (d1 goes into the base).
+        let z = w(0);
+        let y = -(w(1) - z * z.dot(&w(1))).normalize();
+        let x = y.cross(&z);
+        let origin = closest_on_first(&p(0), &w(0), &p(1), &w(1));
+        let rotation = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_basis_unchecked(&[x, y, z]));
+        let base = Isometry3::from_parts(Translation3::from(origin), rotation);
+        let local = |v: Vector3<f64>| base.rotation.inverse() * v;
+        let local_point = |v: Vector3<f64>| base.inverse_transform_point(&Point3::from(v)).coords;
+        // Axes 2 to 4 run along -y: where they cross the x-z plane is the planar arm.
+        let (p3, p4) = (local_point(p(2)), local_point(p(3)));
+        let (elbow, wrist) = ((p3.x, p3.z), (p4.x - p3.x, p4.z - p3.z));
+        let a2 = elbow.0.hypot(elbow.1);
+        let a3 = wrist.0.hypot(wrist.1);
+        if a2 < MIN_LINK_M || a3 < MIN_LINK_M {
+            return None;
+        }
+        let mut offset = [0.0; 6];
+        let mut sign = [1.0; 6];
+        offset[1] = elbow.1.atan2(elbow.0);
+        offset[2] = wrist.1.atan2(wrist.0) - offset[1];
+        let axis2 = local(w(1));
+        sign[2] = local(w(2)).dot(&axis2).signum();
+        sign[3] = local(w(3)).dot(&axis2).signum();
+        // Joint 4's origin is where axis 5 crosses axis 4; its distance along the parallel axes
+        // is every d offset between joints 2 and 5, summed.
+        let crossing45 = local_point(closest_on_first(&p(3), &w(3), &p(4), &w(4)));
+        let d4 = crossing45.dot(&axis2);
+        let frame3 = dh(0.0, 0.0, 0.0, FRAC_PI_2) * dh(offset[1], 0.0, a2, 0.0) * dh(offset[2], 0.0, a3, 0.0);
+        // Axis 5 in frame 3 is Rot_z(theta_4) (0, -1, 0).
+        let v = frame3.rotation.inverse() * local(w(4));
+        offset[3] = v.x.atan2(-v.y);
+        let frame4 = frame3 * dh(offset[3], d4, 0.0, FRAC_PI_2);
+        let axis5 = frame4.rotation * Vector3::z();
+        let crossing56 = local_point(closest_on_first(&p(4), &w(4), &p(5), &w(5)));
+        let d5 = (crossing56 - frame4.translation.vector).dot(&axis5);
+        // Axis 6 in frame 4 is Rot_z(theta_5) (0, 1, 0).
+        let u = frame4.rotation.inverse() * local(w(5));
+        offset[4] = (-u.x).atan2(u.y);
+        let frame6 = frame4 * dh(offset[4], d5, 0.0, -FRAC_PI_2);
+        let tool = (base * frame6).inverse() * ws.tool_in_world;
+        let arm = UrArm {
+            base,
+            base_inverse: base.inverse(),
+            tool,
+            tool_inverse: tool.inverse(),
+            a2,
+            a3,
+            d4,
+            d5,
+            offset,
+            sign,
+        };
+        let numbers = [a2, a3, d4, d5].into_iter().chain(offset);
+        if numbers.into_iter().any(|n| !n.is_finite()) || !arm.fits(model) {
+            return None;
+        }
+        Some(arm)
+    }
+
+    /// Whether the fitted FK agrees with the model's at seeded configurations.
+    fn fits(&self, model: &Model) -> bool {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5552_4b49);
+        (0..FIT_CONFIGURATIONS).all(|_| {
+            let q: [f64; 6] = std::array::from_fn(|_| rand::Rng::random_range(&mut rng, -PI..=PI));
+            let (position, angle) = crate::frames::pose_difference(&model.tool_pose(&q), &self.forward(&q));
+            position <= FIT_TOLERANCE && angle <= FIT_TOLERANCE
+        })
+    }
+
+    /// World pose of the tool at `q` by the fitted parametrisation.
+    pub fn forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        let theta: [f64; 6] = std::array::from_fn(|i| self.offset[i] + self.sign[i] * q[i]);
+        self.base
+            * dh(theta[0], 0.0, 0.0, FRAC_PI_2)
+            * dh(theta[1], 0.0, self.a2, 0.0)
+            * dh(theta[2], 0.0, self.a3, 0.0)
+            * dh(theta[3], self.d4, 0.0, FRAC_PI_2)
+            * dh(theta[4], self.d5, 0.0, -FRAC_PI_2)
+            * dh(theta[5], 0.0, 0.0, 0.0)
+            * self.tool
+    }
+
+    /// The fitted DH numbers `(a2, a3, d4, d5)` (m); `d1` and `d6` are in the base and tool.
+    pub fn lengths(&self) -> [f64; 4] {
+        [self.a2, self.a3, self.d4, self.d5]
+    }
+
+    /// Every configuration whose tool frame is at world pose `goal`.
+    pub fn solve(&self, goal: &Isometry3<f64>) -> AnalyticSolutions {
+        let flange = self.base_inverse * goal * self.tool_inverse;
+        let centre = flange.translation.vector;
+        let mut out = AnalyticSolutions {
+            configurations: Vec::with_capacity(8),
+            finite: true,
+            out_of_reach: self.out_of_reach(&centre),
+        };
+        let rotation = flange.rotation.to_rotation_matrix();
+        let (x6, y6, z6) = (
+            rotation.matrix().column(0).into_owned(),
+            rotation.matrix().column(1).into_owned(),
+            rotation.matrix().column(2).into_owned(),
+        );
+        let (a2, a3, d4, d5) = (self.a2, self.a3, self.d4, self.d5);
+        // The wrist centre lies on the plane of the parallel axes, d4 along them: theta_1 puts
+        // the plane there.
+        let radius = centre.x.hypot(centre.y);
+        if radius < SHOULDER_SINGULAR_M {
+            // On joint 1's axis (possible only with d4 = 0): every theta_1 or none.
+            out.finite = false;
+        }
+        let sine1 = if radius > 0.0 { d4 / radius } else { 0.0 };
+        if sine1.abs() > 1.0 + COSINE_SLACK {
+            return out;
+        }
+        let psi = centre.y.atan2(centre.x);
+        let lean = sine1.clamp(-1.0, 1.0).asin();
+        for theta1 in [psi + lean, psi + PI - lean] {
+            let (s1, c1) = theta1.sin_cos();
+            let z1 = Vector3::new(s1, -c1, 0.0);
+            let c5 = z6.dot(&z1).clamp(-1.0, 1.0);
+            let first_to_base = dh(theta1, 0.0, 0.0, FRAC_PI_2).inverse();
+            for wrist in [1.0, -1.0] {
+                let theta5 = wrist * c5.acos();
+                let s5 = theta5.sin();
+                let theta6 = if s5.abs() < WRIST_SINGULAR {
+                    out.finite = false;
+                    0.0
+                } else {
+                    // z1 in frame 6: (c6 s5, -s6 s5, .).
+                    let flip = s5.signum();
+                    (-z1.dot(&y6) * flip).atan2(z1.dot(&x6) * flip)
+                };
+                let frame4 = flange * (dh(theta5, d5, 0.0, -FRAC_PI_2) * dh(theta6, 0.0, 0.0, 0.0)).inverse();
+                let in_first = first_to_base * frame4;
+                let (x, y) = (in_first.translation.x, in_first.translation.y);
+                let x4 = in_first.rotation * Vector3::x();
+                let sum = x4.y.atan2(x4.x);
+                let squared = x * x + y * y;
+                if squared.sqrt() < SHOULDER_SINGULAR_M {
+                    out.finite = false;
+                }
+                let c3 = (squared - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
+                if c3.abs() > 1.0 + COSINE_SLACK {
+                    continue;
+                }
+                for elbow in [1.0, -1.0] {
+                    let theta3 = elbow * c3.clamp(-1.0, 1.0).acos();
+                    let (s3, c3) = theta3.sin_cos();
+                    let theta2 = y.atan2(x) - (a3 * s3).atan2(a2 + a3 * c3);
+                    let theta4 = sum - theta2 - theta3;
+                    let theta = [theta1, theta2, theta3, theta4, theta5, theta6];
+                    out.configurations
+                        .push(std::array::from_fn(|i| wrap(self.sign[i] * (theta[i] - self.offset[i]))));
+                }
+                if s5.abs() < WRIST_SINGULAR {
+                    // Both wrist signs are the same configuration family.
+                    break;
+                }
+            }
+        }
+        out
+    }
+
+    /// Why no configuration reaches `goal` within 1 mm and 1 degree, from the wrist centre
+    /// `centre` (DH base frame) alone: it lies `d4` off the arm's plane, at most `|a2| + |a3| +
+    /// |d5|` and at least `||a2| - |a3|| - |d5|` from axis 2 in that plane. A tool within the
+    /// tolerance puts the wrist centre within `1 mm + L * 1 deg` of it (`L` its distance from the
+    /// tool), so a centre further than that outside the region proves the pose out of reach.
+    fn out_of_reach(&self, centre: &Vector3<f64>) -> Option<String> {
+        let slack = super::REACHED_POSITION_M + self.tool.translation.vector.norm() * super::REACHED_ORIENTATION_RAD;
+        let d4 = self.d4.abs();
+        let radius = centre.x.hypot(centre.y);
+        let distance = centre.norm();
+        let (a2, a3, d5) = (self.a2.abs(), self.a3.abs(), self.d5.abs());
+        let outer = (a2 + a3 + d5).hypot(d4);
+        let inner = ((a2 - a3).abs() - d5).max(0.0).hypot(d4);
+        if radius < d4 - slack {
+            Some(format!(
+                "closed-form IK: pose out of reach: its wrist centre is {radius:.3} m from joint 1's axis, and the arm's offset along its parallel axes keeps it at least {d4:.3} m away"
+            ))
+        } else if distance > outer + slack {
+            Some(format!(
+                "closed-form IK: pose out of reach: its wrist centre is {distance:.3} m from the shoulder, and the stretched arm reaches {outer:.3} m"
+            ))
+        } else if distance < inner - slack {
+            Some(format!(
+                "closed-form IK: pose out of reach: its wrist centre is {distance:.3} m from the shoulder, and the folded arm comes no closer than {inner:.3} m"
+            ))
+        } else {
+            None
+        }
+    }
+}

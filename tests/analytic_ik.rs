@@ -1,0 +1,250 @@
+//! Closed-form IK of UR-type arms: detection by fit and FK check, every solution against the
+//! model's own FK, and against the numeric solver.
+
+mod common;
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use proving_ground::ik::analytic::UrArm;
+use proving_ground::ik::{Ik, IkOptions};
+use proving_ground::model::Model;
+use proving_ground::pipeline::{load_model, LoadOptions};
+use proving_ground::scenario::{Goal, Tolerance};
+use rand::{Rng, SeedableRng};
+use std::f64::consts::PI;
+use std::path::Path;
+
+const UR_DESIGNS: [&str; 3] = ["designs/ur5e.json", "designs/ur10e.json", "designs/ur20.json"];
+
+fn design(path: &str) -> Model {
+    load_model(&common::repo().join(path), &LoadOptions::default()).expect("design loads")
+}
+
+/// The held-out UR5 URDF (ROS-Industrial joint frames, URDF axis signs and zero offsets), to
+/// `tool0`.
+fn ur5_urdf() -> Model {
+    let root = common::repo().join("tests/fixtures/urdf");
+    let opts = LoadOptions {
+        tip_link: Some("tool0".into()),
+        package_paths: vec![root.clone()],
+        ..Default::default()
+    };
+    load_model(&root.join("example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"), &opts).expect("UR5 URDF loads")
+}
+
+fn ur_models() -> Vec<(String, Model)> {
+    let mut models: Vec<(String, Model)> = UR_DESIGNS.iter().map(|d| (d.to_string(), design(d))).collect();
+    models.push(("ur5_robot.urdf".into(), ur5_urdf()));
+    // The modular catalog's elbow arm is UR-type too: joint 5's axis the other way, offsets
+    // along every parallel axis.
+    models.push(("modular-elbow.json".into(), design("designs/modular-elbow.json")));
+    // Mounted off the origin and tilted: the fit's base frame takes it.
+    let mount = Isometry3::from_parts(Translation3::new(0.3, -0.2, 0.5), UnitQuaternion::from_euler_angles(0.4, -0.3, 1.1));
+    models.push(("ur10e.json placed".into(), design("designs/ur10e.json").placed(&mount)));
+    models
+}
+
+fn pose_goal(pose: &Isometry3<f64>) -> Goal {
+    Goal {
+        name: "g".into(),
+        position: pose.translation.vector,
+        rotation: pose.rotation,
+        tolerance: Tolerance::Pose,
+    }
+}
+
+fn same_modulo_turns(a: &[f64], b: &[f64], tolerance: f64) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| proving_ground::ik::wrap_angle(x - y).abs() <= tolerance)
+}
+
+#[test]
+fn ur_designs_and_the_ur5_urdf_are_detected_and_their_fit_is_exact() {
+    for (name, model) in ur_models() {
+        let arm = UrArm::detect(&model).unwrap_or_else(|| panic!("{name}: not detected as UR-type"));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..200 {
+            let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-2.0 * PI..=2.0 * PI));
+            let (dp, da) = proving_ground::frames::pose_difference(&model.tool_pose(&q), &arm.forward(&q));
+            assert!(dp < 1e-12 && da < 1e-12, "{name}: fit off by {dp} m, {da} rad");
+        }
+        println!("{name}: a2, a3, d4, d5 = {:?}", arm.lengths());
+    }
+}
+
+#[test]
+fn non_ur_models_are_not_detected() {
+    for path in [
+        "designs/paper-real-world.json",
+        "designs/free-offset-6dof.json",
+        "designs/abb-irb-2600.json",
+        "designs/economic-spherical-wrist.json",
+        "designs/economic-scara.json",
+        "designs/free-redundant-7dof.json",
+    ] {
+        assert!(UrArm::detect(&design(path)).is_none(), "{path} detected as UR-type");
+    }
+    assert!(UrArm::detect(&load_model(&common::panda_urdf(), &LoadOptions::default()).expect("loads")).is_none());
+}
+
+/// UR5e's DH table as a free design, one number changed: the axes keep their directions (so the
+/// fit is tried), the offsets no longer fit, and the FK check must refuse.
+#[test]
+fn a_ur_like_design_with_one_offset_perturbed_is_rejected_by_the_fk_check() {
+    let rows = |a1: f64, a4: f64, a5: f64, d2: f64| {
+        format!(
+            r#"{{"name": "ur-like", "mode": "free", "joints": [
+            {{"d": 0.1625, "a": {a1}, "alpha": 1.5707963267948966}},
+            {{"d": {d2}, "a": -0.425, "alpha": 0.0}},
+            {{"d": 0.0, "a": -0.3922, "alpha": 0.0}},
+            {{"d": 0.1333, "a": {a4}, "alpha": 1.5707963267948966}},
+            {{"d": 0.0997, "a": {a5}, "alpha": -1.5707963267948966}},
+            {{"d": 0.0996, "a": 0.03, "alpha": 0.4}}]}}"#
+        )
+    };
+    let model =
+        |text: String| proving_ground::model::from_design(&proving_ground::design::parse(&text, Path::new("t.json")).expect("valid"));
+    // Offsets along the parallel axes and a tool offset keep the UR structure.
+    assert!(UrArm::detect(&model(rows(0.0, 0.0, 0.0, 0.05))).is_some());
+    for (a1, a4, a5) in [(0.02, 0.0, 0.0), (0.0, 0.01, 0.0), (0.0, 0.0, -0.005), (1e-7, 0.0, 0.0)] {
+        assert!(
+            UrArm::detect(&model(rows(a1, a4, a5, 0.0))).is_none(),
+            "a1 = {a1}, a4 = {a4}, a5 = {a5} detected as UR-type"
+        );
+    }
+}
+
+#[test]
+fn every_closed_form_solution_reaches_the_pose_and_the_set_has_the_generating_configuration() {
+    for (name, model) in ur_models() {
+        let arm = UrArm::detect(&model).expect("UR-type");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+        let mut counts = [0usize; 9];
+        for index in 0..500 {
+            let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..=PI));
+            let pose = model.tool_pose(&q);
+            let exact = arm.solve(&pose);
+            assert!(
+                exact.out_of_reach.is_none(),
+                "{name} goal {index}: a reachable pose called out of reach"
+            );
+            for c in &exact.configurations {
+                let (dp, da) = proving_ground::frames::pose_difference(&model.tool_pose(c), &pose);
+                assert!(dp < 1e-10 && da < 1e-10, "{name} goal {index}: {c:?} off by {dp} m, {da} rad");
+            }
+            assert!(
+                exact.configurations.iter().any(|c| same_modulo_turns(c, &q, 1e-6)),
+                "{name} goal {index}: {q:?} not among {:?}",
+                exact.configurations
+            );
+            if exact.finite {
+                counts[exact.configurations.len()] += 1;
+            }
+        }
+        println!("{name}: solutions per pose (count of poses with 0..8) {counts:?}");
+        // Random configurations are almost never singular, every set is finite; about three in
+        // four poses have all 8 (the others lose a pair or two of branches to the elbow's reach).
+        assert!(counts.iter().sum::<usize>() >= 495 && counts[8] >= 250, "{name}: {counts:?}");
+    }
+}
+
+#[test]
+fn poses_out_of_reach_have_no_solution_and_a_proof() {
+    for (name, model) in ur_models() {
+        let arm = UrArm::detect(&model).expect("UR-type");
+        let base = model.world_from_base.translation.vector;
+        for (direction, distance) in [(Vector3::x(), 3.0), (Vector3::new(0.3, -0.5, 0.8).normalize(), 5.0)] {
+            let pose = Isometry3::from_parts(Translation3::from(base + direction * distance), UnitQuaternion::identity());
+            let exact = arm.solve(&pose);
+            assert!(exact.configurations.is_empty(), "{name}: {exact:?}");
+            assert!(exact.out_of_reach.is_some(), "{name}: no proof");
+            let result = Ik::new(&model, IkOptions::default()).solve(&pose_goal(&pose), 0, None);
+            assert!(!result.reached() && result.complete, "{name}: {result:?}");
+            assert!(
+                result.proof.as_deref().is_some_and(|p| p.contains("out of reach")),
+                "{name}: {:?}",
+                result.proof
+            );
+        }
+    }
+}
+
+/// Every numeric solution is one of the closed form's, which finds at least as many.
+#[test]
+fn the_closed_form_finds_every_numeric_solution_and_more() {
+    for (name, model) in ur_models() {
+        let mut analytic = Ik::new(&model, IkOptions::default());
+        assert!(analytic.closed_form().is_some());
+        let mut numeric = Ik::new(
+            &model,
+            IkOptions {
+                analytic: false,
+                ..Default::default()
+            },
+        );
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(29);
+        let (mut found_analytic, mut found_numeric) = (0, 0);
+        let goals = 50;
+        for index in 0..goals {
+            let goal = pose_goal(&model.tool_pose(&model.random_configuration(&mut rng)));
+            let a = analytic.solve(&goal, index, None);
+            let n = numeric.solve(&goal, index, None);
+            assert!(a.complete && a.reached(), "{name} goal {index}: {a:?}");
+            for s in &a.solutions {
+                assert!(
+                    s.error.position_m < 1e-10 && s.error.orientation_rad < 1e-10,
+                    "{name} goal {index}: {:?}",
+                    s.error
+                );
+                for (value, joint) in s.q.iter().zip(&model.joints) {
+                    let [lower, upper] = joint.limits.unwrap_or([-PI, PI]);
+                    assert!(
+                        *value >= lower && *value <= upper,
+                        "{name} goal {index}: {value} outside the limits"
+                    );
+                }
+            }
+            // Converged numeric solutions only: a start stuck at a workspace boundary (the arm
+            // stretched) may end 0.2 mm off, within the tolerance but no exact solution.
+            for s in n
+                .solutions
+                .iter()
+                .filter(|s| s.error.position_m < 1e-6 && s.error.orientation_rad < 1e-6)
+            {
+                // The numeric solver stops at 1e-6 m, which near the shoulder singularity leaves
+                // joints 1e-4 rad off.
+                assert!(
+                    a.solutions.iter().any(|t| same_modulo_turns(&t.q, &s.q, 1e-2)),
+                    "{name} goal {index}: numeric {:?} ({:?}) not among the closed form's {:?}",
+                    s.q,
+                    s.error,
+                    a.solutions.iter().map(|t| &t.q).collect::<Vec<_>>()
+                );
+            }
+            let numeric_count = n
+                .solutions
+                .iter()
+                .filter(|s| s.error.position_m < 1e-6 && s.error.orientation_rad < 1e-6)
+                .count();
+            assert!(a.solutions.len() >= numeric_count);
+            found_analytic += a.solutions.len();
+            found_numeric += numeric_count;
+        }
+        println!(
+            "{name}: {goals} random reachable poses, solutions per goal: closed form {:.2}, numeric (4 seeds) {:.2}",
+            found_analytic as f64 / goals as f64,
+            found_numeric as f64 / goals as f64
+        );
+    }
+}
+
+#[test]
+fn a_wrist_singular_pose_falls_back_to_the_numeric_solver_and_is_not_complete() {
+    let model = design("designs/ur5e.json");
+    let q = [0.3, -1.2, 1.1, 0.4, 0.0, 0.7];
+    let goal = pose_goal(&model.tool_pose(&q));
+    let arm = UrArm::detect(&model).expect("UR-type");
+    assert!(!arm.solve(&model.tool_pose(&q)).finite);
+    let result = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
+    assert!(result.reached() && !result.complete && result.proof.is_none(), "{result:?}");
+}
