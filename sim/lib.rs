@@ -60,4 +60,5 @@ pub mod pipeline;
 pub mod plan;
 pub mod report;
 pub mod scenario;
+pub mod srdf;
 pub mod suite;

@@ -23,7 +23,7 @@ Examples:
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-00.json --planner straight
   validate-design designs/ur20.json --scenario scenarios/cluttered/task-12.json --plan-budget 50000
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-03.json --reach-only
-  validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --tip panda_hand
+  validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --srdf designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
   validate-design robot.xml --kinematics-only --mujoco-checks 20
   validate-design designs/ur5e.json --describe --export-urdf ur5e.urdf --export-mjcf ur5e.xml
@@ -67,9 +67,15 @@ struct Cli {
     /// URDF: first link of the chain [default: the root link].
     #[arg(long, value_name = "LINK")]
     base: Option<String>,
-    /// URDF: last link of the chain [default: end of the longest chain of movable joints].
+    /// URDF: last link of the chain; MJCF: a body or a site, the tool frame [default: the arm's
+    /// last link, or the link fixed below it named like a tool frame (tcp, tool0, eef, ee_link,
+    /// flange, hand); gripper joints are not arm joints].
     #[arg(long, value_name = "LINK")]
     tip: Option<String>,
+    /// URDF: leave out the self-collision pairs the SRDF FILE's <disable_collisions> list, with
+    /// its reasons (never read unless given).
+    #[arg(long, value_name = "FILE")]
+    srdf: Option<PathBuf>,
     /// URDF: a root for package://NAME/... mesh URIs (repeatable; searched before ROS_PACKAGE_PATH).
     #[arg(long = "package-path", value_name = "DIR")]
     package_paths: Vec<PathBuf>,
@@ -293,6 +299,32 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     for diagnostic in &model.diagnostics {
         eprintln!("{diagnostic}");
     }
+    let describing = cli.describe || cli.kinematics_only;
+    // --describe prints them with the model.
+    if !cli.quiet && !describing {
+        for choice in model.source.choices() {
+            eprintln!("info: {}: {choice}", design_path.display());
+        }
+    }
+    let srdf = match &cli.srdf {
+        Some(path) if pipeline::input_kind(design_path)? != pipeline::InputKind::Urdf => {
+            return Err(Error::Srdf {
+                path: path.clone(),
+                element: "--srdf".into(),
+                message: format!("is for URDF input; {} is not a URDF", design_path.display()),
+            })
+        }
+        Some(path) => Some(proving_ground::srdf::exclusions(path, model)?),
+        None => None,
+    };
+    if let (Some(srdf), false, false) = (&srdf, cli.quiet, describing) {
+        eprintln!(
+            "info: {}: {} self-collision pairs left out ({} entries not applied); listed with --describe and in the JSON report's criteria.excluded_pairs",
+            srdf.path.display(),
+            srdf.pairs.len(),
+            srdf.notes.len()
+        );
+    }
     if cli.strict && !model.diagnostics.is_empty() {
         let list = model.diagnostics.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n");
         return Err(Error::Strict {
@@ -314,6 +346,9 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     }
     if !cli.quiet && (cli.describe || cli.kinematics_only) {
         print!("{}", report::describe(model, loaded.design.as_ref().map(|d| d.hardware_cost())));
+        if let Some(srdf) = &srdf {
+            println!("{}", srdf.describe());
+        }
         println!("{}", report::scenario_summary(&scenario));
     }
 
@@ -381,6 +416,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
             seed: cli.seed,
         },
         reach_only: cli.reach_only,
+        excluded_pairs: srdf.map(|s| s.pairs).unwrap_or_default(),
         engine: proving_ground::engine::RunOptions {
             contact_depth_m: cli.contact_depth,
             ..Default::default()

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 pub struct LoadOptions {
     /// URDF: first link of the chain (default: the root).
     pub base_link: Option<String>,
-    /// URDF: last link of the chain (default: end of the longest chain of movable joints).
+    /// URDF: last link of the chain; MJCF: a body or site holding the tool frame (default: the
+    /// arm's tool frame, see [`crate::model::from_urdf`] and [`crate::model::from_mjcf`]).
     pub tip_link: Option<String>,
     /// URDF: roots for `package://` URIs, searched before `ROS_PACKAGE_PATH`.
     pub package_paths: Vec<PathBuf>,

@@ -45,12 +45,43 @@ fn main_command_validates_the_paper_robot_on_the_course_and_passes() {
 }
 
 #[test]
-fn panda_needs_a_tip_and_loads_with_one() {
-    let output = validate_design().arg(panda_urdf()).output().expect("runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2));
+fn panda_loads_without_a_tip_and_with_one() {
+    // No --tip: the fingers are gripper joints, the tip is the TCP frame, and both are said.
+    let output = validate_design().arg(panda_urdf()).arg("--describe").output().expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     assert!(
-        stderr.contains("panda_leftfinger, panda_rightfinger") && stderr.contains("--tip"),
+        stdout.contains("panda (URDF, chain panda_link0 -> panda_hand_tcp, 7 joints)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .contains("joint `panda_finger_joint1` (line 334) is a gripper joint, not an arm joint: joint `panda_finger_joint2` mimics it"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("joint `panda_finger_joint2` (line 342) is a gripper joint, not an arm joint: it has <mimic"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("tip `panda_hand_tcp` (no --tip): the arm is the longest chain of movable joints from `panda_link0` that are not gripper joints (7 joints, to link `panda_link7`)"),
+        "{stdout}"
+    );
+
+    // A full run says the same on stderr.
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args(["--reach-only", "--mujoco-checks", "0"])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("info: ") && stderr.contains("tip `panda_hand_tcp` (no --tip)"),
         "{stderr}"
     );
 
@@ -70,6 +101,133 @@ fn panda_needs_a_tip_and_loads_with_one() {
         stdout.contains("panda (URDF, chain panda_link0 -> panda_hand, 7 joints)"),
         "{stdout}"
     );
+    assert!(!stdout.contains("chosen by default"), "an explicit --tip chooses nothing: {stdout}");
+}
+
+#[test]
+fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
+    let srdf = "designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf";
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args(["--srdf", srdf, "--describe"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("collision pairs disabled by {srdf} (18 model link pairs left out):")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("  panda_link0 - panda_link2: disabled in SRDF panda.srdf: panda_link0 - panda_link2 \"Never\" (line 48)"),
+        "{stdout}"
+    );
+    // The hand and fingers are merged into panda_link7: their pairs become its pairs.
+    assert!(
+        stdout.contains("  panda_link3 - panda_link7: disabled in SRDF panda.srdf: panda_hand - panda_link3 \"Never\" (line 36)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("not applied: panda_hand - panda_link7 (line 40): both are part of model link `panda_link7`"),
+        "{stdout}"
+    );
+    // The fingers against link5 are not disabled: link5 - link7 stays checked.
+    assert!(
+        stdout.contains("not applied: panda_link5 - panda_link7: the SRDF disables only some"),
+        "{stdout}"
+    );
+
+    // In a run, the JSON report lists them with their reasons.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let json = dir.path().join("report.json");
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args(["--srdf", srdf, "--reach-only", "--mujoco-checks", "0", "--json"])
+        .arg(&json)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.code().is_some_and(|c| c < 2), "{stderr}");
+    assert!(stderr.contains("18 self-collision pairs left out"), "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("report")).expect("JSON");
+    let excluded = report["criteria"]["excluded_pairs"].as_array().expect("excluded pairs");
+    assert!(
+        excluded.iter().any(|p| p["a"] == "panda_link0"
+            && p["b"] == "panda_link2"
+            && p["reason"]
+                .as_str()
+                .is_some_and(|r| r.contains("disabled in SRDF panda.srdf") && r.contains("\"Never\""))),
+        "{excluded:?}"
+    );
+    assert!(
+        report["inputs"]["model_choices"].as_array().is_some_and(|c| c.len() == 3),
+        "{}",
+        report["inputs"]
+    );
+}
+
+#[test]
+fn srdf_errors_name_the_file_and_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let srdf = dir.path().join("typo.srdf");
+    std::fs::write(
+        &srdf,
+        "<robot name=\"panda\">\n  <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\" reason=\"Adjacent\"/>\n</robot>\n",
+    )
+    .expect("write");
+    let output = validate_design()
+        .arg(panda_urdf())
+        .arg("--srdf")
+        .arg(&srdf)
+        .arg("--describe")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("typo.srdf: <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\"> (line 2): no link named `panda_lnk1`"),
+        "{stderr}"
+    );
+
+    std::fs::write(&srdf, "<robot><disable_collisions link1=\"panda_link0\"/></robot>").expect("write");
+    let output = validate_design()
+        .arg(panda_urdf())
+        .arg("--srdf")
+        .arg(&srdf)
+        .arg("--describe")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("<disable_collisions> (line 1): has no link2 attribute"), "{stderr}");
+
+    std::fs::write(&srdf, "<robot><unclosed></robot>").expect("write");
+    let output = validate_design()
+        .arg(panda_urdf())
+        .arg("--srdf")
+        .arg(&srdf)
+        .arg("--describe")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("typo.srdf: the XML:"), "{stderr}");
+
+    let output = validate_design()
+        .arg("designs/ur5e.json")
+        .arg("--srdf")
+        .arg(&srdf)
+        .arg("--describe")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--srdf: is for URDF input"), "{stderr}");
 }
 
 #[test]
@@ -180,8 +338,21 @@ fn rejects_link_with_two_parents() {
 
 #[test]
 fn rejects_mimic_joint_on_the_chain() {
-    let stderr = error_for("mimic_on_chain.urdf", &[]);
+    // With no --tip a trailing mimic joint is a gripper joint; a tip below it puts it on the chain.
+    let stderr = error_for("mimic_on_chain.urdf", &["--tip", "b"]);
     assert!(stderr.contains("joint `j2`") && stderr.contains("is a mimic joint"), "{stderr}");
+    let output = validate_design()
+        .arg(fixture("mimic_on_chain.urdf"))
+        .arg("--describe")
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("mimic (URDF, chain base -> a, 1 joints)"), "{stdout}");
+    assert!(
+        stdout.contains("joint `j2` (line 7) is a gripper joint, not an arm joint: it has <mimic joint=\"j1\">"),
+        "{stdout}"
+    );
 }
 
 #[test]

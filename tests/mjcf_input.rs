@@ -99,6 +99,7 @@ fn shipped_robots_survive_an_mjcf_round_trip_through_mujoco() {
                 path: dir.path().join(format!("{id}.xml")),
                 base_body: model.links[0].name.clone(),
                 tip_body: model.links[model.dof()].name.clone(),
+                choices: back.source.choices().to_vec(),
             },
             "{id}"
         );

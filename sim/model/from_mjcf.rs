@@ -239,6 +239,7 @@ impl Reader<'_> {
                 path: self.path.to_path_buf(),
                 base_body: self.name(MjtObjBase::mjOBJ_BODY, base_body),
                 tip_body: self.name(MjtObjBase::mjOBJ_BODY, moving[moving.len() - 1]),
+                choices: vec![],
             },
             world_from_base,
             joints,

@@ -4,12 +4,17 @@
 //! whether `<inertial>` and `<limit>` were written at all (urdf-rs fills both with zeros), and the
 //! line of each element for messages.
 //!
-//! The chain runs from the base link (default: the root) to the tip link (default: the child of
-//! the last movable joint on the longest chain of movable joints; a tie is an error). Fixed joints
-//! are folded into their parent; links off the chain are attached to the chain link they hang
-//! from, at their joints' zero position.
+//! The chain runs from the base link (default: the root) to the tip link. The default tip: the arm
+//! is the longest chain of movable joints that are not gripper joints (a tie is an error); the tip
+//! is the link below its last joint, or the link fixed below that one named like a tool frame
+//! (see `names`). Gripper joints end the tree and have a `<mimic>`, are mimicked from another
+//! branch, carry a gripper word, or branch as a pair from one moving body. Every default is said
+//! in `ModelSource::Urdf::choices`. Fixed joints are folded into their parent; links off the chain
+//! (gripper parts too) are attached to the chain link they hang from, at their joints' zero
+//! position.
 
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
+use super::names;
 use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Segment, Shape};
 use crate::frames::isometry_from_xyz_rpy;
 use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
@@ -21,7 +26,7 @@ use std::path::{Path, PathBuf};
 pub struct UrdfOptions {
     /// First link of the chain; default the root link.
     pub base_link: Option<String>,
-    /// Last link of the chain; default the end of the longest chain of movable joints.
+    /// Last link of the chain; default the arm's tool frame (see the module docs).
     pub tip_link: Option<String>,
     /// Roots searched for `package://NAME/...` meshes before `ROS_PACKAGE_PATH` and the folders
     /// holding the URDF.
@@ -232,9 +237,10 @@ impl<'a> Builder<'a> {
                     known: known(),
                 })
             }
-            Some(name) => name.clone(),
+            Some(name) => (name.clone(), vec![]),
             None => self.default_tip(base, &children)?,
         };
+        let (tip, choices) = tip;
 
         // Walk up from the tip to the base.
         let mut path_joints: Vec<&urdf_rs::Joint> = Vec::new();
@@ -355,6 +361,7 @@ impl<'a> Builder<'a> {
                 path: self.path.to_path_buf(),
                 base_link: base.into(),
                 tip_link: tip,
+                choices,
             },
             world_from_base: Isometry3::identity(),
             joints,
@@ -364,43 +371,214 @@ impl<'a> Builder<'a> {
         })
     }
 
-    /// The child of the last movable joint on the longest chain of movable joints below `base`.
-    fn default_tip(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> Result<String, ModelError> {
-        let mut best: (usize, Vec<String>) = (0, vec![]);
+    /// The default tip below `base` and the sentences that say why: the arm is the longest
+    /// chain of movable joints that are not gripper joints (see [`Self::gripper_joints`]); the
+    /// tip is the link below the arm's last joint, followed down fixed joints to the link named
+    /// like a tool frame ([`names::TOOL_NAMES`]) when exactly one name ranks first.
+    fn default_tip(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> Result<(String, Vec<String>), ModelError> {
+        let mut choices = Vec::new();
+        let mut grippers = self.gripper_joints(base, children);
+        let all_movable = {
+            let mut count = 0usize;
+            let mut stack = vec![base];
+            while let Some(link) = stack.pop() {
+                for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                    count += usize::from(is_movable(&joint.joint_type));
+                    stack.push(joint.child.link.as_str());
+                }
+            }
+            count
+        };
+        // A file that is all gripper (a gripper on its own) keeps the plain longest chain.
+        if grippers.len() == all_movable {
+            grippers.clear();
+        }
+        for (name, reason) in &grippers {
+            choices.push(format!(
+                "{} is a gripper joint, not an arm joint: {reason}; it is held at 0 and what it moves is rigid geometry of the link it hangs from",
+                self.element("joint", name)
+            ));
+        }
+
+        let mut best: (usize, Vec<&str>) = (0, vec![]);
         let mut stack = vec![(base, 0usize)];
         while let Some((link, depth)) = stack.pop() {
             for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
                 let child = joint.child.link.as_str();
-                if is_movable(&joint.joint_type) {
+                if !is_movable(&joint.joint_type) {
+                    stack.push((child, depth));
+                } else if !grippers.contains_key(joint.name.as_str()) {
                     let depth = depth + 1;
                     if depth > best.0 {
-                        best = (depth, vec![child.to_string()]);
+                        best = (depth, vec![child]);
                     } else if depth == best.0 {
-                        best.1.push(child.to_string());
+                        best.1.push(child);
                     }
-                    stack.push((child, depth));
-                } else {
                     stack.push((child, depth));
                 }
             }
         }
-        match best.1.len() {
-            0 => Err(ModelError::NoMovableJoint {
-                path: self.path.to_path_buf(),
-                base: base.into(),
-                tip: base.into(),
-            }),
-            1 => Ok(best.1.remove(0)),
+        let arm_end = match best.1.as_slice() {
+            [] => {
+                return Err(ModelError::NoMovableJoint {
+                    path: self.path.to_path_buf(),
+                    base: base.into(),
+                    tip: base.into(),
+                })
+            }
+            [one] => *one,
             _ => {
-                best.1.sort();
-                Err(ModelError::AmbiguousTip {
+                best.1.sort_unstable();
+                return Err(ModelError::AmbiguousTip {
                     path: self.path.to_path_buf(),
                     base: base.into(),
                     length: best.0,
                     candidates: best.1.join(", "),
-                })
+                });
+            }
+        };
+
+        // The tool frame: the arm's last link or a link rigidly below it, never past a movable
+        // (gripper) joint.
+        let mut rigid = vec![arm_end];
+        let mut at = 0;
+        while at < rigid.len() {
+            for joint in children.get(rigid[at]).map(Vec::as_slice).unwrap_or(&[]) {
+                if !is_movable(&joint.joint_type) {
+                    rigid.push(joint.child.link.as_str());
+                }
+            }
+            at += 1;
+        }
+        let arm = format!(
+            "the arm is the longest chain of movable joints from `{base}` that are not gripper joints ({} joints, to link `{arm_end}`)",
+            best.0
+        );
+        let tip = match names::pick_tool(&rigid) {
+            Ok(Some(tool)) if tool == arm_end => {
+                choices.push(format!(
+                    "tip `{tool}` (no --tip): {arm}, whose last link is named like a tool frame"
+                ));
+                tool
+            }
+            Ok(Some(tool)) => {
+                choices.push(format!(
+                    "tip `{tool}` (no --tip): {arm}; `{tool}` is fixed below it and named like a tool frame ({})",
+                    names::tool_rule()
+                ));
+                tool
+            }
+            Ok(None) => {
+                choices.push(format!(
+                    "tip `{arm_end}` (no --tip): {arm}; no link fixed below it is named like a tool frame ({})",
+                    names::tool_rule()
+                ));
+                arm_end
+            }
+            Err(tied) => {
+                choices.push(format!(
+                    "tip `{arm_end}` (no --tip): {arm}; the links fixed below it named like a tool frame tie ({}): choose one with --tip",
+                    tied.join(", ")
+                ));
+                arm_end
+            }
+        };
+        Ok((tip.to_string(), choices))
+    }
+
+    /// Movable joints below `base` that belong to a gripper, with the reason. A joint is a
+    /// gripper joint when every movable joint below it is one (it ends the tree) and it has a
+    /// `<mimic>`, a joint not below it mimics it, its name or its child link's has a gripper word
+    /// ([`names::GRIPPER_WORDS`]), or another such trailing joint branches from the same moving
+    /// body (two fingers on a hand). Joints hanging directly from the base's body never branch
+    /// as fingers: two arms on one torso are arms.
+    fn gripper_joints(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> BTreeMap<String, String> {
+        let mut mimicked_by: HashMap<&str, Vec<&str>> = HashMap::new();
+        for joint in &self.robot.joints {
+            if let Some(mimic) = &joint.mimic {
+                mimicked_by.entry(mimic.joint.as_str()).or_default().push(joint.name.as_str());
             }
         }
+        // Movable joints with the movable joint above them (None: the base's body) and their
+        // depth in movable joints, parents first.
+        let mut movable: Vec<(&urdf_rs::Joint, Option<&str>, usize)> = Vec::new();
+        let mut stack: Vec<(&str, Option<&str>, usize)> = vec![(base, None, 0)];
+        while let Some((link, above, depth)) = stack.pop() {
+            for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                if is_movable(&joint.joint_type) {
+                    movable.push((joint, above, depth + 1));
+                    stack.push((joint.child.link.as_str(), Some(joint.name.as_str()), depth + 1));
+                } else {
+                    stack.push((joint.child.link.as_str(), above, depth));
+                }
+            }
+        }
+        let above_of: HashMap<&str, Option<&str>> = movable.iter().map(|(j, above, _)| (j.name.as_str(), *above)).collect();
+        let is_below = |joint: &str, ancestor: &str| {
+            let mut at = above_of.get(joint).copied().flatten();
+            while let Some(name) = at {
+                if name == ancestor {
+                    return true;
+                }
+                at = above_of.get(name).copied().flatten();
+            }
+            false
+        };
+        let deepest = movable.iter().map(|(_, _, d)| *d).max().unwrap_or(0);
+        let mut grippers: BTreeMap<String, String> = BTreeMap::new();
+        // Deepest first: whether a joint ends the tree depends on the joints below it, and
+        // siblings share a depth.
+        for depth in (1..=deepest).rev() {
+            let level: Vec<&(&urdf_rs::Joint, Option<&str>, usize)> = movable.iter().filter(|(_, _, d)| *d == depth).collect();
+            let trailing: HashMap<&str, bool> = level
+                .iter()
+                .map(|(joint, _, _)| {
+                    let ends = movable
+                        .iter()
+                        .filter(|(_, above, _)| *above == Some(joint.name.as_str()))
+                        .all(|(below, _, _)| grippers.contains_key(&below.name));
+                    (joint.name.as_str(), ends)
+                })
+                .collect();
+            for (joint, above, _) in &level {
+                if !trailing.get(joint.name.as_str()).copied().unwrap_or(false) {
+                    continue;
+                }
+                let child = joint.child.link.as_str();
+                let sibling = above.and_then(|above| {
+                    level
+                        .iter()
+                        .find(|(other, other_above, _)| {
+                            other.name != joint.name
+                                && *other_above == Some(above)
+                                && trailing.get(other.name.as_str()).copied().unwrap_or(false)
+                        })
+                        .map(|(other, _, _)| (other.name.as_str(), above))
+                });
+                let reason = if let Some(mimic) = &joint.mimic {
+                    Some(format!("it has <mimic joint=\"{}\">", mimic.joint))
+                } else if let Some(partners) = mimicked_by
+                    .get(joint.name.as_str())
+                    .map(|all| all.iter().copied().filter(|p| !is_below(p, &joint.name)).collect::<Vec<_>>())
+                    .filter(|off_branch| !off_branch.is_empty())
+                {
+                    // A joint its own descendant mimics is a linkage of the arm, not a finger pair.
+                    Some(format!("joint `{}` mimics it", partners.join("`, `")))
+                } else if let Some(word) = names::gripper_word(&joint.name) {
+                    Some(format!("its name has `{word}`"))
+                } else if let Some(word) = names::gripper_word(child) {
+                    Some(format!("its link `{child}` is named like a gripper part (`{word}`)"))
+                } else {
+                    sibling.map(|(other, above)| {
+                        format!("it and joint `{other}` branch from the body joint `{above}` moves and nothing moves below them (fingers)")
+                    })
+                };
+                if let Some(reason) = reason {
+                    grippers.insert(joint.name.clone(), reason);
+                }
+            }
+        }
+        grippers
     }
 
     fn origin(&self, pose: &urdf_rs::Pose, element: String) -> Result<Isometry3<f64>, ModelError> {

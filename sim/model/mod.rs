@@ -10,6 +10,7 @@ mod geometry;
 mod inertia;
 mod kinematics;
 mod mesh;
+mod names;
 mod trig;
 mod urdf_xml;
 
@@ -67,6 +68,10 @@ pub enum ModelSource {
         base_link: String,
         /// Tip link of the chain.
         tip_link: String,
+        /// Defaults the reader chose, each a sentence saying what and why (the default tip, the
+        /// joints left out of the arm as gripper joints); empty when `--tip` was given.
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        choices: Vec<String>,
     },
     /// An MJCF file, loaded by MuJoCo.
     Mjcf {
@@ -74,8 +79,12 @@ pub enum ModelSource {
         path: PathBuf,
         /// Body the chain hangs from (`world` when the first moving body is in `<worldbody>`).
         base_body: String,
-        /// Last body carrying a joint.
+        /// Last body of the chain (the last one carrying an arm joint).
         tip_body: String,
+        /// Defaults the reader chose, each a sentence saying what and why (the tool frame, the
+        /// joints left out of the arm as gripper joints).
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        choices: Vec<String>,
     },
 }
 
@@ -308,6 +317,24 @@ pub enum ModelError {
         /// What is wrong.
         problem: String,
     },
+}
+
+impl ModelSource {
+    /// The defaults the reader chose (see the `choices` fields); none for a design.
+    pub fn choices(&self) -> &[String] {
+        match self {
+            ModelSource::Design { .. } => &[],
+            ModelSource::Urdf { choices, .. } | ModelSource::Mjcf { choices, .. } => choices,
+        }
+    }
+
+    /// The file the model was read from; `None` for a design (its path is not kept).
+    pub fn path(&self) -> Option<&std::path::Path> {
+        match self {
+            ModelSource::Design { .. } => None,
+            ModelSource::Urdf { path, .. } | ModelSource::Mjcf { path, .. } => Some(path),
+        }
+    }
 }
 
 impl Model {

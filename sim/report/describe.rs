@@ -15,6 +15,13 @@ pub fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
         crate::model::ModelSource::Mjcf { base_body, tip_body, .. } => format!("MJCF, chain {base_body} -> {tip_body}"),
     };
     let _ = writeln!(out, "{} ({source}, {} joints)", model.name, model.dof());
+    let choices = model.source.choices();
+    if !choices.is_empty() {
+        let _ = writeln!(out, "\nchosen by default:");
+        for choice in choices {
+            let _ = writeln!(out, "  {choice}");
+        }
+    }
     if let Some(cost) = hardware_cost {
         let _ = writeln!(out, "hardware cost c_h = sum|a| + sum|d| = {cost:.4} m");
     }

@@ -62,6 +62,10 @@ pub struct InputsReport {
     pub warnings: Vec<String>,
     /// Our kinematics against MuJoCo's on the MJCF export; `None` when not run.
     pub kinematics_check: Option<crate::engine::KinematicsCheck>,
+    /// Defaults the model reader chose for a URDF or MJCF file, each with its reason (the tip
+    /// or tool frame, the joints left out of the arm as gripper joints); also printed on stderr.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub model_choices: Vec<String>,
 }
 
 /// The criteria a verdict was reached under.
@@ -339,6 +343,7 @@ pub fn build(validation: &Validation) -> Report {
         inputs: InputsReport {
             warnings: validation.input_warnings.clone(),
             kinematics_check: validation.kinematics_check.clone(),
+            model_choices: validation.model.source.choices().to_vec(),
         },
         design: design_summary(validation),
         scenario: ScenarioSummary {

@@ -1,0 +1,194 @@
+//! Real robots load right with no flags: the default tip follows fixed joints to the tool frame
+//! the authors named, gripper joints are not arm joints, an SRDF's disabled pairs map onto the
+//! merged links, and MJCF input takes `--tip` and reads `ctrlrange` x `gear` as ratings.
+
+mod common;
+
+use common::{panda_urdf, repo};
+use proving_ground::model::{from_urdf, from_urdf_str, ModelSource, UrdfOptions};
+use std::path::Path;
+
+fn ur5_urdf() -> std::path::PathBuf {
+    repo().join("tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf")
+}
+
+fn tip_and_choices(source: &ModelSource) -> (String, Vec<String>) {
+    match source {
+        ModelSource::Urdf { tip_link, choices, .. } => (tip_link.clone(), choices.clone()),
+        ModelSource::Mjcf { tip_body, choices, .. } => (tip_body.clone(), choices.clone()),
+        ModelSource::Design { .. } => panic!("not a file"),
+    }
+}
+
+#[test]
+fn ur5_default_tip_is_tool0_not_ee_link() {
+    let model = from_urdf(&ur5_urdf(), &UrdfOptions::default()).expect("the UR5 loads");
+    assert_eq!(model.dof(), 6);
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "tool0");
+    assert_eq!(model.links.last().map(|l| l.name.as_str()), Some("wrist_3_link"));
+    assert!(model.links[6].merged.iter().any(|m| m == "ee_link"), "{:?}", model.links[6].merged);
+    assert_eq!(choices.len(), 1, "{choices:?}");
+    assert!(
+        choices[0].starts_with("tip `tool0` (no --tip): the arm is the longest chain of movable joints from `world`")
+            && choices[0].contains("6 joints, to link `wrist_3_link`"),
+        "{choices:?}"
+    );
+    // The tool frame is tool0's: the same as asking for it.
+    let asked = from_urdf(
+        &ur5_urdf(),
+        &UrdfOptions {
+            tip_link: Some("tool0".into()),
+            ..UrdfOptions::default()
+        },
+    )
+    .expect("loads");
+    assert!((asked.last_from_tool.to_homogeneous() - model.last_from_tool.to_homogeneous()).norm() < 1e-12);
+    assert!(tip_and_choices(&asked.source).1.is_empty());
+}
+
+#[test]
+fn panda_default_is_the_seven_joint_arm_to_the_tcp() {
+    let model = from_urdf(&panda_urdf(), &UrdfOptions::default()).expect("the Panda loads with no --tip");
+    assert_eq!(model.dof(), 7);
+    assert!(model.joints.iter().all(|j| !j.name.contains("finger")));
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "panda_hand_tcp");
+    let last = model.links.last().expect("links");
+    for part in ["panda_hand", "panda_leftfinger", "panda_rightfinger"] {
+        assert!(last.merged.iter().any(|m| m == part), "{part}: {:?}", last.merged);
+    }
+    assert_eq!(choices.len(), 3, "{choices:?}");
+    assert!(choices[0].contains("`panda_finger_joint1`") && choices[0].contains("joint `panda_finger_joint2` mimics it"));
+    assert!(choices[1].contains("`panda_finger_joint2`") && choices[1].contains("<mimic joint=\"panda_finger_joint1\">"));
+    assert!(choices[2].starts_with("tip `panda_hand_tcp`"), "{choices:?}");
+
+    // The TCP is 0.1034 m beyond the hand along its z axis.
+    let hand = from_urdf(
+        &panda_urdf(),
+        &UrdfOptions {
+            tip_link: Some("panda_hand".into()),
+            ..UrdfOptions::default()
+        },
+    )
+    .expect("loads");
+    let q = vec![0.0; 7];
+    let (tcp, hand) = (model.tool_pose(&q), hand.tool_pose(&q));
+    let offset = hand.inverse() * tcp;
+    assert!((offset.translation.vector - nalgebra::Vector3::new(0.0, 0.0, 0.1034)).norm() < 1e-9);
+}
+
+/// A 2-joint arm ending in `flange`, with whatever `extra` hangs from `link2`.
+fn arm_with(extra: &str) -> String {
+    let inertial = r#"<inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>"#;
+    let limit = r#"<limit lower="-1" upper="1" effort="10" velocity="1"/>"#;
+    format!(
+        r#"<robot name="arm">
+  <link name="base"/>
+  <link name="link1">{inertial}</link>
+  <link name="link2">{inertial}</link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/><axis xyz="0 0 1"/>{limit}</joint>
+  <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/><origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>{limit}</joint>
+  {extra}
+</robot>"#
+    )
+}
+
+fn load(text: &str) -> proving_ground::model::Model {
+    from_urdf_str(text, Path::new("arm.urdf"), &UrdfOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn gripper_joints_by_name_by_branching_and_by_mimic() {
+    let inertial = r#"<inertial><mass value="0.1"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>"#;
+    let limit = r#"<limit lower="0" upper="0.04" effort="10" velocity="1"/>"#;
+    // Z1-style: one gripper joint at the end, named so.
+    let z1 = arm_with(&format!(
+        r#"<link name="gripperMover">{inertial}</link>
+  <joint name="jointGripper" type="revolute"><parent link="link2"/><child link="gripperMover"/><axis xyz="0 1 0"/>{limit}</joint>"#
+    ));
+    let model = load(&z1);
+    assert_eq!(model.dof(), 2);
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "link2");
+    assert!(
+        choices[0].contains("joint `jointGripper` (line 8) is a gripper joint") && choices[0].contains("its name has `gripper`"),
+        "{choices:?}"
+    );
+    assert!(
+        choices[1].contains("no link fixed below it is named like a tool frame"),
+        "{choices:?}"
+    );
+
+    // Two unnamed prismatic joints branching from the last moving body: fingers.
+    let pair = arm_with(&format!(
+        r#"<link name="a">{inertial}</link><link name="b">{inertial}</link>
+  <joint name="left" type="prismatic"><parent link="link2"/><child link="a"/><axis xyz="0 1 0"/>{limit}</joint>
+  <joint name="right" type="prismatic"><parent link="link2"/><child link="b"/><axis xyz="0 -1 0"/>{limit}</joint>"#
+    ));
+    let model = load(&pair);
+    assert_eq!(model.dof(), 2);
+    let (_, choices) = tip_and_choices(&model.source);
+    assert!(
+        choices[0].contains("it and joint `right` branch from the body joint `j2` moves"),
+        "{choices:?}"
+    );
+    assert!(choices[1].contains("it and joint `left` branch"), "{choices:?}");
+
+    // One unnamed, unmimicked joint at the end is an arm joint, as before.
+    let third = arm_with(&format!(
+        r#"<link name="a">{inertial}</link>
+  <joint name="j3" type="prismatic"><parent link="link2"/><child link="a"/><axis xyz="0 1 0"/>{limit}</joint>"#
+    ));
+    assert_eq!(load(&third).dof(), 3);
+
+    // A fixed tool frame below a gripper joint is not the arm's tool frame; a flange fixed
+    // below the arm is.
+    let flange = arm_with(&format!(
+        r#"<link name="flange"/><link name="finger">{inertial}</link><link name="finger_tcp"/>
+  <joint name="f" type="fixed"><parent link="link2"/><child link="flange"/><origin xyz="0 0 0.1"/></joint>
+  <joint name="g" type="prismatic"><parent link="flange"/><child link="finger"/><axis xyz="0 1 0"/>{limit}</joint>
+  <joint name="t" type="fixed"><parent link="finger"/><child link="finger_tcp"/></joint>"#
+    ));
+    let model = load(&flange);
+    assert_eq!((model.dof(), tip_and_choices(&model.source).0.as_str()), (2, "flange"));
+    assert!((model.last_from_tool.translation.vector.z - 0.1).abs() < 1e-12);
+
+    // Two tool frames of the same rank: the arm's last link, and the tie said.
+    let tied = arm_with(
+        r#"<link name="left_tcp"/><link name="right_tcp"/>
+  <joint name="l" type="fixed"><parent link="link2"/><child link="left_tcp"/></joint>
+  <joint name="r" type="fixed"><parent link="link2"/><child link="right_tcp"/></joint>"#,
+    );
+    let (tip, choices) = tip_and_choices(&load(&tied).source);
+    assert_eq!(tip, "link2");
+    assert!(
+        choices[0].contains("tie (left_tcp, right_tcp): choose one with --tip"),
+        "{choices:?}"
+    );
+}
+
+#[test]
+fn srdf_pairs_map_onto_merged_links() {
+    let model = from_urdf(&panda_urdf(), &UrdfOptions::default()).expect("loads");
+    let srdf = repo().join("designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf");
+    let exclusions = proving_ground::srdf::exclusions(&srdf, &model).expect("the Panda SRDF reads");
+    assert_eq!(exclusions.pairs.len(), 18);
+    assert!(exclusions
+        .pairs
+        .iter()
+        .all(|p| p.a != p.b && p.reason.starts_with("disabled in SRDF panda.srdf: ")));
+    let link7 = exclusions
+        .pairs
+        .iter()
+        .find(|p| p.a == "panda_link4" && p.b == "panda_link7")
+        .expect("link4 - link7 covers the hand and fingers");
+    assert!(
+        link7.reason.contains("panda_hand - panda_link4 \"Never\" (line 37)"),
+        "{}",
+        link7.reason
+    );
+    // Notes: 6 pairs inside panda_link7, and link5 - link7 only partly disabled.
+    assert_eq!(exclusions.notes.len(), 7, "{:?}", exclusions.notes);
+    assert!(!exclusions.pairs.iter().any(|p| p.a == "panda_link5" && p.b == "panda_link7"));
+}
