@@ -248,3 +248,56 @@ fn a_wrist_singular_pose_falls_back_to_the_numeric_solver_and_is_not_complete() 
     let result = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
     assert!(result.reached() && !result.complete && result.proof.is_none(), "{result:?}");
 }
+
+/// A sphere on joint 2's origin: every configuration collides, so every one of the closed form's
+/// solutions does, and the report says the goal is unreachable, proven by the complete set; a
+/// free goal's solutions are reported complete.
+#[test]
+fn a_goal_whose_every_solution_collides_is_proven_unreachable_in_the_report() {
+    use proving_ground::model::Shape;
+    use proving_ground::pipeline::{load, validate, ValidateOptions};
+    use proving_ground::scenario::{Obstacle, Scenario};
+
+    let path = common::repo().join("designs/ur20.json");
+    let model = design("designs/ur20.json");
+    let shoulder = model.joints[1].parent_from_joint.translation.vector;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
+    let goal = |name: &str, q: &[f64]| Goal {
+        name: name.into(),
+        ..pose_goal(&model.tool_pose(q))
+    };
+    let free = goal("free", &model.random_configuration(&mut rng));
+    let blocked = goal("blocked", &model.random_configuration(&mut rng));
+    let scenario = |obstacles: Vec<Obstacle>, goals: Vec<Goal>| Scenario {
+        name: "blocked".into(),
+        world_from_base: Isometry3::identity(),
+        floor: None,
+        obstacles,
+        goals,
+        home: None,
+        provenance: None,
+    };
+    let ball = Obstacle {
+        name: "ball".into(),
+        world_from_shape: Isometry3::translation(shoulder.x, shoulder.y, shoulder.z),
+        shape: Shape::Sphere { radius: 0.1 },
+    };
+    let opts = ValidateOptions {
+        reach_only: true,
+        ..Default::default()
+    };
+    let loaded = || load(&path, &LoadOptions::default()).expect("loads");
+    let clear = proving_ground::report::build(&validate(loaded(), scenario(vec![], vec![free]), &opts).expect("runs"));
+    let json = serde_json::to_value(&clear).expect("serialises");
+    assert_eq!(json["goals"][0]["outcome"], "reached");
+    assert_eq!(json["goals"][0]["solutions_complete"], true, "{}", json["goals"][0]);
+
+    let report = proving_ground::report::build(&validate(loaded(), scenario(vec![ball], vec![blocked]), &opts).expect("runs"));
+    let json = serde_json::to_value(&report).expect("serialises");
+    let goal = &json["goals"][0];
+    assert_eq!(goal["outcome"], "unreachable", "{goal}");
+    let proven = goal["proven"].as_str().unwrap_or_default();
+    assert!(proven.starts_with("closed-form IK: all ") && proven.ends_with("collide"), "{goal}");
+    assert_eq!(goal["solutions_free"], 0);
+    assert!(goal["solutions_found"].as_u64().is_some_and(|n| n >= 2), "{goal}");
+}

@@ -169,14 +169,20 @@ impl<'a> Ik<'a> {
     /// into the joint limits nearest `first_seed` (else zero), so the set is complete. Elsewhere:
     /// from `first_seed` (e.g. the previous goal's solution) and random starts within the limits;
     /// the closed form's solutions join as extra starts where it applies but cannot list every
-    /// solution (singular poses, poses just beyond reach that the tolerance may still accept).
+    /// solution (singular poses, poses just beyond reach that the tolerance may still accept,
+    /// `z_symmetric` goals: those of the goal's own rotation).
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
         let exact = match (&self.analytic, goal.tolerance) {
-            (Some(arm), Tolerance::Pose) if self.opts.analytic => {
+            (Some(arm), Tolerance::Pose | Tolerance::ZSymmetric) if self.opts.analytic => {
                 arm.solve(&Isometry3::from_parts(Translation3::from(goal.position), goal.rotation))
             }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
         };
+        if goal.tolerance == Tolerance::ZSymmetric {
+            // A continuum of solutions (any turn about tool z): the goal rotation's own are on
+            // every branch, good starts, never the whole set.
+            return self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+        }
         if exact.finite && !exact.configurations.is_empty() {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
@@ -382,6 +388,9 @@ impl<'a> Ik<'a> {
                 (0, Some(seed)) if seed.len() == self.model.dof() => seed.to_vec(),
                 _ => self.model.random_configuration(&mut rng),
             };
+            if start >= self.opts.seeds && found.iter().any(|s| self.same_configuration(&s.q, &q)) {
+                continue;
+            }
             iterations += self.solver.solve(goal, &mut q, self.opts.max_iterations, done, &mut rng);
             let mut clearance = None;
             if let Some(checker) = self.checker.as_mut() {

@@ -263,7 +263,7 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
                     s.clearance.map_or(f64::NAN, |c| c.exact_m),
                 )
             });
-            let proof = validation.proofs.get(index).cloned().flatten();
+            let proof = validation.proof(index);
             let why = match (&proof, best) {
                 (Some(proof), _) => format!("proven: {proof}"),
                 (None, Some(s)) if s.pose_reached => format!(

@@ -35,8 +35,9 @@ pub struct Validation {
     pub structural_allowances: Vec<crate::collide::StructuralAllowance>,
     /// IK solutions per goal.
     pub solutions: Vec<crate::ik::GoalSolutions>,
-    /// Per goal, why no configuration can reach it, where that is proven (see
-    /// [`crate::ik::unreachable_proof`]); `None` for goals IK reached or could not prove.
+    /// Per goal, why no configuration can reach it, where the model and world prove it (see
+    /// [`crate::ik::unreachable_proof`]); `None` for goals IK reached or could not prove. Read
+    /// through [`Validation::proof`], which adds IK's own proofs.
     pub proofs: Vec<Option<String>>,
     /// The trajectory through the goals; `None` in a reach-only run.
     pub trajectory: Option<crate::plan::Trajectory>,
@@ -56,6 +57,18 @@ pub struct Validation {
     pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
     /// The settings the run used that the report states as its criteria.
     pub settings: Settings,
+}
+
+impl Validation {
+    /// Why no configuration can reach goal `index`, when proven: by the model and world (beyond
+    /// the arm's reach, inside an obstacle), else by IK's complete solution set (closed form).
+    pub fn proof(&self, index: usize) -> Option<String> {
+        self.proofs
+            .get(index)
+            .cloned()
+            .flatten()
+            .or_else(|| self.solutions.get(index).and_then(|found| found.proof.clone()))
+    }
 }
 
 /// The settings of a run that decide its verdict.

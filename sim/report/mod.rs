@@ -151,12 +151,16 @@ pub struct GoalReport {
     /// exist, no certified path found within the planner's budget).
     pub outcome: &'static str,
     /// Why no configuration can reach the goal, when that is proven (beyond the arm's reach,
-    /// inside an obstacle); `None` otherwise.
+    /// inside an obstacle, or by the closed form's complete solution set); `None` otherwise.
     pub proven: Option<String>,
     /// IK found a collision-free solution within the thresholds.
     pub reached: bool,
     /// Distinct solutions IK found that reach the pose (colliding or not).
     pub solutions_found: usize,
+    /// Those are every solution within the joint limits (closed-form IK); left out of the JSON
+    /// when false (numeric IK: found from its starts, more may exist).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub solutions_complete: bool,
     /// Of those, collision-free.
     pub solutions_free: usize,
     /// The configuration the trajectory goes to (or IK's best, when none connects).
@@ -430,12 +434,13 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                 tolerance: goal.tolerance,
                 outcome,
                 proven: if outcome == "unreachable" {
-                    validation.proofs.get(index).cloned().flatten()
+                    validation.proof(index)
                 } else {
                     None
                 },
                 reached: ik_reached,
                 solutions_found: found.iter().filter(|s| s.pose_reached).count(),
+                solutions_complete: validation.solutions.get(index).is_some_and(|g| g.complete),
                 solutions_free: found.iter().filter(|s| s.reached).count(),
                 position_error_m: error.map(|e| e.position_m),
                 orientation_error_deg: error.map(|e| e.orientation_rad.to_degrees()),
