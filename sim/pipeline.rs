@@ -75,19 +75,18 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
             })
         }
         InputKind::Mjcf => {
-            // The chain of an MJCF file is its bodies with joints; the URDF chain options would
-            // be silently meaningless.
-            let urdf_only = [("--base", opts.base_link.is_some()), ("--tip", opts.tip_link.is_some())];
-            if let Some((flag, _)) = urdf_only.iter().find(|(_, given)| *given) {
+            // The base of an MJCF chain is where its first joint hangs; a URDF-style base link
+            // would be silently meaningless.
+            if opts.base_link.is_some() {
                 return Err(model::ModelError::UnsupportedMjcf {
                     path: path.to_path_buf(),
-                    element: (*flag).into(),
-                    problem: "is for URDF input; an MJCF chain runs from the base body to the last body with a joint".into(),
+                    element: "--base".into(),
+                    problem: "is for URDF input; an MJCF chain runs from the body holding its first joint".into(),
                 }
                 .into());
             }
             Ok(Loaded {
-                model: model::from_mjcf(path)?,
+                model: model::from_mjcf_to(path, opts.tip_link.as_deref())?,
                 design: None,
             })
         }

@@ -101,7 +101,7 @@ fn panda_loads_without_a_tip_and_with_one() {
         stdout.contains("panda (URDF, chain panda_link0 -> panda_hand, 7 joints)"),
         "{stdout}"
     );
-    assert!(!stdout.contains("chosen by default"), "an explicit --tip chooses nothing: {stdout}");
+    assert!(!stdout.contains("model choices"), "an explicit --tip chooses nothing: {stdout}");
 }
 
 #[test]

@@ -103,6 +103,12 @@ fn shipped_robots_survive_an_mjcf_round_trip_through_mujoco() {
             },
             "{id}"
         );
+        // The export marks its tool frame with the `tool` site, and the reader says it used it.
+        assert!(
+            matches!(back.source.choices(), [only] if only.starts_with("tool frame: site `tool` (no --tip")),
+            "{id}: {:?}",
+            back.source.choices()
+        );
 
         // Kinematics: every link and the tool at seeded random configurations.
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(SEED);
@@ -271,8 +277,17 @@ fn hand_written_mjcf_agrees_with_mujocos_own_kinematics() {
 fn tool_defaults_to_the_last_moving_body_frame() {
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("no_site.xml");
+    // Without the `tool` site the body named `flange` is the tool frame (named like one) ...
     let text = hand_written_mjcf().replace(r#"<site name="tool" pos="0 0 0.03" euler="0 90 0"/>"#, "");
-    std::fs::write(&path, text).expect("write MJCF");
+    std::fs::write(&path, &text).expect("write MJCF");
+    let model = from_mjcf(&path).unwrap_or_else(|e| panic!("{e}"));
+    let flange = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::new(0.05, 0.0, 0.0),
+        nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(0.9, 0.1, 0.3, 0.2)),
+    );
+    assert!((model.last_from_tool.to_homogeneous() - flange.to_homogeneous()).norm() < 1e-12);
+    // ... and with no body or site named like a tool frame, the last moving body's frame.
+    std::fs::write(&path, text.replace(r#"<body name="flange""#, r#"<body name="cap""#)).expect("write MJCF");
     let model = from_mjcf(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(model.last_from_tool, nalgebra::Isometry3::identity());
     // The elbow's anchor is off its body origin: the default tool is the body frame, not the link's.
@@ -356,12 +371,28 @@ fn binary_exits_2_on_broken_mjcf_naming_file_and_element() {
         assert!(stderr.contains(name) && stderr.contains(element), "{name}: {stderr}");
         assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     }
+    // --tip chooses one of the tied chains; the other arm is held still, and that is said.
     let output = validate_design()
         .arg(fixture("mjcf/branching_chain.xml"))
-        .args(["--tip", "left_arm"])
+        .args(["--tip", "left_arm", "--describe"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        stdout.contains("branching_chain (MJCF, chain base -> left_arm, 1 joints)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("joint `right_shoulder` of body `right_arm` is not on the chain; it is held at its reference position"),
+        "{stdout}"
+    );
+    let output = validate_design()
+        .arg(fixture("mjcf/branching_chain.xml"))
+        .args(["--base", "base"])
         .output()
         .expect("runs");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("--tip") && stderr.contains("URDF"), "{stderr}");
+    assert!(stderr.contains("--base") && stderr.contains("URDF"), "{stderr}");
 }

@@ -192,3 +192,103 @@ fn srdf_pairs_map_onto_merged_links() {
     assert_eq!(exclusions.notes.len(), 7, "{:?}", exclusions.notes);
     assert!(!exclusions.pairs.iter().any(|p| p.a == "panda_link5" && p.b == "panda_link7"));
 }
+
+fn arm_with_flange() -> std::path::PathBuf {
+    repo().join("tests/fixtures/mjcf/arm_with_flange.xml")
+}
+
+#[test]
+fn mjcf_default_tool_frame_is_the_tcp_site_and_fingers_are_not_arm_joints() {
+    let model = proving_ground::model::from_mjcf(&arm_with_flange()).unwrap_or_else(|e| panic!("{e}"));
+    let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, ["j1", "j2", "j3"]);
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "link3");
+    for part in ["flange", "left_pad", "right_pad"] {
+        assert!(
+            model.links[3].merged.iter().any(|m| m == part),
+            "{part}: {:?}",
+            model.links[3].merged
+        );
+    }
+    assert_eq!(choices.len(), 3, "{choices:?}");
+    assert!(
+        choices[0].starts_with("joint `left_slide` of body `left_pad` is a gripper joint, not an arm joint: an <equality joint> couples it to joint `right_slide`"),
+        "{choices:?}"
+    );
+    assert!(choices[2].starts_with("tool frame: site `tcp` (no --tip)"), "{choices:?}");
+    // The tcp site: 0.1 m to the flange, 0.12 m beyond it, z along the arm.
+    let expected = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::new(0.22, 0.0, 0.0),
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0),
+    );
+    assert!(
+        (model.last_from_tool.to_homogeneous() - expected.to_homogeneous()).norm() < 1e-9,
+        "{}",
+        model.last_from_tool
+    );
+}
+
+#[test]
+fn mjcf_ratings_come_from_ctrlrange_times_gear() {
+    let model = proving_ground::model::from_mjcf(&arm_with_flange()).unwrap_or_else(|e| panic!("{e}"));
+    let ratings: Vec<Option<f64>> = model.joints.iter().map(|j| j.max_effort).collect();
+    // j1: 2 x 50; j2: 1.5 x 80; j3: the forcerange 0.5 bounds the control's 1 before the gear 10.
+    assert_eq!(ratings, [Some(100.0), Some(120.0), Some(5.0)]);
+}
+
+#[test]
+fn mjcf_tip_takes_a_body_or_a_site() {
+    use proving_ground::model::from_mjcf_to;
+    // A site halfway: the chain ends at its body, the rest of the arm is held still and said.
+    let model = from_mjcf_to(&arm_with_flange(), Some("marker")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(model.dof(), 2);
+    assert!((model.last_from_tool.translation.vector - nalgebra::Vector3::new(0.15, 0.0, 0.05)).norm() < 1e-12);
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "link2");
+    assert!(choices[0].contains("joint `j3` of body `link3` is not on the chain"), "{choices:?}");
+    // A body: its frame.
+    let model = from_mjcf_to(&arm_with_flange(), Some("flange")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(model.dof(), 3);
+    assert!((model.last_from_tool.translation.vector - nalgebra::Vector3::new(0.1, 0.0, 0.0)).norm() < 1e-12);
+    // Unknown names are errors listing bodies and sites; a body nothing moves has no chain.
+    let error = from_mjcf_to(&arm_with_flange(), Some("nope")).expect_err("unknown").to_string();
+    assert!(
+        error.contains("--tip: no body or site named `nope`") && error.contains("`flange`") && error.contains("`tcp`"),
+        "{error}"
+    );
+    let error = from_mjcf_to(&arm_with_flange(), Some("base"))
+        .expect_err("nothing moves")
+        .to_string();
+    assert!(error.contains("no joint moves body `base`"), "{error}");
+}
+
+#[test]
+fn mjcf_tip_on_the_command_line() {
+    let output = assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary")
+        .current_dir(repo())
+        .args([
+            "tests/fixtures/mjcf/arm_with_flange.xml",
+            "--tip",
+            "tcp",
+            "--mujoco-checks",
+            "10",
+            "--kinematics-only",
+        ])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(stdout.contains("arm_with_flange (MJCF, chain base -> link3, 3 joints)"), "{stdout}");
+    assert!(stdout.contains("rated 120.0"), "{stdout}");
+    assert!(
+        stdout.contains("tool pose at q = 0: position [0.5200, 0.0000, 0.4000] m, rpy [0.0000, 1.5708, 0.0000]"),
+        "{stdout}"
+    );
+}

@@ -5,18 +5,24 @@
 //! resolved by MuJoCo itself; this module reads the compiled `mjModel`, whose arrays give each
 //! body, joint, geom and inertia in one canonical form (radians, quaternions, principal inertia).
 //!
-//! Chain: the bodies carrying a joint, in MuJoCo's body order, must each hang below the previous
-//! one (a serial chain); each carries exactly one hinge or slide joint. Jointless bodies are
-//! merged into the nearest moving body above them, or into the base. The base link is the body
-//! holding the first moving body (the world body when that body hangs from `<worldbody>`
-//! directly). A link frame is its body frame moved to the joint's `pos`, so the joint axis passes
-//! through the link origin as the model requires; geoms, inertia and sites move with it. The tool
-//! frame is the site named `tool` when there is one (on the last moving body or a jointless body
-//! below it), else the last moving body's frame.
+//! Chain: by default the arm, the longest chain of bodies carrying a joint that is not a gripper
+//! joint; with `--tip` the bodies carrying a joint above the tip's body (see `chain`). Each
+//! carries exactly one hinge or slide joint. Jointless bodies, and moving bodies off the chain
+//! (held at their joints' reference position), are merged into the nearest chain body above
+//! them, or into the base. The base link is the body holding the first chain body (the world
+//! body when that body hangs from `<worldbody>` directly). A link frame is its body frame moved
+//! to the joint's `pos`, so the joint axis passes through the link origin as the model requires;
+//! geoms, inertia and sites move with it. The tool frame is the `--tip` body's or site's frame;
+//! by default the site named `tool` when there is one (on the last chain body or a jointless
+//! body below it), else the body or site rigidly on the last chain body named like a tool frame,
+//! else the last chain body's frame. Every default is said in `ModelSource::Mjcf::choices`.
 
+mod chain;
 mod checks;
 mod geoms;
 mod joint;
+
+use chain::Tool;
 
 use super::{Diagnostic, Inertial, Joint, Link, Model, ModelError, ModelSource, Segment};
 use mujoco_rs::mujoco_c::{mj_deleteModel, mj_loadXML, mjtJoint};
@@ -33,11 +39,22 @@ pub const TOOL_SITE: &str = "tool";
 /// [`ModelError::MjcfLoad`] with MuJoCo's own message when MuJoCo cannot load the file (bad XML,
 /// unknown element, missing mesh file, a linked MuJoCo of another version);
 /// [`ModelError::UnsupportedMjcf`] naming the body, joint, geom or site for what a serial model
-/// cannot hold: free or ball joints, two joints in one body, branching moving bodies, an unlimited
+/// cannot hold: free or ball joints, two joints in one chain body, longest chains that tie, an unlimited
 /// slide joint, a joint `ref`, a plane, height field or SDF geom on a moving body, a `tool` site
 /// the last joint does not move, or no joint at all; [`ModelError::BadInertia`] for a moving link
 /// without usable mass.
 pub fn from_mjcf(path: &Path) -> Result<Model, ModelError> {
+    from_mjcf_to(path, None)
+}
+
+/// [`from_mjcf`] with the chain ending at `tip`: a body (the tool frame is its frame) or a site
+/// (the site's frame); the chain is the moving bodies above it, and moving bodies off it are held
+/// at their joints' reference position like jointless ones. `None` is [`from_mjcf`]'s default.
+///
+/// # Errors
+/// As [`from_mjcf`]; [`ModelError::UnsupportedMjcf`] for a `tip` that names no body or site, or
+/// one no joint moves.
+pub fn from_mjcf_to(path: &Path, tip: Option<&str>) -> Result<Model, ModelError> {
     // Loads MuJoCo, and checks its version first: mujoco-rs panics on a mismatch.
     crate::engine::check_version().map_err(|e| ModelError::MjcfLoad {
         path: path.to_path_buf(),
@@ -58,7 +75,7 @@ pub fn from_mjcf(path: &Path) -> Result<Model, ModelError> {
             }
         },
     })?;
-    Reader { path, mj: &mj }.build()
+    Reader { path, mj: &mj }.build(tip)
 }
 
 /// MuJoCo's whole load error for `path`: mujoco-rs keeps only its first 99 characters, which
@@ -120,7 +137,7 @@ impl Reader<'_> {
         }
     }
 
-    fn build(&self) -> Result<Model, ModelError> {
+    fn build(&self, tip: Option<&str>) -> Result<Model, ModelError> {
         self.check_numbers()?;
         let mj = self.mj;
         let body_count = mj.ffi().nbody as usize;
@@ -138,62 +155,32 @@ impl Reader<'_> {
                 format!("is {what}; only hinge and slide joints can be on a serial chain"),
             ));
         }
-        let mut moving: Vec<usize> = Vec::new();
-        for body in 1..body_count {
-            match mj.body_jntnum()[body] {
-                0 => {}
-                1 => moving.push(body),
-                count => {
-                    let first = mj.body_jntadr()[body] as usize;
-                    let names: Vec<String> = (first..first + count as usize)
-                        .map(|j| format!("`{}`", self.name(MjtObjBase::mjOBJ_JOINT, j)))
-                        .collect();
-                    return Err(self.unsupported(
-                        self.body(body),
-                        format!(
-                            "has {count} joints ({}); each body of a serial chain has one hinge or slide joint (split it into one body per joint)",
-                            names.join(", ")
-                        ),
-                    ));
-                }
-            }
-        }
-        let Some(&first) = moving.first() else {
+        let all_moving: Vec<usize> = (1..body_count).filter(|&b| mj.body_jntnum()[b] > 0).collect();
+        if all_moving.is_empty() {
             return Err(self.unsupported("<worldbody>".into(), "has no hinge or slide joint: nothing moves".into()));
+        }
+        let mut choices = Vec::new();
+        let (moving, tool) = match tip {
+            Some(name) => self.chain_to(name, &mut choices)?,
+            None => self.default_chain(&all_moving, &mut choices)?,
         };
-
-        // MuJoCo numbers bodies depth first, parents before children, so the chain order is the
-        // body order and each moving body's nearest moving ancestor must be the one before it.
-        let nearest_moving_ancestor = |body: usize| {
-            let mut at = parent(body);
-            while at != 0 && mj.body_jntnum()[at] == 0 {
-                at = parent(at);
-            }
-            at
-        };
-        for pair in moving.windows(2) {
-            let (previous, body) = (pair[0], pair[1]);
-            if nearest_moving_ancestor(body) != previous {
-                // Name where the two branches part: the lowest common ancestor.
-                let mut ancestors = vec![previous];
-                while let Some(&top) = ancestors.last().filter(|&&b| b != 0) {
-                    ancestors.push(parent(top));
-                }
-                let mut fork = parent(body);
-                while !ancestors.contains(&fork) {
-                    fork = parent(fork);
-                }
+        for &body in &moving {
+            let count = mj.body_jntnum()[body];
+            if count > 1 {
+                let first = mj.body_jntadr()[body] as usize;
+                let names: Vec<String> = (first..first + count as usize)
+                    .map(|j| format!("`{}`", self.name(MjtObjBase::mjOBJ_JOINT, j)))
+                    .collect();
                 return Err(self.unsupported(
                     self.body(body),
                     format!(
-                        "is not below {}, the moving body before it: the moving bodies branch at {}; only a serial chain of joints can be read",
-                        self.body(previous),
-                        self.body(fork)
+                        "has {count} joints ({}); each body of a serial chain has one hinge or slide joint (split it into one body per joint)",
+                        names.join(", ")
                     ),
                 ));
             }
         }
-
+        let first = moving[0];
         let layout = self.layout(&moving);
         let joints = moving
             .iter()
@@ -213,7 +200,7 @@ impl Reader<'_> {
                 }
             }
         }
-        let last_from_tool = self.tool(&moving, &layout)?;
+        let last_from_tool = self.tool(tool, &moving, &layout)?;
 
         // The paper's capsule approximation, as for URDF: the bone from a link's origin to the
         // next joint (the tool frame for the last link).
@@ -239,7 +226,7 @@ impl Reader<'_> {
                 path: self.path.to_path_buf(),
                 base_body: self.name(MjtObjBase::mjOBJ_BODY, base_body),
                 tip_body: self.name(MjtObjBase::mjOBJ_BODY, moving[moving.len() - 1]),
-                choices: vec![],
+                choices,
             },
             world_from_base,
             joints,
@@ -373,16 +360,21 @@ impl Reader<'_> {
     }
 
     /// The tool frame in the last link's frame.
-    fn tool(&self, moving: &[usize], layout: &Layout) -> Result<Isometry3<f64>, ModelError> {
+    fn tool(&self, tool: Tool, moving: &[usize], layout: &Layout) -> Result<Isometry3<f64>, ModelError> {
         let mj = self.mj;
         let last = moving[moving.len() - 1];
-        let Some(site) = mj.name_to_id(MjtObjBase::mjOBJ_SITE, TOOL_SITE) else {
-            return Ok(layout.link_from_body[last]);
+        let (body, body_from_tool, element) = match tool {
+            Tool::LastBody => return Ok(layout.link_from_body[last]),
+            Tool::Body(body) => (body, Isometry3::identity(), self.body(body)),
+            Tool::Site(site) => (
+                mj.site_bodyid()[site] as usize,
+                pose(&mj.site_pos()[site], &mj.site_quat()[site]),
+                format!("site `{}`", self.name(MjtObjBase::mjOBJ_SITE, site)),
+            ),
         };
-        let body = mj.site_bodyid()[site] as usize;
         if layout.owner[body] != moving.len() {
             return Err(self.unsupported(
-                format!("site `{TOOL_SITE}`"),
+                element,
                 format!(
                     "is on {}, which the last joint (of {}) does not carry; the tool site must move with the end of the chain",
                     self.body(body),
@@ -390,7 +382,7 @@ impl Reader<'_> {
                 ),
             ));
         }
-        Ok(layout.link_from_body[body] * pose(&mj.site_pos()[site], &mj.site_quat()[site]))
+        Ok(layout.link_from_body[body] * body_from_tool)
     }
 }
 

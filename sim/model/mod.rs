@@ -15,7 +15,7 @@ mod trig;
 mod urdf_xml;
 
 pub use from_design::from_design;
-pub use from_mjcf::{from_mjcf, TOOL_SITE};
+pub use from_mjcf::{from_mjcf, from_mjcf_to, TOOL_SITE};
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
 

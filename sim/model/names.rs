@@ -8,17 +8,18 @@
 /// (Kinova) are the mounting flange's tool frame; end-effector, flange and hand frames come
 /// after, since a TCP or tool frame usually hangs below them.
 pub(super) const TOOL_NAMES: [&str; 6] = [
-    "tcp (`tcp`, `*_tcp`, `tcp_link`)",
+    "tcp (`tcp`, `*_tcp`, `tcp_link`, `pinch`, `pinch_site`, `grip_site`)",
     "tool (`tool0`, `tool`, `*_tool0`, `tool_frame`, `tool_link`)",
     "end effector (`eef`, `link_eef`, `*_eef`, `end_effector`, `*_end_effector`, `end_effector_link`)",
     "ee (`ee`, `ee_link`, `*_ee_link`)",
-    "flange (`flange`, `*_flange`)",
+    "flange (`flange`, `*_flange`, `attachment_site`)",
     "hand (`hand`, `*_hand`)",
 ];
 
 /// The rank of a tool-frame name in [`TOOL_NAMES`] (0 is the most specific), `None` for a name
 /// that is not one. The name's last word decides (a trailing `link` or `frame` is skipped), so
-/// `panda_hand_tcp` is a TCP, `hand_camera` is not a hand.
+/// `panda_hand_tcp` is a TCP, `hand_camera` is not a hand. MuJoCo Menagerie and robosuite name
+/// their TCP sites `pinch` and `grip_site`, their flange sites `attachment_site`.
 pub(super) fn tool_rank(name: &str) -> Option<usize> {
     let lower = name
         .to_ascii_lowercase()
@@ -29,16 +30,16 @@ pub(super) fn tool_rank(name: &str) -> Option<usize> {
         .filter(|w| !w.is_empty())
         .collect();
     let key = match words.as_slice() {
-        [.., key, "link" | "frame"] => *key,
+        [.., key, "link" | "frame" | "site"] => *key,
         [.., key] => *key,
         [] => return None,
     };
     match key {
-        "tcp" => Some(0),
+        "tcp" | "pinch" | "grip" => Some(0),
         "tool0" | "tool" => Some(1),
         "eef" => Some(2),
         "ee" => Some(3),
-        "flange" => Some(4),
+        "flange" | "attachment" => Some(4),
         "hand" => Some(5),
         _ => None,
     }
@@ -90,6 +91,9 @@ mod tests {
             ("j2n6s300_end_effector", Some(2)),
             ("ee_link", Some(3)),
             ("flange", Some(4)),
+            ("attachment_site", Some(4)),
+            ("pinch", Some(0)),
+            ("grip_site", Some(0)),
             ("panda_hand", Some(5)),
             ("hand_camera", None),
             ("panda_link8", None),

@@ -17,7 +17,7 @@ pub fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
     let _ = writeln!(out, "{} ({source}, {} joints)", model.name, model.dof());
     let choices = model.source.choices();
     if !choices.is_empty() {
-        let _ = writeln!(out, "\nchosen by default:");
+        let _ = writeln!(out, "\nmodel choices:");
         for choice in choices {
             let _ = writeln!(out, "  {choice}");
         }

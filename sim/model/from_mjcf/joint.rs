@@ -1,9 +1,9 @@
 //! MJCF joints -> model joints: the frame at the joint anchor, kind and limits, and the rated
-//! effort from MuJoCo's actuator force ranges.
+//! effort from MuJoCo's actuator force ranges (or a motor's control range).
 
 use super::{Layout, Reader};
 use crate::model::{Joint, JointKind, ModelError};
-use mujoco_rs::mujoco_c::{mjtJoint, mjtTrn};
+use mujoco_rs::mujoco_c::{mjtBias, mjtGain, mjtJoint, mjtTrn};
 use mujoco_rs::prelude::*;
 use nalgebra::{Isometry3, Unit, Vector3};
 
@@ -65,9 +65,11 @@ impl Reader<'_> {
         })
     }
 
-    /// Rated effort: the joint's `actuatorfrcrange`, else the force ranges of the actuators
-    /// driving it (times their gear), added; the larger magnitude of each range. `None` when
-    /// any actuator on the joint is not force-limited, or none drives it.
+    /// Rated effort: the joint's `actuatorfrcrange`, else what the actuators driving it can
+    /// exert, added: a force-limited actuator's `forcerange` times its gear, a motor's (`<motor>`:
+    /// fixed gain, no bias) `ctrlrange` times its gain and gear (the smaller of the two when both
+    /// bound it); the larger magnitude of each range. `None` when any actuator on the joint is neither (a servo's ctrlrange is a position,
+    /// not a force), or none drives it.
     fn effort(&self, joint: usize) -> Option<f64> {
         let mj = self.mj;
         let magnitude = |[lower, upper]: [f64; 2]| lower.abs().max(upper.abs());
@@ -82,11 +84,20 @@ impl Reader<'_> {
             if !drives {
                 continue;
             }
-            if !mj.actuator_forcelimited()[actuator] {
-                return None;
-            }
+            let gear = mj.actuator_gear()[actuator][0].abs();
+            let motor =
+                mj.actuator_gaintype()[actuator] == mjtGain::mjGAIN_FIXED && mj.actuator_biastype()[actuator] == mjtBias::mjBIAS_NONE;
+            let by_control = (motor && mj.actuator_ctrllimited()[actuator])
+                .then(|| mj.actuator_gainprm()[actuator][0].abs() * magnitude(mj.actuator_ctrlrange()[actuator]));
+            // MuJoCo clamps a motor's force to its forcerange after the gain: the smaller bound.
+            let force = match (mj.actuator_forcelimited()[actuator], by_control) {
+                (true, Some(control)) => magnitude(mj.actuator_forcerange()[actuator]).min(control),
+                (true, None) => magnitude(mj.actuator_forcerange()[actuator]),
+                (false, Some(control)) => control,
+                (false, None) => return None,
+            };
             any = true;
-            total += mj.actuator_gear()[actuator][0].abs() * magnitude(mj.actuator_forcerange()[actuator]);
+            total += gear * force;
         }
         Some(total).filter(|v| any && v.is_finite() && *v > 0.0)
     }
