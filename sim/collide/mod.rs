@@ -91,10 +91,12 @@
 mod approx;
 mod compare;
 mod exact;
+mod mesh_tree;
 mod narrow;
 mod pairs;
 mod point;
 mod structural;
+mod triangles;
 mod world;
 
 pub use approx::approximate_distances;

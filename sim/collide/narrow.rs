@@ -56,7 +56,17 @@ pub(super) struct Measured {
 }
 
 impl Measured {
-    fn from_contact(contact: &Contact) -> Self {
+    /// The same measurement with the bodies swapped.
+    pub(super) fn flipped(self) -> Self {
+        Self {
+            point_a: self.point_b,
+            point_b: self.point_a,
+            normal: -self.normal,
+            ..self
+        }
+    }
+
+    pub(super) fn from_contact(contact: &Contact) -> Self {
         Self {
             distance: contact.dist,
             point_a: contact.point1,
@@ -113,10 +123,25 @@ pub(super) fn measure_convex(pose_a: &Pose, a: &dyn Shape, pose_b: &Pose, b: &dy
     }
 }
 
-/// Signed distance when a side is a mesh: the gap by BVH descent; its witnesses from the
-/// nearest triangle's contact; an overlap from the deepest triangle; an enclosure by a
-/// containment test on closed meshes.
+/// Signed distance when a side is a mesh: a gap by the sphere trees (see `mesh_tree`), else
+/// parry's descent; the witnesses from the nearest triangle's contact; an overlap from the
+/// deepest triangle; an enclosure by a containment test on closed meshes.
 fn measure_mesh(pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Measured {
+    let separated = match (&a.tree, &b.tree) {
+        (Some(tree_a), Some(tree_b)) => tree_a.gap_to_tree(pose_a, tree_b, pose_b),
+        (Some(tree), None) => tree.gap_to_shape(pose_a, &*b.shape, pose_b),
+        (None, Some(tree)) => tree.gap_to_shape(pose_b, &*a.shape, pose_a).map(Measured::flipped),
+        (None, None) => None,
+    };
+    match separated {
+        Some(measured) => separated_mesh(measured, pose_a, a, pose_b, b),
+        None => measure_mesh_descent(pose_a, a, pose_b, b),
+    }
+}
+
+/// [`measure_mesh`] by parry's descent of the meshes' AABB trees: for overlaps (the deepest
+/// triangle), and the oracle the sphere trees are tested against.
+pub(super) fn measure_mesh_descent(pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Measured {
     let pose_ab = pose_a.inv_mul(pose_b);
     let gap = Polished::EXACT.distance(&pose_ab, &*a.shape, &*b.shape).map_or(0.0, |d| d.distance);
     let prediction = if gap > 0.0 {
@@ -128,19 +153,36 @@ fn measure_mesh(pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Mea
         return touching(pose_a, pose_b);
     };
     contact.transform_by_mut(pose_a, pose_b);
-    let mut measured = Measured::from_contact(&contact);
+    let measured = Measured::from_contact(&contact);
     if gap > 0.0 && measured.distance > 0.0 {
-        measured.normal = direction(measured.point_a, measured.point_b, pose_a, pose_b);
-        // A mesh is a surface: a body inside a closed mesh touches no triangle.
-        let enclosed = (a.closed && a.shape.contains_point(pose_a, pose_b * b.probe))
-            || (b.closed && b.shape.contains_point(pose_b, pose_a * a.probe));
-        if enclosed {
-            measured.distance = -measured.distance;
-            measured.normal = -measured.normal;
-            measured.enclosed = true;
-        }
+        separated_mesh(measured, pose_a, a, pose_b, b)
+    } else {
+        measured
+    }
+}
+
+/// A mesh pair's positive gap: the normal along the witnesses, and the sign turned when one body
+/// is enclosed by the other (a mesh is a surface: a body inside a closed mesh touches no triangle).
+fn separated_mesh(mut measured: Measured, pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Measured {
+    measured.normal = direction(measured.point_a, measured.point_b, pose_a, pose_b);
+    let enclosed =
+        (a.closed && a.shape.contains_point(pose_a, pose_b * b.probe)) || (b.closed && b.shape.contains_point(pose_b, pose_a * a.probe));
+    if enclosed {
+        measured.distance = -measured.distance;
+        measured.normal = -measured.normal;
+        measured.enclosed = true;
     }
     measured
+}
+
+/// The contact of one triangle of a mesh (first, in the mesh frame) with a shape at `pos12`, as
+/// parry's mesh descent measures it through [`Polished`]; `None` unless they are apart.
+pub(super) fn leaf_contact(pos12: &Pose, triangle: &dyn Shape, shape: &dyn Shape) -> Option<Contact> {
+    Polished::EXACT
+        .contact(pos12, triangle, shape, UNBOUNDED_M)
+        .ok()
+        .flatten()
+        .filter(|contact| contact.dist > 0.0)
 }
 
 /// Unit vector from `from` to `to`; from frame to frame when the points coincide.
@@ -408,6 +450,7 @@ mod tests {
         let geometry = Geometry {
             shape: parry3d_f64::shape::SharedShape::new(Cuboid::new(Vector::new(0.1, 0.2, 0.3))),
             hull: None,
+            tree: None,
             closed: false,
             probe: Vector::ZERO,
             bounding: BoundingCapsule::of_shape(&Cuboid::new(Vector::new(0.1, 0.2, 0.3))),

@@ -1,6 +1,7 @@
 //! The collision world: parry shapes for every link collider, capsule segment, obstacle and the
 //! floor, and the pairs to check, built once per (model, scenario).
 
+use super::mesh_tree::SphereTree;
 use super::pairs::{pair_lists, CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance, FLOOR_NAME};
 use super::{Body, CollideError, CollideOptions};
 use crate::frames::{parry_pose, parry_vector, vector_from_parry};
@@ -46,6 +47,8 @@ pub(super) struct Geometry {
     pub(super) shape: SharedShape,
     /// Convex hull, for meshes only.
     pub(super) hull: Option<SharedShape>,
+    /// Sphere tree over the triangles, for meshes only.
+    pub(super) tree: Option<SphereTree>,
     /// A mesh whose every edge is shared by exactly two triangles, oriented outwards.
     pub(super) closed: bool,
     /// A point of the body in the shape frame (the middle of its axis, or a mesh vertex), for
@@ -121,6 +124,7 @@ impl Geometry {
             bounding,
             shape,
             hull: None,
+            tree: None,
             closed: false,
         }
     }
@@ -593,6 +597,7 @@ fn mesh_geometry(owner: &str, mesh: &TriMesh) -> Result<Geometry, CollideError> 
     let hull = ConvexPolyhedron::from_convex_hull(&vertices)
         .ok_or_else(|| bad("parry cannot build its convex hull (fewer than three distinct vertices, or all on one line)".into()))?;
     let probe = vertices[0];
+    let tree = SphereTree::new(&vertices, &triangles);
     let flags = if closed { TriMeshFlags::ORIENTED } else { TriMeshFlags::empty() };
     let trimesh = parry3d_f64::shape::TriMesh::with_flags(vertices, triangles, flags).map_err(|e| bad(format!("parry: {e}")))?;
     let shape = SharedShape::new(trimesh);
@@ -600,6 +605,7 @@ fn mesh_geometry(owner: &str, mesh: &TriMesh) -> Result<Geometry, CollideError> 
         bounding: BoundingCapsule::of(&shape),
         shape,
         hull: Some(SharedShape::new(hull)),
+        tree: Some(tree),
         closed,
         probe,
     })

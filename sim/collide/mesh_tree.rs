@@ -1,0 +1,439 @@
+//! Bounding-sphere trees over a mesh's triangles, for the exact gap between a mesh and another
+//! shape without visiting most of its triangles.
+//!
+//! parry measures a mesh against a shape by descending the mesh's AABB tree against the shape's
+//! AABB in the mesh frame, and a mesh against a mesh by running that whole descent once per
+//! triangle of the first mesh. Both bounds are loose for turned shapes (an AABB of a turned box
+//! or of a whole mesh), so most triangles of two links 15 mm apart end in GJK. A sphere does not
+//! grow when turned, and a dual descent of two trees bounds a pair of nodes by the gap between
+//! their spheres; a node against a convex shape is bounded by the exact distance from the
+//! sphere's centre to the shape minus the radius. Leaves are measured with the same narrow phase
+//! as before, triangle by triangle, so the gap and its witnesses are the same as parry's descent
+//! gives (the minimum over the same triangle contacts); only the number of triangles measured
+//! changes.
+//!
+//! Only separated pairs are answered here: when a measured triangle touches or overlaps the
+//! other shape, the caller falls back to parry's descent, which gives the deepest triangle.
+
+use super::narrow::{leaf_contact, Measured};
+use super::triangles::{segment_segment, triangle_distance};
+use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::query::Contact;
+use parry3d_f64::shape::{Shape, Triangle};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// Triangles per leaf: two measured leaves cost up to this squared in triangle contacts.
+const LEAF_TRIANGLES: usize = 4;
+/// Subtracted from every node bound (m): a bound that rounding puts above the gap it bounds could
+/// skip the nearest triangle.
+const BOUND_ROUNDING_M: f64 = 1e-9;
+
+/// A sphere tree over the triangles of one mesh, in the mesh's frame.
+#[derive(Debug, Clone)]
+pub(super) struct SphereTree {
+    nodes: Vec<Node>,
+    /// The mesh's triangles, ordered so that each leaf holds a contiguous range.
+    triangles: Vec<Triangle>,
+    /// Each triangle's bounding sphere (centre, radius), in the same order.
+    spheres: Vec<(Vector, f64)>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    center: Vector,
+    radius: f64,
+    /// A capsule containing the node: a segment along its vertices' principal axis and the
+    /// largest distance of a vertex from it; far tighter than the sphere for the long strips of
+    /// a tube's surface.
+    axis: [Vector; 2],
+    axis_radius: f64,
+    /// Children (inner node), or `None` for a leaf.
+    children: Option<(u32, u32)>,
+    /// The node's triangles: `triangles[first..first + count]`.
+    first: u32,
+    count: u32,
+}
+
+impl SphereTree {
+    /// The tree of a mesh given by its vertices and triangles (indices checked by the caller).
+    pub(super) fn new(vertices: &[Vector], indices: &[[u32; 3]]) -> Self {
+        let triangles: Vec<Triangle> = indices
+            .iter()
+            .map(|t| Triangle::new(vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize]))
+            .collect();
+        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * triangles.len() / LEAF_TRIANGLES + 1);
+        build(&triangles, &mut order, 0, &mut nodes);
+        let triangles: Vec<Triangle> = order.iter().map(|&i| triangles[i as usize]).collect();
+        let spheres = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = *t.vertices();
+                let centre = (a.min(b).min(c) + a.max(b).max(c)) / 2.0;
+                (centre, t.vertices().iter().map(|v| (v - centre).length()).fold(0.0, f64::max))
+            })
+            .collect();
+        Self { nodes, triangles, spheres }
+    }
+
+    /// The exact gap between this mesh at `pose` and a convex (non-mesh) `shape` at `pose_other`,
+    /// with witnesses; `None` when a triangle touches or overlaps the shape.
+    pub(super) fn gap_to_shape(&self, pose: &Pose, shape: &dyn Shape, pose_other: &Pose) -> Option<Measured> {
+        // Everything in the mesh frame; the shape at `pos12` there.
+        let pos12 = pose.inv_mul(pose_other);
+        let bound = |node: &Node| {
+            let centre = pos12.inverse_transform_point(node.center);
+            shape.distance_to_local_point(centre, true) - node.radius - BOUND_ROUNDING_M
+        };
+        let mut best: Option<Contact> = None;
+        let mut queue = BinaryHeap::with_capacity(32);
+        queue.push(Reverse((order_key(bound(&self.nodes[0])), 0u32)));
+        while let Some(Reverse((key, index))) = queue.pop() {
+            if best.is_some_and(|best| key >= order_key(best.dist)) {
+                break;
+            }
+            let node = &self.nodes[index as usize];
+            match node.children {
+                Some((left, right)) => {
+                    for child in [left, right] {
+                        let key = order_key(bound(&self.nodes[child as usize]));
+                        if best.is_none_or(|best| key < order_key(best.dist)) {
+                            queue.push(Reverse((key, child)));
+                        }
+                    }
+                }
+                None => {
+                    for triangle in self.leaf(node) {
+                        let contact = leaf_contact(&pos12, triangle, shape)?;
+                        if best.is_none_or(|best| contact.dist < best.dist) {
+                            best = Some(contact);
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|mut contact| {
+            contact.transform_by_mut(pose, pose_other);
+            Measured::from_contact(&contact)
+        })
+    }
+
+    /// The exact gap between this mesh at `pose` and `other` at `pose_other`, with witnesses;
+    /// `None` when two triangles touch or overlap.
+    pub(super) fn gap_to_tree(&self, pose: &Pose, other: &SphereTree, pose_other: &Pose) -> Option<Measured> {
+        let pos12 = pose.inv_mul(pose_other);
+        // The spheres' gap first (cheap); the capsules' only when the spheres cannot prune.
+        let bound = |a: &Node, b: &Node, best: f64| {
+            let spheres = (pos12 * b.center - a.center).length() - a.radius - b.radius - BOUND_ROUNDING_M;
+            if spheres >= best {
+                return spheres;
+            }
+            let axis = segment_segment(a.axis[0], a.axis[1], pos12 * b.axis[0], pos12 * b.axis[1]).sqrt();
+            spheres.max(axis - a.axis_radius - b.axis_radius - BOUND_ROUNDING_M)
+        };
+        // Triangle pairs are ranked by the closed form; the nearest is then measured as parry's
+        // descent measures it, so its witnesses are the same.
+        let mut best_distance = f64::INFINITY;
+        let mut nearest: Option<(&Triangle, &Triangle)> = None;
+        let mut queue = BinaryHeap::with_capacity(64);
+        queue.push(Reverse((
+            order_key(bound(&self.nodes[0], &other.nodes[0], f64::INFINITY)),
+            0u32,
+            0u32,
+        )));
+        while let Some(Reverse((key, ia, ib))) = queue.pop() {
+            if key >= order_key(best_distance) {
+                break;
+            }
+            let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
+            // Split the larger node, so both sides shrink at the same pace.
+            let split_a = match (a.children, b.children) {
+                (None, None) => {
+                    let (first_a, first_b) = (a.first as usize, b.first as usize);
+                    for (ia, ta) in self.leaf(a).iter().enumerate() {
+                        let ta_vertices = ta.vertices();
+                        let sa = self.spheres[first_a + ia];
+                        for (ib, tb) in other.leaf(b).iter().enumerate() {
+                            let sb = other.spheres[first_b + ib];
+                            if (pos12 * sb.0 - sa.0).length() - sa.1 - sb.1 - BOUND_ROUNDING_M >= best_distance {
+                                continue;
+                            }
+                            let tb_vertices = tb.vertices().map(|v| pos12 * v);
+                            if separation(ta_vertices, &tb_vertices, pos12 * sb.0 - sa.0) >= best_distance {
+                                continue;
+                            }
+                            let distance = triangle_distance(ta_vertices, &tb_vertices)?;
+                            if distance < best_distance {
+                                best_distance = distance;
+                                nearest = Some((ta, tb));
+                            }
+                        }
+                    }
+                    continue;
+                }
+                (Some(_), None) => true,
+                (None, Some(_)) => false,
+                (Some(_), Some(_)) => a.radius >= b.radius,
+            };
+            let (left, right) = if split_a { a.children } else { b.children }.expect("the split node is inner");
+            for child in [left, right] {
+                let (ca, cb) = if split_a { (child, ib) } else { (ia, child) };
+                let key = order_key(bound(&self.nodes[ca as usize], &other.nodes[cb as usize], best_distance));
+                if key < order_key(best_distance) {
+                    queue.push(Reverse((key, ca, cb)));
+                }
+            }
+        }
+        let (ta, tb) = nearest?;
+        let mut contact = leaf_contact(&pos12, ta, tb)?;
+        contact.transform_by_mut(pose, pose_other);
+        Some(Measured::from_contact(&contact))
+    }
+
+    fn leaf(&self, node: &Node) -> &[Triangle] {
+        &self.triangles[node.first as usize..(node.first + node.count) as usize]
+    }
+}
+
+/// A lower bound on the distance between two triangles: the gap between their projections on
+/// the line through their spheres' centres and on each one's normal (a gap along any axis is).
+fn separation(a: &[Vector; 3], b: &[Vector; 3], centres: Vector) -> f64 {
+    let gap = |axis: Vector| {
+        let (pa, pb) = (a.map(|v| v.dot(axis)), b.map(|v| v.dot(axis)));
+        let (lo_a, hi_a) = (pa[0].min(pa[1]).min(pa[2]), pa[0].max(pa[1]).max(pa[2]));
+        let (lo_b, hi_b) = (pb[0].min(pb[1]).min(pb[2]), pb[0].max(pb[1]).max(pb[2]));
+        (lo_b - hi_a).max(lo_a - hi_b)
+    };
+    let normal = |t: &[Vector; 3]| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+    let along = centres.normalize_or_zero();
+    gap(along).max(gap(normal(a))).max(gap(normal(b))) - BOUND_ROUNDING_M
+}
+
+/// Builds the subtree over `order` (a range of triangle indices starting at `first` in the final
+/// order) and returns its index. Splits at the median of the triangle centres along the longest
+/// axis of their box, so the tree is balanced whatever the mesh.
+fn build(triangles: &[Triangle], order: &mut [u32], first: u32, nodes: &mut Vec<Node>) -> u32 {
+    let (mut lo, mut hi) = (Vector::splat(f64::INFINITY), Vector::splat(f64::NEG_INFINITY));
+    for &i in order.iter() {
+        for v in triangles[i as usize].vertices() {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+    }
+    let center = (lo + hi) / 2.0;
+    let radius = order
+        .iter()
+        .flat_map(|&i| triangles[i as usize].vertices().map(|v| (v - center).length()))
+        .fold(0.0, f64::max);
+    let (axis, axis_radius) = principal_capsule(order.iter().flat_map(|&i| *triangles[i as usize].vertices()));
+    let index = nodes.len() as u32;
+    nodes.push(Node {
+        center,
+        radius,
+        axis,
+        axis_radius,
+        children: None,
+        first,
+        count: order.len() as u32,
+    });
+    if order.len() > LEAF_TRIANGLES {
+        let centre_of = |i: u32| triangles[i as usize].center();
+        let (mut clo, mut chi) = (Vector::splat(f64::INFINITY), Vector::splat(f64::NEG_INFINITY));
+        for &i in order.iter() {
+            clo = clo.min(centre_of(i));
+            chi = chi.max(centre_of(i));
+        }
+        let extent = chi - clo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let half = order.len() / 2;
+        // Ties broken by index, so the tree does not depend on the sort's internals.
+        order.select_nth_unstable_by(half, |&i, &j| centre_of(i)[axis].total_cmp(&centre_of(j)[axis]).then(i.cmp(&j)));
+        let (left, right) = order.split_at_mut(half);
+        let left = build(triangles, left, first, nodes);
+        let right = build(triangles, right, first + half as u32, nodes);
+        nodes[index as usize].children = Some((left, right));
+    }
+    index
+}
+
+/// A capsule containing `points`: the segment spanned by their projections on their principal
+/// axis (the covariance's largest eigenvector), and the largest distance of a point from it.
+fn principal_capsule(points: impl Iterator<Item = Vector> + Clone) -> ([Vector; 2], f64) {
+    let count = points.clone().count().max(1) as f64;
+    let mean = points.clone().fold(Vector::ZERO, |sum, p| sum + p) / count;
+    let mut covariance = nalgebra::Matrix3::<f64>::zeros();
+    for p in points.clone() {
+        let d = nalgebra::Vector3::new(p.x - mean.x, p.y - mean.y, p.z - mean.z);
+        covariance += d * d.transpose();
+    }
+    let eigen = covariance.symmetric_eigen();
+    let largest = eigen.eigenvalues.imax();
+    let column = eigen.eigenvectors.column(largest);
+    let direction = Vector::new(column[0], column[1], column[2]).normalize_or_zero();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in points.clone() {
+        let t = (p - mean).dot(direction);
+        lo = lo.min(t);
+        hi = hi.max(t);
+    }
+    if !lo.is_finite() {
+        return ([mean, mean], 0.0);
+    }
+    let ends = [mean + direction * lo, mean + direction * hi];
+    let radius = points.map(|p| segment_point_distance(ends, p)).fold(0.0, f64::max);
+    (ends, radius)
+}
+
+/// Distance from `p` to the segment `ends`.
+fn segment_point_distance([a, b]: [Vector; 2], p: Vector) -> f64 {
+    let ab = b - a;
+    let length2 = ab.length_squared();
+    let t = if length2 > 0.0 {
+        ((p - a).dot(ab) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).length()
+}
+
+/// A key whose unsigned order is the total order of `value`.
+fn order_key(value: f64) -> u64 {
+    let bits = value.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed box mesh of 12 triangles with half extents `h`.
+    fn box_mesh(h: Vector) -> (Vec<Vector>, Vec<[u32; 3]>) {
+        let vertices = (0..8)
+            .map(|i| {
+                Vector::new(
+                    if i & 1 == 0 { -h.x } else { h.x },
+                    if i & 2 == 0 { -h.y } else { h.y },
+                    if i & 4 == 0 { -h.z } else { h.z },
+                )
+            })
+            .collect();
+        let faces = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        (vertices, faces)
+    }
+
+    /// The trees against parry's descent of every triangle (the oracle), on every mesh pair and
+    /// mesh-obstacle pair of two real robots, at random configurations: same distances, and
+    /// witnesses at that distance.
+    #[test]
+    fn trees_measure_what_parry_descent_measures_on_real_robots() {
+        use crate::collide::narrow::{measure_mesh_descent, measure_shapes};
+        use crate::collide::world::Other;
+        use crate::pipeline::{collision_world, load_model, LoadOptions};
+        use rand::SeedableRng;
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robots = [
+            (
+                "designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf",
+                "panda_hand",
+                "scenarios/course.json",
+            ),
+            (
+                "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
+                "tool0",
+                "scenarios/cluttered/task-00.json",
+            ),
+        ];
+        let (mut separated, mut compared) = (0, 0);
+        for (robot, tip, scenario) in robots {
+            let opts = LoadOptions {
+                tip_link: Some(tip.into()),
+                ..Default::default()
+            };
+            let model = load_model(&root.join(robot), &opts).expect("shipped robot loads");
+            let scenario = crate::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
+            let model = model.placed(&scenario.world_from_base);
+            let world = collision_world(&model, &scenario, &[]).expect("valid world");
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+            let mut ws = model.workspace();
+            for _ in 0..16 {
+                model.forward(&model.random_configuration(&mut rng), &mut ws);
+                let pose =
+                    |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
+                for candidate in &world.candidates {
+                    let a = &world.colliders[candidate.a];
+                    let (pose_b, b) = match candidate.b {
+                        Other::Link(j) => (pose(j), &world.colliders[j].geometry),
+                        Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
+                        Other::Floor => continue,
+                    };
+                    if !a.geometry.is_mesh() && !b.is_mesh() {
+                        continue;
+                    }
+                    let pose_a = pose(candidate.a);
+                    let fast = measure_shapes(&pose_a, &a.geometry, &pose_b, b, true);
+                    let oracle = measure_mesh_descent(&pose_a, &a.geometry, &pose_b, b);
+                    compared += 1;
+                    separated += usize::from(oracle.distance > 0.0);
+                    assert!(
+                        (fast.distance - oracle.distance).abs() < 1e-9,
+                        "{robot}: candidate {candidate:?}: trees {} m, parry {} m",
+                        fast.distance,
+                        oracle.distance
+                    );
+                    let witnesses = (fast.point_b - fast.point_a).length();
+                    assert!(
+                        (witnesses - fast.distance.abs()).abs() < 1e-9,
+                        "witnesses {witnesses} m apart, distance {}",
+                        fast.distance
+                    );
+                }
+            }
+        }
+        assert!(
+            separated > 400 && compared > separated,
+            "{separated} separated of {compared} compared"
+        );
+    }
+
+    #[test]
+    fn every_triangle_is_in_exactly_one_leaf_inside_its_sphere() {
+        let (vertices, faces) = box_mesh(Vector::new(0.3, 0.1, 0.05));
+        let tree = SphereTree::new(&vertices, &faces);
+        let mut covered = 0;
+        for node in &tree.nodes {
+            for t in tree.leaf(node) {
+                for v in t.vertices() {
+                    assert!((v - node.center).length() <= node.radius + 1e-15);
+                }
+            }
+            if node.children.is_none() {
+                covered += node.count;
+            }
+        }
+        assert_eq!(covered as usize, faces.len());
+    }
+}
