@@ -213,15 +213,16 @@ impl<'a> Ik<'a> {
         let mut outside: Vec<Vec<f64>> = Vec::new();
         for configuration in &exact.configurations {
             let mut q = configuration.to_vec();
-            let (steps, error) = self.polish(goal, &mut q);
+            let (steps, size, error) = self.polish(goal, &mut q);
             iterations += steps;
-            complete &= error <= EXACT;
+            complete &= size <= EXACT;
             if distinct.iter().any(|d| self.same_configuration(d, &q)) {
                 continue;
             }
             distinct.push(q.clone());
             if self.shift_into_limits(&mut q, first_seed) {
-                found.push(self.judge(goal, q, margin));
+                // The error at the whole-turn equivalent differs by rounding only.
+                found.push(self.judge(goal, q, Some(error), margin));
             } else {
                 outside.push(q);
             }
@@ -234,7 +235,7 @@ impl<'a> Ik<'a> {
             for mut q in outside.iter().cloned() {
                 starts += 1;
                 iterations += self.solver.solve(goal, &mut q, self.opts.max_iterations, done, &mut rng);
-                let solution = self.judge(goal, q, margin);
+                let solution = self.judge(goal, q, None, margin);
                 if solution.pose_reached {
                     if !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
                         found.push(solution);
@@ -282,38 +283,36 @@ impl<'a> Ik<'a> {
         }
     }
 
-    /// Newton steps on the model's own FK until the pose error is below [`POLISHED`]; returns the
-    /// steps taken and the larger of the final position (m) and orientation (rad) errors.
-    fn polish(&mut self, goal: &Goal, q: &mut [f64]) -> (usize, f64) {
-        let error_of = |ws: &KinematicsWorkspace| {
-            let e = task_error(goal, &ws.tool_in_world);
+    /// Newton steps on the model's own FK until the pose error is below [`POLISHED`] (the
+    /// closed form is usually there already: one FK, no Jacobian); returns the steps taken, the
+    /// larger of the final position (m) and orientation (rad) errors, and the goal error.
+    fn polish(&mut self, goal: &Goal, q: &mut [f64]) -> (usize, f64, GoalError) {
+        let error_of = |tool: &Isometry3<f64>| {
+            let e = task_error(goal, tool);
             (e, e.fixed_rows::<3>(0).norm().max(e.fixed_rows::<3>(3).norm()))
         };
-        self.model.tool_jacobian(q, &mut self.ws);
-        let (mut e, mut size) = error_of(&self.ws);
+        let mut tool = self.model.tool_pose(q);
+        let (mut e, mut size) = error_of(&tool);
         let mut steps = 0;
-        let mut previous = q.to_vec();
         while size > POLISHED && steps < POLISH_STEPS {
+            self.model.tool_jacobian(q, &mut self.ws);
             let jacobian = Matrix6::from_fn(|r, c| self.ws.jacobian[(r, c)]);
             let Some(step) = jacobian.lu().solve(&e) else { break };
-            previous.copy_from_slice(q);
-            for (value, delta) in q.iter_mut().zip(step.iter()) {
-                *value += delta;
+            let mut next = [0.0; 6];
+            for ((n, value), delta) in next.iter_mut().zip(q.iter()).zip(step.iter()) {
+                *n = wrap_angle(value + delta);
             }
             steps += 1;
-            self.model.tool_jacobian(q, &mut self.ws);
-            let (new_e, new_size) = error_of(&self.ws);
-            if new_size >= size {
+            let next_tool = self.model.tool_pose(&next);
+            let (next_e, next_size) = error_of(&next_tool);
+            if next_size >= size {
                 // Near a singularity Newton may overshoot: keep the closed form's answer.
-                q.copy_from_slice(&previous);
                 break;
             }
-            (e, size) = (new_e, new_size);
+            q.copy_from_slice(&next);
+            (tool, e, size) = (next_tool, next_e, next_size);
         }
-        for value in q.iter_mut() {
-            *value = wrap_angle(*value);
-        }
-        (steps, size)
+        (steps, size, goal_error(goal, &tool))
     }
 
     /// Moves each revolute angle of `q` by whole turns into its limits, to the equivalent nearest
@@ -343,10 +342,11 @@ impl<'a> Ik<'a> {
         true
     }
 
-    /// The solution record of configuration `q`: errors, exact clearance, verdict.
-    fn judge(&mut self, goal: &Goal, q: Vec<f64>, margin: f64) -> IkSolution {
+    /// The solution record of configuration `q` (its `error` when known): errors, exact
+    /// clearance, verdict.
+    fn judge(&mut self, goal: &Goal, q: Vec<f64>, error: Option<GoalError>, margin: f64) -> IkSolution {
         let clearance = self.checker.as_mut().map(|checker| checker.clearance(&q, true));
-        let error = goal_error(goal, &self.model.tool_pose(&q));
+        let error = error.unwrap_or_else(|| goal_error(goal, &self.model.tool_pose(&q)));
         let pose_reached = is_reached(&error);
         IkSolution {
             reached: pose_reached && clearance.is_none_or(|c| c.exact_m > margin),
