@@ -47,6 +47,7 @@
 //!   multibody's motor impulses: its effort is the control law on the state after each step.
 
 pub mod collide;
+pub mod convex;
 pub mod design;
 pub mod engine;
 pub mod error;
