@@ -211,10 +211,12 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
 }
 
 #[test]
-fn an_engine_contact_exact_geometry_refutes_does_not_fail_the_design() {
+fn a_mesh_notch_stays_open_in_both_engines() {
     // One joint swings a 0.6 m tube (0.12 m thick, 0.3 m up) a quarter turn into the notch of a
     // U-shaped mesh: 40 mm from the notch's floor and from both prongs at the goal, and free all
-    // the way in exact geometry. The U's convex hull, which MuJoCo collides, swallows the tube.
+    // the way in exact geometry. The U's convex hull swallows the tube: MuJoCo, which collides a
+    // mesh as its hull, once pushed the arm 536 mm off the goal. Both engines now get the U's
+    // convex pieces, which keep the notch open.
     let text = r#"{"name": "swing", "mode": "free", "joints": [{"d": 0.3, "a": 0.6, "alpha": 0, "limits": [-3, 3]}]}"#;
     let design = proving_ground::design::parse(text, std::path::Path::new("swing.json")).expect("valid design");
     let loaded = proving_ground::pipeline::Loaded {
@@ -251,33 +253,15 @@ fn an_engine_contact_exact_geometry_refutes_does_not_fail_the_design() {
     // Exact geometry: free, with the 40 mm of the notch at the goal.
     let clearance = report.goals[0].exact_clearance_m.expect("measured");
     assert!((clearance - 0.04).abs() < 1e-6, "{clearance}");
-    // MuJoCo collides the hull: contacts, each refuted at MuJoCo's own configuration.
-    let mujoco = report.engines.iter().find(|e| e.engine == "mujoco").expect("ran");
-    assert!(!mujoco.contacts.is_empty(), "MuJoCo's hull should touch the tube");
-    for contact in &mujoco.contacts {
-        assert!(contact.parry_distance_m.is_some_and(|d| d > 0.0), "{contact:?}");
+    // Neither engine touches the U, and both hold the goal.
+    for engine in &report.engines {
+        assert!(engine.contacts.is_empty(), "{}: {:?}", engine.engine, engine.contacts);
     }
-    let refuted: Vec<_> = report
-        .findings
-        .iter()
-        .filter(|f| f.kind == FindingKind::EngineContactNotConfirmed && f.engine == Some("mujoco"))
-        .collect();
     assert!(
-        !refuted.is_empty()
-            && refuted
-                .iter()
-                .all(|f| f.severity == Severity::Warn && f.message.contains("convex hulls"))
-    );
-    let fails: Vec<_> = report.findings_at_least(Severity::Fail).collect();
-    // The hull pushes MuJoCo's arm off the goal: a miss that is MuJoCo's, so a warning.
-    assert!(
-        report
-            .findings
-            .iter()
-            .any(|f| f.kind == FindingKind::GoalNotHeldAfterEngineArtefact && f.engine == Some("mujoco") && f.severity == Severity::Warn),
+        report.findings.iter().all(|f| f.engine.is_none() || f.severity < Severity::Warn),
         "{:#?}",
         report.findings
     );
-    assert_eq!(report.goals[0].held_by, ["rapier"]);
-    assert!(report.verdict.passed && fails.is_empty(), "{fails:#?}");
+    assert_eq!(report.goals[0].held_by, ["rapier", "mujoco"]);
+    assert!(report.verdict.passed, "{:?}", report.verdict);
 }

@@ -13,7 +13,9 @@
 //! only such pair by default is the base against the floor, and the base never moves. MuJoCo
 //! never collides two bodies fixed to the world, so a base-obstacle contact is not reported.
 //! MuJoCo collides cylinders approximately (README, "Collision checking"): depths involving a
-//! cylinder are MuJoCo's, not the exact ones.
+//! cylinder are MuJoCo's, not the exact ones. Meshes are written as their convex pieces
+//! ([`crate::convex`], the pieces rapier collides), geoms `<link>/<k>/<p>` and `<obstacle>/<p>`,
+//! each attributed to its link or obstacle, so a contact names the pair as before.
 //!
 //! # Control
 //!
@@ -130,6 +132,9 @@ impl Loaded {
             explicit_geom_pairs,
             gravity_m_s2: opts.gravity_m_s2,
             integrator: Some(INTEGRATOR.into()),
+            // The pieces, not the hull MuJoCo would make of a whole mesh: the same shapes rapier
+            // collides, and no phantom contact inside a mesh's concavity.
+            convex_pieces: true,
         };
         let xml = to_mjcf(model, &mjcf_options).map_err(|source| EngineError::Export {
             robot: model.name.clone(),
@@ -171,15 +176,22 @@ impl Loaded {
                     let body_name = mj.id_to_name(MjtObjBase::mjOBJ_BODY, body).unwrap_or_default();
                     return link_names.iter().position(|n| n == body_name).map(Body::Link);
                 }
-                // World body: the floor, an obstacle, or the geoms of a base named `world`
-                // (`world/<k>`).
+                // World body: the floor, an obstacle (a mesh's convex pieces `<name>/<p>`), or
+                // the geoms of a base named `world` (`world/<k>`, pieces `world/<k>/<p>`).
+                let piece_of = |name: &str| {
+                    let (whole, piece) = name.rsplit_once('/')?;
+                    piece.parse::<usize>().is_ok().then(|| whole.to_string())
+                };
                 if scenario.is_some_and(|s| s.floor.is_some()) && geom_name == "floor" {
                     Some(Body::Floor)
                 } else if let Some(k) = obstacle_names.iter().position(|n| n == geom_name) {
                     Some(Body::Obstacle(k))
+                } else if let Some(k) = piece_of(geom_name).and_then(|whole| obstacle_names.iter().position(|n| *n == whole)) {
+                    Some(Body::Obstacle(k))
                 } else {
-                    let (link, _) = geom_name.rsplit_once('/')?;
-                    (link == link_names[0]).then_some(Body::Link(0))
+                    let rest = geom_name.strip_prefix(link_names[0].as_str())?.strip_prefix('/')?;
+                    let is_geom = rest.split('/').take(2).all(|part| part.parse::<usize>().is_ok());
+                    is_geom.then_some(Body::Link(0))
                 }
             })
             .collect();

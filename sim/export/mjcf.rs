@@ -15,12 +15,16 @@
 //!
 //! Numbers are written with `{}` (shortest text that parses back to the same f64) and angles in
 //! radians, declared in `<compiler>`. MuJoCo re-centres and re-orients mesh geoms at their
-//! centroid and collides with their convex hull; the body frames and sites stay as written.
+//! centroid and collides with their convex hull; the body frames and sites stay as written. So
+//! for the engine runs ([`MjcfOptions::convex_pieces`]) a mesh is written as its convex pieces
+//! ([`crate::convex`]), each piece its own hull.
 
 use super::{check_chain, check_unique, ExportError};
+use crate::convex::ConvexPiece;
 use crate::frames::{wxyz, xyz};
 use crate::model::{Collider, JointKind, Model, Shape};
 use nalgebra::Isometry3;
+use std::sync::Arc;
 
 /// Name of MuJoCo's world body; no other body may use it.
 const WORLD_BODY: &str = "world";
@@ -63,6 +67,11 @@ pub struct MjcfOptions {
     /// MuJoCo `integrator` option (`Euler`, `implicitfast`, `implicit`, `RK4`); default `None`:
     /// not written, MuJoCo's default (Euler).
     pub integrator: Option<String>,
+    /// Write each mesh as its convex pieces ([`crate::convex`]), one asset and one geom per
+    /// piece, rather than the whole mesh, which MuJoCo collides as its convex hull; a mesh VHACD
+    /// cannot decompose is written whole. Default `false`: the file then describes the model
+    /// exactly (read back, it is the same model, meshes and all); the engine runs set it.
+    pub convex_pieces: bool,
 }
 
 impl Default for MjcfOptions {
@@ -78,6 +87,7 @@ impl Default for MjcfOptions {
             explicit_geom_pairs: Vec::new(),
             gravity_m_s2: 9.81,
             integrator: None,
+            convex_pieces: false,
         }
     }
 }
@@ -86,6 +96,10 @@ impl Default for MjcfOptions {
 ///
 /// Body, joint and actuator names are the model's link and joint names; geoms are named
 /// `<link>/<k>` and mesh assets `mesh_<link>_<k>` after the collider's index `k` in its link. A
+/// mesh written as convex pieces (see [`MjcfOptions::convex_pieces`]) has geoms `<link>/<k>/<p>`
+/// and assets `mesh_<link>_<k>_<p>` for its pieces `p` (a world collider `<label>/<p>` and
+/// `mesh_world_<k>_<p>`), preceded by a comment naming the mesh; explicit pairs naming such a
+/// collider are written for each of its pieces. A
 /// base link called `world` is MuJoCo's world body itself: its geoms go straight into
 /// `<worldbody>` (inside a `<frame>` when `world_from_base` is not the identity) and its inertial,
 /// which a static body does not need, is left out.
@@ -117,18 +131,26 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     let reserved = (!base_is_world).then_some(WORLD_BODY);
     check_unique(model, "MJCF", "body", reserved.into_iter().chain(body_names))?;
     check_unique(model, "MJCF", "joint", model.joints.iter().map(|j| j.name.as_str()))?;
+    let pieces = Pieces::of(model, opts);
     let link_geoms: Vec<String> = model
         .links
         .iter()
-        .flat_map(|link| (0..link.colliders.len()).map(move |k| format!("{}/{k}", link.name)))
+        .enumerate()
+        .flat_map(|(i, link)| (0..link.colliders.len()).map(move |k| (i, k, format!("{}/{k}", link.name))))
+        .flat_map(|(i, k, name)| piece_names(&name, pieces.link(i, k)))
         .collect();
-    let world_geoms = opts.world_colliders.iter().map(|c| c.label.as_str());
+    let world_geoms: Vec<String> = opts
+        .world_colliders
+        .iter()
+        .enumerate()
+        .flat_map(|(k, c)| piece_names(&c.label, pieces.world(k)))
+        .collect();
     let floor = opts.floor_height.map(|_| FLOOR_GEOM);
     check_unique(
         model,
         "MJCF",
         "geom",
-        link_geoms.iter().map(String::as_str).chain(world_geoms).chain(floor),
+        link_geoms.iter().chain(&world_geoms).map(String::as_str).chain(floor),
     )?;
 
     let mut out = String::new();
@@ -145,8 +167,8 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         1,
         &format!(r#"<option timestep="{timestep}" gravity="0 0 {gravity}"{integrator}/>"#),
     );
-    write_assets(&mut out, model, &opts.world_colliders);
-    write_bodies(&mut out, model, base_is_world, opts);
+    write_assets(&mut out, model, &opts.world_colliders, &pieces);
+    write_bodies(&mut out, model, base_is_world, opts, &pieces);
     if opts.include_actuators && !model.joints.is_empty() {
         line(&mut out, 1, "<actuator>");
         for ((joint, kp), kv) in model.joints.iter().zip(&kp).zip(&kv) {
@@ -171,8 +193,12 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     if !pairs.is_empty() || !opts.explicit_geom_pairs.is_empty() {
         line(&mut out, 1, "<contact>");
         for (a, b) in &opts.explicit_geom_pairs {
-            let (geom1, geom2) = (escape(a), escape(b));
-            line(&mut out, 2, &format!(r#"<pair geom1="{geom1}" geom2="{geom2}"/>"#));
+            for geom1 in pieces.geoms_of(model, a) {
+                for geom2 in pieces.geoms_of(model, b) {
+                    let (geom1, geom2) = (escape(&geom1), escape(&geom2));
+                    line(&mut out, 2, &format!(r#"<pair geom1="{geom1}" geom2="{geom2}"/>"#));
+                }
+            }
         }
         for (a, b) in pairs {
             let (body1, body2) = (escape(a), escape(b));
@@ -198,30 +224,98 @@ fn gains(model: &Model, gain: &'static str, given: Option<&[f64]>, default: f64)
     }
 }
 
-fn write_assets(out: &mut String, model: &Model, world_colliders: &[Collider]) {
-    let mesh_asset = |name: String, collider: &Collider| {
-        let Shape::Mesh(mesh) = &collider.shape else {
-            return None;
+/// The convex pieces of every mesh collider written as pieces; `None` for the others.
+struct Pieces {
+    links: Vec<Vec<Option<Arc<Vec<ConvexPiece>>>>>,
+    world: Vec<Option<Arc<Vec<ConvexPiece>>>>,
+}
+
+impl Pieces {
+    fn of(model: &Model, opts: &MjcfOptions) -> Self {
+        let all = || model.links.iter().flat_map(|l| &l.colliders).chain(&opts.world_colliders);
+        let of = |collider: &Collider| match (&collider.shape, opts.convex_pieces) {
+            (Shape::Mesh(mesh), true) => crate::convex::pieces(mesh),
+            _ => None,
         };
-        let vertex = numbers(mesh.vertices.iter().flatten().copied());
-        let face = mesh.triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
-        let name = escape(&name);
-        Some(format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#))
+        if opts.convex_pieces {
+            crate::convex::prepare(all().filter_map(|c| match &c.shape {
+                Shape::Mesh(mesh) => Some(mesh),
+                _ => None,
+            }));
+        }
+        Self {
+            links: model.links.iter().map(|l| l.colliders.iter().map(of).collect()).collect(),
+            world: opts.world_colliders.iter().map(of).collect(),
+        }
+    }
+
+    fn link(&self, link: usize, k: usize) -> Option<&[ConvexPiece]> {
+        self.links.get(link)?.get(k)?.as_deref().map(Vec::as_slice)
+    }
+
+    fn world(&self, k: usize) -> Option<&[ConvexPiece]> {
+        self.world.get(k)?.as_deref().map(Vec::as_slice)
+    }
+
+    /// The geoms written for the link geom named `name` (`<link>/<k>`): its pieces', or itself.
+    fn geoms_of(&self, model: &Model, name: &str) -> Vec<String> {
+        let found = model.links.iter().enumerate().find_map(|(i, link)| {
+            let k: usize = name.strip_prefix(link.name.as_str())?.strip_prefix('/')?.parse().ok()?;
+            (k < link.colliders.len()).then(|| self.link(i, k))
+        });
+        piece_names(name, found.flatten())
+    }
+}
+
+/// The geom (or asset) names of a collider named `name`: one per piece, `<name>/<p>` (or
+/// `<name>_<p>`), or `name` itself when it is written whole.
+fn piece_names(name: &str, pieces: Option<&[ConvexPiece]>) -> Vec<String> {
+    piece_names_with(name, '/', pieces)
+}
+
+fn piece_names_with(name: &str, separator: char, pieces: Option<&[ConvexPiece]>) -> Vec<String> {
+    match pieces {
+        Some(pieces) => (0..pieces.len()).map(|p| format!("{name}{separator}{p}")).collect(),
+        None => vec![name.to_string()],
+    }
+}
+
+fn write_assets(out: &mut String, model: &Model, world_colliders: &[Collider], pieces: &Pieces) {
+    let mesh_assets = |name: String, collider: &Collider, pieces: Option<&[ConvexPiece]>| {
+        let Shape::Mesh(mesh) = &collider.shape else {
+            return Vec::new();
+        };
+        let asset = |name: &str, vertices: &[[f64; 3]], triangles: &[[u32; 3]]| {
+            let vertex = numbers(vertices.iter().flatten().copied());
+            let face = triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
+            let name = escape(name);
+            format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#)
+        };
+        match pieces {
+            None => vec![asset(&name, &mesh.vertices, &mesh.triangles)],
+            Some(pieces) => {
+                let comment = comment(&format!("{}: convex pieces of {}", collider.label, mesh.uri));
+                let names = piece_names_with(&name, '_', Some(pieces));
+                let assets = names.iter().zip(pieces).map(|(n, p)| asset(n, &p.vertices, &p.triangles));
+                std::iter::once(comment).chain(assets).collect()
+            }
+        }
     };
     let meshes: Vec<String> = model
         .links
         .iter()
-        .flat_map(|link| {
+        .enumerate()
+        .flat_map(|(i, link)| {
             link.colliders
                 .iter()
                 .enumerate()
-                .filter_map(|(k, collider)| mesh_asset(mesh_name(&link.name, k), collider))
+                .flat_map(move |(k, collider)| mesh_assets(mesh_name(&link.name, k), collider, pieces.link(i, k)))
         })
         .chain(
             world_colliders
                 .iter()
                 .enumerate()
-                .filter_map(|(k, collider)| mesh_asset(format!("{WORLD_MESH_PREFIX}{k}"), collider)),
+                .flat_map(|(k, collider)| mesh_assets(format!("{WORLD_MESH_PREFIX}{k}"), collider, pieces.world(k))),
         )
         .collect();
     if meshes.is_empty() {
@@ -234,9 +328,14 @@ fn write_assets(out: &mut String, model: &Model, world_colliders: &[Collider]) {
     line(out, 1, "</asset>");
 }
 
+/// An XML comment; `--` (not allowed inside one) is broken up.
+fn comment(text: &str) -> String {
+    format!("<!-- {} -->", text.replace("--", "- -"))
+}
+
 /// The bodies, nested: each link's body is opened inside its parent's and all are closed at the
 /// end, innermost first.
-fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &MjcfOptions) {
+fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &MjcfOptions, pieces: &Pieces) {
     line(out, 1, "<worldbody>");
     // The world's own geoms come first, outside any base frame: their poses are world poses.
     if let Some(height) = opts.floor_height {
@@ -247,8 +346,10 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
         );
     }
     for (k, collider) in opts.world_colliders.iter().enumerate() {
-        let text = geom_text(&collider.label, &format!("{WORLD_MESH_PREFIX}{k}"), collider);
-        line(out, 2, &text);
+        let mesh = format!("{WORLD_MESH_PREFIX}{k}");
+        for text in geom_texts(&collider.label, &mesh, collider, pieces.world(k)) {
+            line(out, 2, &text);
+        }
     }
     let mut depth = 2;
     let mut closing = Vec::with_capacity(model.links.len());
@@ -293,7 +394,10 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
             line(out, depth, &text);
         }
         for (k, collider) in link.colliders.iter().enumerate() {
-            line(out, depth, &geom(&link.name, k, collider));
+            let (name, mesh) = (format!("{}/{k}", link.name), mesh_name(&link.name, k));
+            for text in geom_texts(&name, &mesh, collider, pieces.link(i, k)) {
+                line(out, depth, &text);
+            }
         }
         if i == model.links.len() - 1 {
             line(out, depth, &format!(r#"<site name="tool" {}/>"#, pose(&model.last_from_tool)));
@@ -306,8 +410,12 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
     line(out, 1, "</worldbody>");
 }
 
-fn geom(link: &str, k: usize, collider: &Collider) -> String {
-    geom_text(&format!("{link}/{k}"), &mesh_name(link, k), collider)
+/// The geoms of one collider: itself, or one per convex piece (each on its own asset, all at
+/// the collider's pose: the pieces are in the mesh's frame).
+fn geom_texts(name: &str, mesh: &str, collider: &Collider, pieces: Option<&[ConvexPiece]>) -> Vec<String> {
+    let names = piece_names(name, pieces);
+    let meshes = piece_names_with(mesh, '_', pieces);
+    names.iter().zip(&meshes).map(|(n, m)| geom_text(n, m, collider)).collect()
 }
 
 /// A `<geom>` named `name` at the collider's pose; a mesh refers to the asset `mesh`.
@@ -481,9 +589,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn mesh_collider_is_written_inline() {
-        let mut model = modular_model();
+    fn with_tetrahedron(model: &mut Model) -> usize {
         let vertices = vec![[0.0; 3], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0], [0.0, 0.0, 0.001]];
         model.links[2].colliders.push(Collider {
             link_from_shape: Isometry3::translation(0.0, 0.0, 0.1),
@@ -496,7 +602,13 @@ mod tests {
             }),
             label: "part".into(),
         });
-        let k = model.links[2].colliders.len() - 1;
+        model.links[2].colliders.len() - 1
+    }
+
+    #[test]
+    fn mesh_collider_is_written_inline() {
+        let mut model = modular_model();
+        let k = with_tetrahedron(&mut model);
         let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
         let asset = format!(r#"<mesh name="mesh_link2_{k}" vertex="0 0 0 0.001 0 0 0 0.002 0 0 0 0.001" face="0 2 1 0 1 3 0 3 2 1 2 3"/>"#);
         assert!(text.contains(&asset), "{asset} not in\n{text}");
@@ -505,6 +617,35 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("part.dae"), "no file is referenced");
+    }
+
+    #[test]
+    fn mesh_collider_is_written_as_convex_pieces() {
+        let mut model = modular_model();
+        let k = with_tetrahedron(&mut model);
+        let opts = MjcfOptions {
+            explicit_geom_pairs: vec![(format!("link2/{k}"), "link4/0".into())],
+            convex_pieces: true,
+            ..MjcfOptions::default()
+        };
+        let text = to_mjcf(&model, &opts).expect("exports");
+        assert!(text.contains("<!-- part: convex pieces of meshes/part.dae -->"), "{text}");
+        assert!(
+            !text.contains(&format!(r#"name="mesh_link2_{k}""#)),
+            "the whole mesh is not written"
+        );
+        // VHACD cuts even a tetrahedron (it splits by voxels); every piece has its asset, its
+        // geom at the collider's pose and its explicit pair.
+        let pieces = text.matches(&format!(r#"<mesh name="mesh_link2_{k}_"#)).count();
+        assert!(pieces >= 1, "{text}");
+        for p in 0..pieces {
+            let geom = format!(r#"<geom name="link2/{k}/{p}" type="mesh" mesh="mesh_link2_{k}_{p}" pos="0 0 0.1""#);
+            assert!(text.contains(&geom), "{geom} not in\n{text}");
+            let pair = format!(r#"<pair geom1="link2/{k}/{p}" geom2="link4/0"/>"#);
+            assert!(text.contains(&pair), "{pair} not in\n{text}");
+        }
+        assert_eq!(text.matches("<pair ").count(), pieces, "{text}");
+        assert!(!text.contains(&format!(r#"name="link2/{k}" "#)), "{text}");
     }
 
     #[test]

@@ -12,10 +12,12 @@
 //!   joins are off, and rapier's default joint damping (0.1 N m s/rad) is removed. Joint limits
 //!   are not given to rapier: the reference stays within them.
 //! - Colliders are the exact shapes: balls, cuboids, `capsule_z`, and cylinders turned by +90
-//!   degrees about x (parry's cylinder axis is y, ours z). Meshes are non-convex triangle meshes,
-//!   as in our parry check (not hulls, not a convex decomposition): a mesh is a surface, so a body
-//!   wholly inside a mesh touches nothing. Obstacles are parentless fixed colliders; the floor is
-//!   a half-space whose top is at the floor height. Gravity is along -z.
+//!   degrees about x (parry's cylinder axis is y, ours z). A mesh is a compound of its convex
+//!   pieces ([`crate::convex`], the same pieces MuJoCo gets): solid, and far cheaper to collide
+//!   than two non-convex trimeshes; a mesh VHACD cannot decompose (flat) stays a trimesh. Our
+//!   parry check keeps the mesh itself, and re-measures every engine contact in it. Obstacles are
+//!   parentless fixed colliders; the floor is a half-space whose top is at the floor height.
+//!   Gravity is along -z.
 //! - Everything is f32: positions near 1 m are resolved to about 1e-7 m, joint angles to 1e-7 rad.
 //!
 //! # Control: how rapier's motor maps to `tau = kp (q_ref - q) + kd (qd_ref - qd)`

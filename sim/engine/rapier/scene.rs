@@ -4,7 +4,7 @@
 
 use crate::collide::{Body, CollisionWorld};
 use crate::engine::EngineError;
-use crate::model::{JointKind, Model, Shape};
+use crate::model::{JointKind, Model, Shape, TriMesh};
 use crate::scenario::Scenario;
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::prelude as rp;
@@ -172,18 +172,32 @@ fn collider(shape: &Shape, parent_from_shape: &Isometry3<f64>, what: &str, model
             rp::ColliderBuilder::cylinder((length / 2.0) as f32, *radius as f32),
             parent_from_shape * y_onto_z,
         ),
-        Shape::Mesh(mesh) => {
-            let vertices = mesh
-                .vertices
-                .iter()
-                .map(|v| rp::Vector::new(v[0] as f32, v[1] as f32, v[2] as f32))
-                .collect();
-            let builder = rp::ColliderBuilder::trimesh(vertices, mesh.triangles.clone())
-                .map_err(|e| rapier_error(model, format!("{what}: mesh {}: {e}", mesh.file.display())))?;
-            (builder, *parent_from_shape)
-        }
+        Shape::Mesh(mesh) => (mesh_collider(mesh, what, model)?, *parent_from_shape),
     };
     Ok(builder.position(pose_of(&pose)).density(0.0))
+}
+
+/// A mesh as the compound of its convex pieces ([`crate::convex`]): rapier collides two
+/// non-convex trimeshes slowly, and the pieces are what MuJoCo collides too. A mesh without
+/// pieces (VHACD found no volume) stays a trimesh.
+fn mesh_collider(mesh: &TriMesh, what: &str, model: &Model) -> Result<rp::ColliderBuilder, EngineError> {
+    let point = |v: &[f64; 3]| rp::Vector::new(v[0] as f32, v[1] as f32, v[2] as f32);
+    if let Some(pieces) = crate::convex::pieces(mesh) {
+        let parts: Vec<(rp::Pose, rp::SharedShape)> = pieces
+            .iter()
+            // A piece too thin for an f32 hull is left out: its neighbours cover its surface.
+            .filter_map(|piece| {
+                let points: Vec<rp::Vector> = piece.vertices.iter().map(point).collect();
+                rp::SharedShape::convex_hull(&points).map(|shape| (rp::Pose::IDENTITY, shape))
+            })
+            .collect();
+        if !parts.is_empty() {
+            return Ok(rp::ColliderBuilder::compound(parts));
+        }
+    }
+    let vertices = mesh.vertices.iter().map(point).collect();
+    rp::ColliderBuilder::trimesh(vertices, mesh.triangles.clone())
+        .map_err(|e| rapier_error(model, format!("{what}: mesh {}: {e}", mesh.file.display())))
 }
 
 /// Builds the world with the robot at configuration `q` (at rest), the scenario's obstacles and
@@ -197,6 +211,12 @@ pub(super) fn build(
     timestep_s: f64,
     gravity_m_s2: f64,
 ) -> Result<Scene, EngineError> {
+    let link_meshes = model.links.iter().flat_map(|l| &l.colliders).map(|c| &c.shape);
+    let obstacle_meshes = scenario.obstacles.iter().map(|o| &o.shape);
+    crate::convex::prepare(link_meshes.chain(obstacle_meshes).filter_map(|shape| match shape {
+        Shape::Mesh(mesh) => Some(mesh),
+        _ => None,
+    }));
     let mut world = rp::PhysicsWorld::new();
     world.gravity = rp::Vector::new(0.0, 0.0, -gravity_m_s2 as f32);
     world.integration_parameters.dt = timestep_s as f32;
