@@ -8,18 +8,18 @@
 /// (Kinova) are the mounting flange's tool frame; end-effector, flange and hand frames come
 /// after, since a TCP or tool frame usually hangs below them.
 pub(super) const TOOL_NAMES: [&str; 6] = [
-    "tcp (`tcp`, `*_tcp`, `tcp_link`, `pinch`, `pinch_site`, `grip_site`)",
-    "tool (`tool0`, `tool`, `*_tool0`, `tool_frame`, `tool_link`)",
-    "end effector (`eef`, `link_eef`, `*_eef`, `end_effector`, `*_end_effector`, `end_effector_link`)",
-    "ee (`ee`, `ee_link`, `*_ee_link`)",
-    "flange (`flange`, `*_flange`, `attachment_site`)",
-    "hand (`hand`, `*_hand`)",
+    "`tcp` (`*_tcp`, `pinch`, `grip_site`)",
+    "`tool0` (`tool`, `tool_frame`)",
+    "`eef` (`*_eef`, `*end_effector*`)",
+    "`ee_link` (`ee`)",
+    "`flange` (`*_flange`, `attachment_site`)",
+    "`hand` (`*_hand`)",
 ];
 
 /// The rank of a tool-frame name in [`TOOL_NAMES`] (0 is the most specific), `None` for a name
-/// that is not one. The name's last word decides (a trailing `link` or `frame` is skipped), so
-/// `panda_hand_tcp` is a TCP, `hand_camera` is not a hand. MuJoCo Menagerie and robosuite name
-/// their TCP sites `pinch` and `grip_site`, their flange sites `attachment_site`.
+/// that is not one. The name's last word decides (a trailing `link`, `frame` or `site` is
+/// skipped), so `panda_hand_tcp` is a TCP, `hand_camera` is not a hand. MuJoCo Menagerie and
+/// robosuite name their TCP sites `pinch` and `grip_site`, their flange sites `attachment_site`.
 pub(super) fn tool_rank(name: &str) -> Option<usize> {
     let lower = name
         .to_ascii_lowercase()
@@ -70,7 +70,7 @@ pub(super) fn pick_tool<'a>(candidates: &[&'a str]) -> Result<Option<&'a str>, V
 
 /// The rule as one phrase for messages.
 pub(super) fn tool_rule() -> String {
-    format!("tool-frame names, first match wins: {}", TOOL_NAMES.join("; "))
+    format!("tool-frame names, first match wins: {}", TOOL_NAMES.join(", "))
 }
 
 #[cfg(test)]
