@@ -130,11 +130,11 @@ impl Reader<'_> {
         let depth = |body: usize| self.moving_chain(body).len();
         let longest = arm.iter().map(|&b| depth(b)).max().unwrap_or(0);
         let ends: Vec<usize> = arm.iter().copied().filter(|&b| depth(b) == longest).collect();
-        let arm_end = match ends.as_slice() {
-            [one] => *one,
-            _ => {
+        let arm_end = match *ends.as_slice() {
+            [] => return Err(self.unsupported("<worldbody>".into(), "has no hinge or slide joint: nothing moves".into())),
+            [one] => one,
+            [a, b, ..] => {
                 // Name where the first two chains part: their lowest common ancestor.
-                let (a, b) = (ends[0], ends[1]);
                 let mut fork = mj.body_parentid()[b] as usize;
                 while fork != 0 && !self.is_below(a, fork) {
                     fork = mj.body_parentid()[fork] as usize;
