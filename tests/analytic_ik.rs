@@ -301,3 +301,17 @@ fn a_goal_whose_every_solution_collides_is_proven_unreachable_in_the_report() {
     assert_eq!(goal["solutions_free"], 0);
     assert!(goal["solutions_found"].as_u64().is_some_and(|n| n >= 2), "{goal}");
 }
+
+#[test]
+fn non_finite_goals_and_seeds_give_an_unreached_result_not_a_panic() {
+    let model = design("designs/ur5e.json");
+    let mut ik = Ik::new(&model, IkOptions::default());
+    let reachable = model.tool_pose(&[0.3, -1.2, 1.1, 0.4, 0.9, 0.7]);
+    let nan_seed = [f64::NAN; 6];
+    let result = ik.solve(&pose_goal(&reachable), 0, Some(&nan_seed));
+    assert!(result.reached(), "{result:?}");
+    let mut broken = pose_goal(&reachable);
+    broken.position.x = f64::NAN;
+    let result = ik.solve(&broken, 0, None);
+    assert!(!result.reached() && !result.complete && result.proof.is_none(), "{result:?}");
+}

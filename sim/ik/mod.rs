@@ -172,8 +172,9 @@ impl<'a> Ik<'a> {
     /// solution (singular poses, poses just beyond reach that the tolerance may still accept,
     /// `z_symmetric` goals: those of the goal's own rotation).
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
+        let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
         let exact = match (&self.analytic, goal.tolerance) {
-            (Some(arm), Tolerance::Pose | Tolerance::ZSymmetric) if self.opts.analytic => {
+            (Some(arm), Tolerance::Pose | Tolerance::ZSymmetric) if self.opts.analytic && finite => {
                 arm.solve(&Isometry3::from_parts(Translation3::from(goal.position), goal.rotation))
             }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
@@ -289,7 +290,16 @@ impl<'a> Ik<'a> {
     fn polish(&mut self, goal: &Goal, q: &mut [f64]) -> (usize, f64, GoalError) {
         let error_of = |tool: &Isometry3<f64>| {
             let e = task_error(goal, tool);
-            (e, e.fixed_rows::<3>(0).norm().max(e.fixed_rows::<3>(3).norm()))
+            let (position, rotation) = (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm());
+            // `max` would drop a NaN, and a NaN goal would pass for exact.
+            (
+                e,
+                if position.is_nan() || rotation.is_nan() {
+                    f64::INFINITY
+                } else {
+                    position.max(rotation)
+                },
+            )
         };
         let mut tool = self.model.tool_pose(q);
         let (mut e, mut size) = error_of(&tool);
@@ -320,6 +330,9 @@ impl<'a> Ik<'a> {
     fn shift_into_limits(&self, q: &mut [f64], near: Option<&[f64]>) -> bool {
         let near = near.filter(|n| n.len() == q.len());
         for (i, (value, joint)) in q.iter_mut().zip(&self.model.joints).enumerate() {
+            if !value.is_finite() {
+                return false;
+            }
             if joint.kind == JointKind::Prismatic {
                 if joint.limits.is_some_and(|[lower, upper]| *value < lower || *value > upper) {
                     return false;
@@ -327,6 +340,7 @@ impl<'a> Ik<'a> {
                 continue;
             }
             let target = near.map_or(0.0, |n| n[i]);
+            let target = if target.is_finite() { target } else { 0.0 };
             let mut turns = ((target - *value) / TAU).round();
             if let Some([lower, upper]) = joint.limits {
                 let (fewest, most) = (((lower - *value) / TAU).ceil(), ((upper - *value) / TAU).floor());
