@@ -150,20 +150,22 @@ impl SphereTree {
             // Split the larger node, so both sides shrink at the same pace.
             let split_a = match (a.children, b.children) {
                 (None, None) => {
-                    let (first_a, first_b) = (a.first as usize, b.first as usize);
-                    for (ia, ta) in self.leaf(a).iter().enumerate() {
+                    // Leaf b's triangles in the frame of a, once for the whole leaf pair.
+                    let mut moved = [([Vector::ZERO; 3], Vector::ZERO, 0.0); LEAF_TRIANGLES];
+                    let leaf_b = other.leaf(b);
+                    for ((slot, tb), (centre, radius)) in moved.iter_mut().zip(leaf_b).zip(&other.spheres[b.first as usize..]) {
+                        *slot = (tb.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
+                    }
+                    for (ta, &(centre_a, radius_a)) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]) {
                         let ta_vertices = ta.vertices();
-                        let sa = self.spheres[first_a + ia];
-                        for (ib, tb) in other.leaf(b).iter().enumerate() {
-                            let sb = other.spheres[first_b + ib];
-                            if (pos12 * sb.0 - sa.0).length() - sa.1 - sb.1 - BOUND_ROUNDING_M >= best_distance {
+                        for ((tb_vertices, centre_b, radius_b), tb) in moved.iter().zip(leaf_b) {
+                            let between = centre_b - centre_a;
+                            if between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= best_distance
+                                || separation(ta_vertices, tb_vertices, between) >= best_distance
+                            {
                                 continue;
                             }
-                            let tb_vertices = tb.vertices().map(|v| pos12 * v);
-                            if separation(ta_vertices, &tb_vertices, pos12 * sb.0 - sa.0) >= best_distance {
-                                continue;
-                            }
-                            let distance = triangle_distance(ta_vertices, &tb_vertices)?;
+                            let distance = triangle_distance(ta_vertices, tb_vertices)?;
                             if distance < best_distance {
                                 best_distance = distance;
                                 nearest = Some((ta, tb));
