@@ -101,10 +101,11 @@ pub fn static_load_without_mujoco<Q: AsRef<[f64]>>(
     gravity_m_s2: f64,
 ) -> Result<StaticLoad, EngineError> {
     let mut joints = unloaded(model);
+    let mut ws = model.workspace();
     for (index, q) in samples.into_iter().enumerate() {
         let q = q.as_ref();
         check_length(model, index, q)?;
-        for (load, torque) in joints.iter_mut().zip(model.gravity_torques(q, gravity_m_s2)) {
+        for (load, torque) in joints.iter_mut().zip(model.gravity_torques_in(&mut ws, q, gravity_m_s2)) {
             if torque.abs() > load.peak_torque {
                 load.peak_torque = torque.abs();
                 load.sample = index;
