@@ -19,7 +19,7 @@ use super::narrow::{leaf_contact, Measured};
 use super::triangles::{segment_segment, triangle_distance};
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::query::Contact;
-use parry3d_f64::shape::{Shape, Triangle};
+use parry3d_f64::shape::{Shape, SupportMap, Triangle};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -86,6 +86,7 @@ impl SphereTree {
             let centre = pos12.inverse_transform_point(node.center);
             shape.distance_to_local_point(centre, true) - node.radius - BOUND_ROUNDING_M
         };
+        let support = shape.as_support_map();
         let mut best: Option<Contact> = None;
         let mut queue = BinaryHeap::with_capacity(32);
         queue.push(Reverse((order_key(bound(&self.nodes[0])), 0u32)));
@@ -104,7 +105,16 @@ impl SphereTree {
                     }
                 }
                 None => {
-                    for triangle in self.leaf(node) {
+                    for (triangle, &(centre, radius)) in self.leaf(node).iter().zip(&self.spheres[node.first as usize..]) {
+                        // A triangle's own sphere, then the shape's extent across the triangle's
+                        // plane, before its contact (GJK).
+                        if let Some(best) = &best {
+                            let sphere =
+                                shape.distance_to_local_point(pos12.inverse_transform_point(centre), true) - radius - BOUND_ROUNDING_M;
+                            if sphere >= best.dist || support.is_some_and(|support| plane_gap(triangle, support, &pos12) >= best.dist) {
+                                continue;
+                            }
+                        }
                         let contact = leaf_contact(&pos12, triangle, shape)?;
                         if best.is_none_or(|best| contact.dist < best.dist) {
                             best = Some(contact);
@@ -196,6 +206,17 @@ impl SphereTree {
     fn leaf(&self, node: &Node) -> &[Triangle] {
         &self.triangles[node.first as usize..(node.first + node.count) as usize]
     }
+}
+
+/// A lower bound on the distance between a triangle and a convex shape at `pos12` (the
+/// triangle's frame): how far the shape lies beyond the triangle's plane, on either side.
+fn plane_gap(triangle: &Triangle, support: &dyn SupportMap, pos12: &Pose) -> f64 {
+    let [a, b, c] = *triangle.vertices();
+    let normal = (b - a).cross(c - a).normalize_or_zero();
+    let extreme = |direction: Vector| pos12 * support.local_support_point(pos12.rotation.inverse() * direction);
+    let above = normal.dot(extreme(-normal) - a);
+    let below = normal.dot(a - extreme(normal));
+    above.max(below) - BOUND_ROUNDING_M
 }
 
 /// A lower bound on the distance between two triangles: the gap between their projections on
