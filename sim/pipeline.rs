@@ -362,7 +362,13 @@ pub fn validate_with_progress(
             chosen.map(|q| crate::ik::paper_loss_terms(&model, &world, goal, q))
         })
         .collect();
-    let samples = crate::plan::replay_samples(&replayed);
+    // The engines replay every sample; without them only the static load reads them, one at a
+    // time (tens of thousands of goals make millions).
+    let samples = if opts.engines.rapier || opts.engines.mujoco {
+        crate::plan::replay_samples(&replayed)
+    } else {
+        Vec::new()
+    };
     let gain_options = crate::engine::GainOptions {
         gravity_m_s2: opts.engine.gravity_m_s2,
         ..opts.gains.clone()
@@ -388,23 +394,19 @@ pub fn validate_with_progress(
     };
     // The static load along the trajectory only: a blocked goal's attempt is not a motion the
     // robot makes.
-    let mut configurations = vec![trajectory.home.clone()];
-    configurations.extend(
-        samples
-            .iter()
-            .filter(|(clock, _)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned))
-            .map(|(_, q)| q.clone()),
-    );
+    let on_trajectory = |(clock, _): &(f64, Vec<f64>)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned);
+    let configurations =
+        || std::iter::once(trajectory.home.clone()).chain(crate::plan::replay_sample_iter(&replayed).filter(on_trajectory).map(|(_, q)| q));
     let gravity = opts.engine.gravity_m_s2;
     let run_mujoco = || -> Result<(Option<EngineRuns>, crate::engine::StaticLoad), crate::engine::EngineError> {
         if !opts.engines.mujoco {
-            return Ok((None, crate::engine::static_load_without_mujoco(&model, &configurations, gravity)?));
+            return Ok((None, crate::engine::static_load_without_mujoco(&model, configurations(), gravity)?));
         }
         let runs = EngineRuns {
             dynamic: crate::engine::run_mujoco(&model, &scenario, &world, timed, &gains, &opts.engine)?,
             replay: crate::engine::replay_mujoco(&model, &scenario, &world, &samples, &opts.engine)?,
         };
-        Ok((Some(runs), crate::engine::static_load(&model, &configurations, gravity)?))
+        Ok((Some(runs), crate::engine::static_load(&model, configurations(), gravity)?))
     };
     progress(&format!("running the engines ({:.1} s simulated)", timed.duration_s()));
     // The engines are independent and each deterministic: running them side by side changes

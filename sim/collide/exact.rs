@@ -230,6 +230,12 @@ fn hull_bound(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch
             return scratch.bounds[index];
         }
     };
+    // A hull of many vertices costs a scan of them all per GJK step, more than the mesh's tree
+    // descent it would spare.
+    if !a.hull_bounds || !b.hull_bounds {
+        scratch.stages[index] = Stage::Hulled;
+        return scratch.bounds[index];
+    }
     let hull_a = a.hull.as_ref().unwrap_or(&a.shape);
     let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
     let gap = measure_convex(&scratch.poses[candidate.a], &**hull_a, pose_b, &**hull_b, false).distance - HULL_SLACK_M;

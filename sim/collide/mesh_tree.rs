@@ -19,7 +19,7 @@ use super::narrow::{leaf_contact, Measured};
 use super::triangles::{segment_segment, triangle_distance};
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::query::Contact;
-use parry3d_f64::shape::{Shape, Triangle};
+use parry3d_f64::shape::{Shape, SupportMap, Triangle};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -86,6 +86,7 @@ impl SphereTree {
             let centre = pos12.inverse_transform_point(node.center);
             shape.distance_to_local_point(centre, true) - node.radius - BOUND_ROUNDING_M
         };
+        let support = shape.as_support_map();
         let mut best: Option<Contact> = None;
         let mut queue = BinaryHeap::with_capacity(32);
         queue.push(Reverse((order_key(bound(&self.nodes[0])), 0u32)));
@@ -104,7 +105,16 @@ impl SphereTree {
                     }
                 }
                 None => {
-                    for triangle in self.leaf(node) {
+                    for (triangle, &(centre, radius)) in self.leaf(node).iter().zip(&self.spheres[node.first as usize..]) {
+                        // A triangle's own sphere, then the shape's extent across the triangle's
+                        // plane, before its contact (GJK).
+                        if let Some(best) = &best {
+                            let sphere =
+                                shape.distance_to_local_point(pos12.inverse_transform_point(centre), true) - radius - BOUND_ROUNDING_M;
+                            if sphere >= best.dist || support.is_some_and(|support| plane_gap(triangle, support, &pos12) >= best.dist) {
+                                continue;
+                            }
+                        }
                         let contact = leaf_contact(&pos12, triangle, shape)?;
                         if best.is_none_or(|best| contact.dist < best.dist) {
                             best = Some(contact);
@@ -150,20 +160,22 @@ impl SphereTree {
             // Split the larger node, so both sides shrink at the same pace.
             let split_a = match (a.children, b.children) {
                 (None, None) => {
-                    let (first_a, first_b) = (a.first as usize, b.first as usize);
-                    for (ia, ta) in self.leaf(a).iter().enumerate() {
+                    // Leaf b's triangles in the frame of a, once for the whole leaf pair.
+                    let mut moved = [([Vector::ZERO; 3], Vector::ZERO, 0.0); LEAF_TRIANGLES];
+                    let leaf_b = other.leaf(b);
+                    for ((slot, tb), (centre, radius)) in moved.iter_mut().zip(leaf_b).zip(&other.spheres[b.first as usize..]) {
+                        *slot = (tb.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
+                    }
+                    for (ta, &(centre_a, radius_a)) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]) {
                         let ta_vertices = ta.vertices();
-                        let sa = self.spheres[first_a + ia];
-                        for (ib, tb) in other.leaf(b).iter().enumerate() {
-                            let sb = other.spheres[first_b + ib];
-                            if (pos12 * sb.0 - sa.0).length() - sa.1 - sb.1 - BOUND_ROUNDING_M >= best_distance {
+                        for ((tb_vertices, centre_b, radius_b), tb) in moved.iter().zip(leaf_b) {
+                            let between = centre_b - centre_a;
+                            if between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= best_distance
+                                || separation(ta_vertices, tb_vertices, between) >= best_distance
+                            {
                                 continue;
                             }
-                            let tb_vertices = tb.vertices().map(|v| pos12 * v);
-                            if separation(ta_vertices, &tb_vertices, pos12 * sb.0 - sa.0) >= best_distance {
-                                continue;
-                            }
-                            let distance = triangle_distance(ta_vertices, &tb_vertices)?;
+                            let distance = triangle_distance(ta_vertices, tb_vertices)?;
                             if distance < best_distance {
                                 best_distance = distance;
                                 nearest = Some((ta, tb));
@@ -194,6 +206,17 @@ impl SphereTree {
     fn leaf(&self, node: &Node) -> &[Triangle] {
         &self.triangles[node.first as usize..(node.first + node.count) as usize]
     }
+}
+
+/// A lower bound on the distance between a triangle and a convex shape at `pos12` (the
+/// triangle's frame): how far the shape lies beyond the triangle's plane, on either side.
+fn plane_gap(triangle: &Triangle, support: &dyn SupportMap, pos12: &Pose) -> f64 {
+    let [a, b, c] = *triangle.vertices();
+    let normal = (b - a).cross(c - a).normalize_or_zero();
+    let extreme = |direction: Vector| pos12 * support.local_support_point(pos12.rotation.inverse() * direction);
+    let above = normal.dot(extreme(-normal) - a);
+    let below = normal.dot(a - extreme(normal));
+    above.max(below) - BOUND_ROUNDING_M
 }
 
 /// A lower bound on the distance between two triangles: the gap between their projections on

@@ -332,7 +332,7 @@ impl QueryDispatcher for Polished {
 /// answer, where parry's default start, the line between the shape origins, often is not.
 fn support_map_contact(pos12: &Pose, g1: &dyn Shape, g2: &dyn Shape, prediction: Real) -> Option<Contact> {
     let (s1, s2) = (g1.as_support_map()?, g2.as_support_map()?);
-    let (b1, b2) = (BoundingCapsule::of_shape(g1), BoundingCapsule::of_shape(g2));
+    let (b1, b2) = (start_capsule(g1), start_capsule(g2));
     let in1 = |p: Vector| vector_from_parry(p);
     let (c1, c2) = closest_points_of_segments(in1(b1.start), in1(b1.end), in1(pos12 * b2.start), in1(pos12 * b2.end));
     let start = parry_vector(&(c2 - c1)).try_normalize();
@@ -345,6 +345,20 @@ fn support_map_contact(pos12: &Pose, g1: &dyn Shape, g2: &dyn Shape, prediction:
             Some(Contact::new(point1, point2, normal1, normal2, dist))
         }
         _ => None,
+    }
+}
+
+/// Where GJK starts from on a shape: its bounding capsule, but a hull's origin, whose bounding
+/// sphere walks every vertex (a finely tessellated mesh's hull has hundreds of thousands).
+fn start_capsule(shape: &dyn Shape) -> BoundingCapsule {
+    if shape.as_convex_polyhedron().is_some() {
+        BoundingCapsule {
+            start: Vector::ZERO,
+            end: Vector::ZERO,
+            radius: 0.0,
+        }
+    } else {
+        BoundingCapsule::of_shape(shape)
     }
 }
 
@@ -451,6 +465,7 @@ mod tests {
             shape: parry3d_f64::shape::SharedShape::new(Cuboid::new(Vector::new(0.1, 0.2, 0.3))),
             hull: None,
             tree: None,
+            hull_bounds: true,
             closed: false,
             probe: Vector::ZERO,
             bounding: BoundingCapsule::of_shape(&Cuboid::new(Vector::new(0.1, 0.2, 0.3))),

@@ -13,6 +13,10 @@ use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, SharedShape, TriMeshFlags};
 use std::collections::{HashMap, HashSet};
 
+/// Most vertices of a mesh hull used as a lower bound before the mesh itself (see
+/// `exact::hull_bound`); robot link hulls have a few hundred.
+pub(super) const HULL_BOUND_VERTICES: usize = 2048;
+
 /// Everything a query needs about one model in one scenario: parry shapes in f64 and the pair
 /// lists. Build it with [`world`]; it holds parry handles and is not part of any output.
 pub struct CollisionWorld {
@@ -49,6 +53,9 @@ pub(super) struct Geometry {
     pub(super) hull: Option<SharedShape>,
     /// Sphere tree over the triangles, for meshes only.
     pub(super) tree: Option<SphereTree>,
+    /// The hull (or the convex shape itself) is cheap enough to bound the mesh's distances:
+    /// at most [`HULL_BOUND_VERTICES`] vertices.
+    pub(super) hull_bounds: bool,
     /// A mesh whose every edge is shared by exactly two triangles, oriented outwards.
     pub(super) closed: bool,
     /// A point of the body in the shape frame (the middle of its axis, or a mesh vertex), for
@@ -125,6 +132,7 @@ impl Geometry {
             shape,
             hull: None,
             tree: None,
+            hull_bounds: true,
             closed: false,
         }
     }
@@ -604,6 +612,7 @@ fn mesh_geometry(owner: &str, mesh: &TriMesh) -> Result<Geometry, CollideError> 
     Ok(Geometry {
         bounding: BoundingCapsule::of(&shape),
         shape,
+        hull_bounds: hull.points().len() <= HULL_BOUND_VERTICES,
         hull: Some(SharedShape::new(hull)),
         tree: Some(tree),
         closed,

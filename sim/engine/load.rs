@@ -1,7 +1,6 @@
 //! The static load check: the gravity torque every joint must hold along a trajectory, from
 //! MuJoCo and from our own statics ([`Model::gravity_torques`]), against each joint's rating.
 
-use super::inputs::check_lengths;
 use super::mujoco_run::Loaded;
 use super::{EngineError, RunOptions};
 use crate::model::Model;
@@ -47,8 +46,11 @@ pub struct JointLoad {
 /// # Errors
 /// [`EngineError::Export`], [`EngineError::MujocoLoad`], [`EngineError::Version`], and
 /// [`EngineError::ConfigurationLength`] for a sample of the wrong length.
-pub fn static_load(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Result<StaticLoad, EngineError> {
-    check_lengths(model, "sample", samples.iter().map(Vec::len))?;
+pub fn static_load<Q: AsRef<[f64]>>(
+    model: &Model,
+    samples: impl IntoIterator<Item = Q>,
+    gravity_m_s2: f64,
+) -> Result<StaticLoad, EngineError> {
     let opts = RunOptions {
         gravity_m_s2,
         ..RunOptions::default()
@@ -57,7 +59,9 @@ pub fn static_load(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Re
     let mut data = loaded.model.make_data();
     let mut joints = unloaded(model);
     let mut max_relative_disagreement = 0.0_f64;
-    for (index, q) in samples.iter().enumerate() {
+    for (index, q) in samples.into_iter().enumerate() {
+        let q = q.as_ref();
+        check_length(model, index, q)?;
         loaded.set_configuration(&mut data, q);
         data.qvel_mut().fill(0.0);
         data.forward();
@@ -91,11 +95,17 @@ pub fn static_load(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Re
 ///
 /// # Errors
 /// [`EngineError::ConfigurationLength`] for a sample of the wrong length.
-pub fn static_load_without_mujoco(model: &Model, samples: &[Vec<f64>], gravity_m_s2: f64) -> Result<StaticLoad, EngineError> {
-    check_lengths(model, "sample", samples.iter().map(Vec::len))?;
+pub fn static_load_without_mujoco<Q: AsRef<[f64]>>(
+    model: &Model,
+    samples: impl IntoIterator<Item = Q>,
+    gravity_m_s2: f64,
+) -> Result<StaticLoad, EngineError> {
     let mut joints = unloaded(model);
-    for (index, q) in samples.iter().enumerate() {
-        for (load, torque) in joints.iter_mut().zip(model.gravity_torques(q, gravity_m_s2)) {
+    let mut ws = model.workspace();
+    for (index, q) in samples.into_iter().enumerate() {
+        let q = q.as_ref();
+        check_length(model, index, q)?;
+        for (load, torque) in joints.iter_mut().zip(model.gravity_torques_in(&mut ws, q, gravity_m_s2)) {
             if torque.abs() > load.peak_torque {
                 load.peak_torque = torque.abs();
                 load.sample = index;
@@ -109,6 +119,20 @@ pub fn static_load_without_mujoco(model: &Model, samples: &[Vec<f64>], gravity_m
         gravity_m_s2,
         joints,
         max_relative_disagreement: None,
+    })
+}
+
+/// [`EngineError::ConfigurationLength`] for sample `index` of the wrong length.
+fn check_length(model: &Model, index: usize, q: &[f64]) -> Result<(), EngineError> {
+    if q.len() == model.dof() {
+        return Ok(());
+    }
+    Err(EngineError::ConfigurationLength {
+        robot: model.name.clone(),
+        context: "sample",
+        index,
+        found: q.len(),
+        expected: model.dof(),
     })
 }
 

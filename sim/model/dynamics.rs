@@ -15,7 +15,7 @@
 //! (revolute), `M_jj = sum_{k > j} m_k` (prismatic). Rotor inertia (armature) is not modelled,
 //! as in the MJCF export.
 
-use super::{JointKind, Model};
+use super::{JointKind, KinematicsWorkspace, Model};
 use nalgebra::{Matrix3, Vector3};
 
 /// World position of a joint's axis point, its world unit axis, and whether it is prismatic.
@@ -34,9 +34,8 @@ struct BodyInWorld {
 
 impl Model {
     /// World joint axes and link mass properties at `q`.
-    fn bodies_in_world(&self, q: &[f64]) -> (Vec<JointInWorld>, Vec<BodyInWorld>) {
-        let mut ws = self.workspace();
-        self.forward(q, &mut ws);
+    fn bodies_in_world(&self, q: &[f64], ws: &mut KinematicsWorkspace) -> (Vec<JointInWorld>, Vec<BodyInWorld>) {
+        self.forward(q, ws);
         let joints = self
             .joints
             .iter()
@@ -84,7 +83,16 @@ impl Model {
     /// # Panics
     /// When `q.len()` differs from [`Model::dof`].
     pub fn gravity_torques(&self, q: &[f64], gravity_m_s2: f64) -> Vec<f64> {
-        let (joints, bodies) = self.bodies_in_world(q);
+        self.gravity_torques_in(&mut self.workspace(), q, gravity_m_s2)
+    }
+
+    /// [`Model::gravity_torques`] in a workspace kept across calls (a workspace costs more to
+    /// make than the torques, and a trajectory's static load asks at every sample).
+    ///
+    /// # Panics
+    /// When `q.len()` differs from [`Model::dof`] or `ws` is not this model's.
+    pub fn gravity_torques_in(&self, ws: &mut KinematicsWorkspace, q: &[f64], gravity_m_s2: f64) -> Vec<f64> {
+        let (joints, bodies) = self.bodies_in_world(q, ws);
         let up = Vector3::z();
         // Sweep from the tip: the mass and first mass moment of everything beyond joint j
         // accumulate, so each joint costs O(1).
@@ -114,7 +122,7 @@ impl Model {
     /// # Panics
     /// When `q.len()` differs from [`Model::dof`].
     pub fn reflected_inertia(&self, q: &[f64]) -> Vec<f64> {
-        let (joints, bodies) = self.bodies_in_world(q);
+        let (joints, bodies) = self.bodies_in_world(q, &mut self.workspace());
         // Composite body beyond joint j, about the world origin: mass, first moment, and the
         // second moment sum (I_k + m_k (|c_k|^2 1 - c_k c_k^T)).
         let mut mass_beyond = 0.0;

@@ -15,7 +15,7 @@ mod trajectory;
 pub use certify::{CertifyOptions, MotionBounds, SegmentCheck, SegmentChecker, SegmentPoint, MAX_STEPS, TOUCH_TOLERANCE_M};
 
 pub use planner::{distance, polyline_length, Failure, Path, Planner, PlannerKind, PlannerOptions, Straight, DEFAULT_PLAN_BUDGET};
-pub use replay::{replay_samples, replay_segments, ReplaySegment, REPLAY_STEP};
+pub use replay::{replay_sample_iter, replay_samples, replay_segments, ReplaySegment, REPLAY_STEP};
 pub use rrt::{RrtConnect, ROOM_M, STEP};
 pub use timing::{
     Hold, TimedPath, TimedSegment, TimingLimits, DEFAULT_ACCELERATION_PER_VELOCITY, DEFAULT_DWELL_S, DEFAULT_VELOCITY_M_S,

@@ -72,15 +72,28 @@ pub fn replay_segments(trajectory: &Trajectory) -> Vec<ReplaySegment> {
 /// Samples `(replay clock, configuration)` of `segments`; both ends of every segment included
 /// (the end at `k + 1 - 1e-9`, so it still maps to segment `k`).
 pub fn replay_samples(segments: &[ReplaySegment]) -> Vec<(f64, Vec<f64>)> {
-    let mut samples = Vec::new();
-    for (k, segment) in segments.iter().enumerate() {
-        let largest = segment.from.iter().zip(&segment.to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
-        let count = ((largest / REPLAY_STEP).ceil() as usize).max(1);
-        for i in 0..=count {
+    // Sized once: tens of thousands of goals make millions of samples, and a doubling vector
+    // would hold up to twice that.
+    let mut samples = Vec::with_capacity(segments.iter().map(|segment| steps(segment) + 1).sum());
+    samples.extend(replay_sample_iter(segments));
+    samples
+}
+
+/// [`replay_samples`] one at a time, for a pass that need not hold them all (the static load
+/// of a run without engines).
+pub fn replay_sample_iter(segments: &[ReplaySegment]) -> impl Iterator<Item = (f64, Vec<f64>)> + '_ {
+    segments.iter().enumerate().flat_map(|(k, segment)| {
+        let count = steps(segment);
+        (0..=count).map(move |i| {
             let s = i as f64 / count as f64;
             let q = segment.from.iter().zip(&segment.to).map(|(a, b)| a + s * (b - a)).collect();
-            samples.push((k as f64 + s.min(1.0 - 1e-9), q));
-        }
-    }
-    samples
+            (k as f64 + s.min(1.0 - 1e-9), q)
+        })
+    })
+}
+
+/// Steps of [`REPLAY_STEP`] that sample a segment (at least one).
+fn steps(segment: &ReplaySegment) -> usize {
+    let largest = segment.from.iter().zip(&segment.to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
+    ((largest / REPLAY_STEP).ceil() as usize).max(1)
 }

@@ -433,11 +433,7 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                 name: goal.name.clone(),
                 tolerance: goal.tolerance,
                 outcome,
-                proven: if outcome == "unreachable" {
-                    validation.proof(index)
-                } else {
-                    None
-                },
+                proven: if outcome == "unreachable" { validation.proof(index) } else { None },
                 reached: ik_reached,
                 solutions_found: found.iter().filter(|s| s.pose_reached).count(),
                 solutions_complete: validation.solutions.get(index).is_some_and(|g| g.complete),
