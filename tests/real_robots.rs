@@ -292,3 +292,38 @@ fn mjcf_tip_on_the_command_line() {
         "{stdout}"
     );
 }
+
+#[test]
+fn an_explicit_tip_keeps_the_old_chain_rules() {
+    // A finger as the tip: its joint is on the chain like any other (8 joints), nothing chosen.
+    let model = from_urdf(
+        &panda_urdf(),
+        &UrdfOptions {
+            tip_link: Some("panda_leftfinger".into()),
+            ..UrdfOptions::default()
+        },
+    )
+    .expect("loads");
+    assert_eq!(model.dof(), 8);
+    assert!(tip_and_choices(&model.source).1.is_empty());
+    // The mimic finger on the chain is refused, as before.
+    let error = from_urdf(
+        &panda_urdf(),
+        &UrdfOptions {
+            tip_link: Some("panda_rightfinger".into()),
+            ..UrdfOptions::default()
+        },
+    )
+    .expect_err("mimic on the chain");
+    assert!(error.to_string().contains("joint `panda_finger_joint2`") && error.to_string().contains("is a mimic joint"));
+    // MJCF chains that tie name both ends and ask for --tip.
+    let error = proving_ground::model::from_mjcf(&repo().join("tests/fixtures/mjcf/branching_chain.xml"))
+        .expect_err("tie")
+        .to_string();
+    assert!(
+        error.contains("branch at body `base`")
+            && error.contains("`left_arm`, `right_arm`")
+            && error.contains("choose the chain's end with --tip"),
+        "{error}"
+    );
+}
