@@ -109,7 +109,7 @@ fn bits(pieces: &[ConvexPiece]) -> Vec<(Vec<u64>, Vec<[u32; 3]>)> {
 }
 
 #[test]
-fn pieces_contain_every_vertex_and_hug_the_panda_surface() {
+fn pieces_contain_every_vertex_and_stay_near_the_surface() {
     for (robot, model) in [("ur5", ur5()), ("panda", panda())] {
         for (name, mesh) in meshes(&model) {
             let pieces = convex::decompose(&mesh.vertices, &mesh.triangles).expect("decomposes");
@@ -117,12 +117,11 @@ fn pieces_contain_every_vertex_and_hug_the_panda_surface() {
             // hold every vertex (to rounding).
             let uncovered = uncovered(&mesh.vertices, &pieces);
             assert!(uncovered < 1e-9, "{robot} {name}: a vertex {uncovered} m outside every piece");
-            // The Panda's meshes are closed: a piece's surface is at most 0.5 mm outside the
-            // mesh (measured 0.2 mm), so the pieces do not fill the mesh's concavities.
-            if robot == "panda" {
-                let over = overshoot(&mesh.vertices, &mesh.triangles, &pieces);
-                assert!(over < 5e-4, "{robot} {name}: a piece reaches {over} m off the surface");
-            }
+            // How far the pieces fill the mesh's concavities (sampled on the pieces' faces):
+            // measured 0.2 mm on the Panda, 12 mm on the UR5 (resolution 64).
+            let bound = if robot == "panda" { 5e-4 } else { 15e-3 };
+            let over = overshoot(&mesh.vertices, &mesh.triangles, &pieces);
+            assert!(over < bound, "{robot} {name}: a piece reaches {over} m off the surface");
         }
     }
 }
@@ -241,5 +240,25 @@ fn measure_parameters() {
                 mesh.triangles.len()
             );
         }
+    }
+}
+
+#[test]
+#[ignore = "measurement: cargo test --release --test convex measure_cache -- --ignored --nocapture"]
+fn measure_cache_cold_and_warm() {
+    for (robot, model) in [("ur5", ur5()), ("panda", panda())] {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let all = meshes(&model);
+        let run = || {
+            let start = Instant::now();
+            for (_, mesh) in &all {
+                convex::pieces_with_cache(&mesh.vertices, &mesh.triangles, Some(dir.path()));
+            }
+            start.elapsed().as_secs_f64()
+        };
+        let cold = run();
+        convex::forget_in_memory();
+        let warm = run();
+        println!("{robot}: {} meshes, cold {cold:.2} s, warm (disk) {:.1} ms", all.len(), warm * 1e3);
     }
 }

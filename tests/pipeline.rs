@@ -48,6 +48,45 @@ fn the_paper_robot_passes_the_course_in_both_engines_with_no_contacts_and_every_
 
 #[test]
 fn a_path_through_an_obstacle_is_caught_by_all_three_checkers_at_the_same_segment() {
+    // The ball, and a cube mesh in its place: the engines collide the mesh as its convex pieces,
+    // and name the contact after the obstacle.
+    through_an_obstacle(Shape::Sphere { radius: 0.05 });
+    through_an_obstacle(Shape::Mesh(cube_mesh(0.05)));
+}
+
+/// A closed cube mesh of half side `half` (m), centred on its frame.
+fn cube_mesh(half: f64) -> proving_ground::model::TriMesh {
+    let vertices: Vec<[f64; 3]> = (0..8)
+        .map(|i| {
+            let sign = |bit: u32| if i & (1 << bit) == 0 { -half } else { half };
+            [sign(0), sign(1), sign(2)]
+        })
+        .collect();
+    // Two outward triangles per face.
+    let triangles = vec![
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+    ];
+    proving_ground::model::TriMesh {
+        uri: "cube.stl".into(),
+        file: std::path::PathBuf::from("cube.stl"),
+        scale: [1.0; 3],
+        vertices,
+        triangles,
+    }
+}
+
+fn through_an_obstacle(shape: Shape) {
     // One joint turning a 0.6 m arm (0.3 m up) from 0 to the goal at +90 degrees (its other turn,
     // -270, is beyond the -3 rad limit), and a ball in the way at 45 degrees.
     let text = r#"{"name": "swing", "mode": "free", "joints": [{"d": 0.3, "a": 0.6, "alpha": 0, "limits": [-3, 3]}]}"#;
@@ -59,7 +98,7 @@ fn a_path_through_an_obstacle_is_caught_by_all_three_checkers_at_the_same_segmen
     let ball = Obstacle {
         name: "ball".into(),
         world_from_shape: Isometry3::translation(0.4 * FRAC_PI_4.cos(), 0.4 * FRAC_PI_4.sin(), 0.3),
-        shape: Shape::Sphere { radius: 0.05 },
+        shape,
     };
     let goal = Goal {
         name: "left".into(),
@@ -76,7 +115,16 @@ fn a_path_through_an_obstacle_is_caught_by_all_three_checkers_at_the_same_segmen
         home: None,
         provenance: None,
     };
-    let validation = validate(loaded, scenario, &ValidateOptions::default()).expect("runs");
+    // The goal's other way round is beyond the joint limit: no budget finds a path, and a small
+    // one keeps the exact checks of the mesh variant (slower than the ball's) short.
+    let opts = ValidateOptions {
+        planner: proving_ground::plan::PlannerOptions {
+            budget: 1000,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let validation = validate(loaded, scenario, &opts).expect("runs");
     let report = report::build(&validation);
     assert!(!report.verdict.passed);
     // The other way round (-270 degrees) is beyond the limit: no planner finds a path.
