@@ -59,6 +59,7 @@ pub mod limits;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
+pub mod progress;
 pub mod report;
 pub mod scenario;
 pub mod srdf;

@@ -265,6 +265,32 @@ impl From<ToleranceArg> for Tolerance {
     }
 }
 
+/// The run's progress on stderr: a spinner for a stage that cannot be counted, else the goals
+/// done of all, the time taken and an estimate of the time left.
+struct StageBar(indicatif::ProgressBar);
+
+impl proving_ground::progress::Progress for StageBar {
+    fn stage(&self, name: &str, total: Option<u64>) {
+        let style = match total {
+            Some(total) => {
+                self.0.set_length(total);
+                self.0.set_position(0);
+                self.0.reset_eta();
+                indicatif::ProgressStyle::with_template("{spinner} {msg}: {pos}/{len} goals, {elapsed} (about {eta} left)")
+            }
+            None => indicatif::ProgressStyle::with_template("{spinner} {msg}"),
+        };
+        if let Ok(style) = style {
+            self.0.set_style(style);
+        }
+        self.0.set_message(name.to_string());
+    }
+
+    fn advance(&self) {
+        self.0.inc(1);
+    }
+}
+
 fn main() -> ExitCode {
     // A file-size limit (`ulimit -f`) then fails the write with an error, which leaves the old
     // file intact and removes the temporary, instead of killing the process mid-write.
@@ -423,15 +449,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         },
         ..Default::default()
     };
-    // A spinner on stderr; indicatif draws nothing when stderr is not a terminal.
-    let spinner = if cli.quiet {
+    // On stderr; indicatif draws nothing when stderr is not a terminal.
+    let bar = StageBar(if cli.quiet {
         indicatif::ProgressBar::hidden()
     } else {
         indicatif::ProgressBar::new_spinner()
-    };
-    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let validation = pipeline::validate_with_progress(loaded, scenario, &opts, &|stage| spinner.set_message(stage.to_string()));
-    spinner.finish_and_clear();
+    });
+    bar.0.enable_steady_tick(std::time::Duration::from_millis(120));
+    let validation = pipeline::validate_with_progress(loaded, scenario, &opts, &bar);
+    bar.0.finish_and_clear();
     let mut validation = validation?;
     validation.kinematics_check = kinematics_check;
     let report = report::build(&validation);

@@ -247,10 +247,11 @@ pub use crate::report::{EngineRuns, Validation};
 /// # Errors
 /// As [`validate_with_progress`].
 pub fn validate(loaded: Loaded, scenario: crate::scenario::Scenario, opts: &ValidateOptions) -> Result<Validation, Error> {
-    validate_with_progress(loaded, scenario, opts, &|_| {})
+    validate_with_progress(loaded, scenario, opts, &crate::progress::Silent)
 }
 
-/// [`validate`], telling `progress` which stage starts (a short phrase, e.g. for a spinner).
+/// [`validate`], telling `progress` which stage starts (a short phrase, e.g. for a spinner) and,
+/// while IK solves and the planner joins the goals, each goal done.
 ///
 /// # Errors
 /// As [`validate`].
@@ -258,9 +259,9 @@ pub fn validate_with_progress(
     loaded: Loaded,
     scenario: crate::scenario::Scenario,
     opts: &ValidateOptions,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn crate::progress::Progress,
 ) -> Result<Validation, Error> {
-    progress("building the collision world");
+    progress.stage("building the collision world", None);
     // Contacts and findings name bodies: an obstacle may not share a robot link's name.
     if let Some((index, obstacle)) = scenario
         .obstacles
@@ -278,12 +279,12 @@ pub fn validate_with_progress(
     let input_warnings: Vec<String> = loaded.model.diagnostics.iter().map(ToString::to_string).collect();
     let model = loaded.model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &opts.excluded_pairs)?;
-    progress(&format!("solving IK for {} goals", scenario.goals.len()));
+    progress.stage("solving IK", Some(scenario.goals.len() as u64));
     let ik = crate::ik::IkOptions {
         clearance_m: opts.certify.threshold_m,
         ..opts.ik.clone()
     };
-    let solutions = crate::ik::solve_goals(&model, &scenario, Some(&world), &ik);
+    let solutions = crate::ik::solve_goals_counted(&model, &scenario, Some(&world), &ik, &|| progress.advance());
     let proofs: Vec<Option<String>> = scenario
         .goals
         .iter()
@@ -338,7 +339,10 @@ pub fn validate_with_progress(
             settings,
         });
     }
-    progress("planning the trajectory (certified continuous check)");
+    progress.stage(
+        "planning the trajectory (certified continuous check)",
+        Some(scenario.goals.len() as u64),
+    );
     let trajectory_options = crate::plan::TrajectoryOptions {
         certify: opts.certify,
         ik,
@@ -348,7 +352,7 @@ pub fn validate_with_progress(
             ..opts.planner
         },
     };
-    let trajectory = crate::plan::plan(&model, &scenario, &world, &solutions, &trajectory_options)?;
+    let trajectory = crate::plan::plan_counted(&model, &scenario, &world, &solutions, &trajectory_options, &|| progress.advance())?;
     let replayed = crate::plan::replay_segments(&trajectory);
     let loss_terms = scenario
         .goals
@@ -408,7 +412,7 @@ pub fn validate_with_progress(
         };
         Ok((Some(runs), crate::engine::static_load(&model, configurations(), gravity)?))
     };
-    progress(&format!("running the engines ({:.1} s simulated)", timed.duration_s()));
+    progress.stage(&format!("running the engines ({:.1} s simulated)", timed.duration_s()), None);
     // The engines are independent and each deterministic: running them side by side changes
     // no number.
     let (rapier, mujoco) = rayon::join(run_rapier, run_mujoco);

@@ -509,6 +509,18 @@ fn rank(error: &GoalError) -> f64 {
 /// own seeded random starts. With a collision world, solutions are checked and refined with
 /// exact geometry.
 pub fn solve_goals(model: &Model, scenario: &Scenario, world: Option<&CollisionWorld>, opts: &IkOptions) -> Vec<GoalSolutions> {
+    solve_goals_counted(model, scenario, world, opts, &|| {})
+}
+
+/// [`solve_goals`], calling `done` after each goal (from the thread that solved it), for a
+/// progress count.
+pub fn solve_goals_counted(
+    model: &Model,
+    scenario: &Scenario,
+    world: Option<&CollisionWorld>,
+    opts: &IkOptions,
+    done: &(dyn Fn() + Sync),
+) -> Vec<GoalSolutions> {
     use rayon::prelude::*;
     // Each goal's starts are seeded by its index alone, so goals solve independently, on any
     // number of threads, with the same result.
@@ -520,6 +532,10 @@ pub fn solve_goals(model: &Model, scenario: &Scenario, world: Option<&CollisionW
         .goals
         .par_iter()
         .enumerate()
-        .map_init(make, |ik, (index, goal)| ik.solve(goal, index, None))
+        .map_init(make, |ik, (index, goal)| {
+            let found = ik.solve(goal, index, None);
+            done();
+            found
+        })
         .collect()
 }

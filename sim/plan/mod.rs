@@ -22,6 +22,6 @@ pub use timing::{
     DEFAULT_VELOCITY_RAD_S,
 };
 pub use trajectory::{
-    default_home, home_configuration, home_for, nearest_equivalent, plan, whole_turn_equivalents, Attempt, GoalStep, PlanError, Trajectory,
-    TrajectoryOptions,
+    default_home, home_configuration, home_for, nearest_equivalent, plan, plan_counted, whole_turn_equivalents, Attempt, GoalStep,
+    PlanError, Trajectory, TrajectoryOptions,
 };

@@ -378,6 +378,21 @@ pub fn plan(
     solutions: &[GoalSolutions],
     opts: &TrajectoryOptions,
 ) -> Result<Trajectory, PlanError> {
+    plan_counted(model, scenario, world, solutions, opts, &|| {})
+}
+
+/// [`plan`], calling `done` after each goal is joined (or given up), for a progress count.
+///
+/// # Errors
+/// As [`plan`].
+pub fn plan_counted(
+    model: &Model,
+    scenario: &Scenario,
+    world: &CollisionWorld,
+    solutions: &[GoalSolutions],
+    opts: &TrajectoryOptions,
+    done: &dyn Fn(),
+) -> Result<Trajectory, PlanError> {
     let (mut home, replaced) = home_for(model, scenario);
     let mut home_replaced = replaced.map(|reason| reason.to_string());
     let mut checker = SegmentChecker::new(model, world, opts.certify);
@@ -435,6 +450,7 @@ pub fn plan(
             PlannerKind::Straight => straight_step(&mut ik, &mut checker, model, goal, index, given, &previous, stream),
             PlannerKind::RrtConnect => sampled_step(&mut ik, &mut checker, &mut rrt, model, goal, index, given, &previous, stream, opts),
         };
+        done();
         let mut step = step;
         if let GoalStep::Reached { q, clearance, .. } = &mut step {
             *clearance = checker.clearance(q);

@@ -1,0 +1,27 @@
+//! Progress of a long validation: which stage runs and, where it can be counted, how far it is,
+//! so a run of ten thousand goals shows counts and an estimate of the time left, not a spinner.
+
+/// Receives the stages of a validation and the items done in each.
+pub trait Progress: Sync {
+    /// A stage starts: a short phrase, and its number of items when they can be counted.
+    fn stage(&self, name: &str, total: Option<u64>);
+    /// One more item of the current stage is done; called from any thread.
+    fn advance(&self);
+}
+
+/// Shows nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Progress for Silent {
+    fn stage(&self, _name: &str, _total: Option<u64>) {}
+    fn advance(&self) {}
+}
+
+/// A stage name alone is enough for a caller that shows a spinner.
+impl<F: Fn(&str) + Sync> Progress for F {
+    fn stage(&self, name: &str, _total: Option<u64>) {
+        self(name);
+    }
+    fn advance(&self) {}
+}
