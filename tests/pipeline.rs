@@ -313,3 +313,104 @@ fn a_mesh_notch_stays_open_in_both_engines() {
     assert_eq!(report.goals[0].held_by, ["rapier", "mujoco"]);
     assert!(report.verdict.passed, "{:?}", report.verdict);
 }
+
+/// A closed prism of `sides` sides around z standing in for a cylinder (centred, like ours).
+fn prism_mesh(radius: f64, length: f64, sides: u32) -> proving_ground::model::TriMesh {
+    let mut vertices = Vec::new();
+    for z in [-length / 2.0, length / 2.0] {
+        for k in 0..sides {
+            let angle = std::f64::consts::TAU * f64::from(k) / f64::from(sides);
+            vertices.push([radius * angle.cos(), radius * angle.sin(), z]);
+        }
+    }
+    let mut triangles = Vec::new();
+    for k in 1..sides - 1 {
+        triangles.push([0, k + 1, k]); // bottom, facing -z
+        triangles.push([sides, sides + k, sides + k + 1]); // top, facing +z
+    }
+    for k in 0..sides {
+        let next = (k + 1) % sides;
+        triangles.push([k, next, sides + next]);
+        triangles.push([k, sides + next, sides + k]);
+    }
+    proving_ground::model::TriMesh {
+        uri: "prism.stl".into(),
+        file: std::path::PathBuf::from("prism.stl"),
+        scale: [1.0; 3],
+        vertices,
+        triangles,
+    }
+}
+
+#[test]
+fn a_link_mesh_in_contact_is_named_after_its_link_in_both_engines() {
+    // The swinging arm of the ball test with its link's cylinders made prism meshes: the engines
+    // collide the meshes' convex pieces (MuJoCo geoms `link1/<k>/<p>`), and report the pair by
+    // the link's name at the angle exact geometry has.
+    let text = r#"{"name": "swing", "mode": "free", "joints": [{"d": 0.3, "a": 0.6, "alpha": 0, "limits": [-3, 3]}]}"#;
+    let design = proving_ground::design::parse(text, std::path::Path::new("swing.json")).expect("valid design");
+    let mut model = proving_ground::model::from_design(&design);
+    let mut meshes = 0;
+    for collider in &mut model.links[1].colliders {
+        if let Shape::Cylinder { radius, length } = collider.shape {
+            collider.shape = Shape::Mesh(prism_mesh(radius, length, 24));
+            meshes += 1;
+        }
+    }
+    assert!(meshes > 0, "the arm has cylinders: {:?}", model.links[1].colliders);
+    let scenario = Scenario {
+        name: "swing-past-a-ball".into(),
+        world_from_base: Isometry3::identity(),
+        floor: None,
+        obstacles: vec![Obstacle {
+            name: "ball".into(),
+            world_from_shape: Isometry3::translation(0.4 * FRAC_PI_4.cos(), 0.4 * FRAC_PI_4.sin(), 0.3),
+            shape: Shape::Sphere { radius: 0.05 },
+        }],
+        goals: Vec::new(),
+        home: None,
+        provenance: None,
+    };
+    let world = proving_ground::pipeline::collision_world(&model, &scenario, &[]).expect("world");
+    // Exact geometry: the first sampled angle where link1 meets the ball.
+    let samples: Vec<(f64, Vec<f64>)> = (0..=300).map(|k| (f64::from(k) * 0.005, vec![f64::from(k) * 0.005])).collect();
+    let mut ws = model.workspace();
+    let mut out = proving_ground::collide::Distances::new();
+    let query = proving_ground::collide::QueryOptions {
+        margin: 1.0,
+        hulls: false,
+        exact_depth: true,
+    };
+    let first_touch = samples
+        .iter()
+        .find(|(_, q)| {
+            model.forward(q, &mut ws);
+            proving_ground::collide::distances(&world, &ws.link_in_world, &query, &mut out);
+            world
+                .pairs()
+                .iter()
+                .zip(&out.estimates)
+                .any(|(pair, e)| pair.a_name == "link1" && pair.b_name == "ball" && e.distance < 0.0)
+        })
+        .map(|(t, _)| *t)
+        .expect("exact geometry has the contact");
+    let opts = proving_ground::engine::RunOptions::default();
+    let runs = [
+        proving_ground::engine::replay_rapier(&model, &scenario, &world, &samples, &opts).expect("rapier replays"),
+        proving_ground::engine::replay_mujoco(&model, &scenario, &world, &samples, &opts).expect("MuJoCo replays"),
+    ];
+    for run in runs {
+        assert!(!run.contacts.is_empty(), "{}", run.engine);
+        for contact in &run.contacts {
+            assert_eq!(
+                (contact.a.as_str(), contact.b.as_str()),
+                ("link1", "ball"),
+                "{}: {contact:?}",
+                run.engine
+            );
+        }
+        // Within two samples (0.01 rad) of exact geometry: the pieces hug the prism.
+        let start = run.contacts.iter().map(|c| c.start_s).fold(f64::INFINITY, f64::min);
+        assert!((start - first_touch).abs() <= 0.0101, "{}: {start} vs {first_touch}", run.engine);
+    }
+}
