@@ -43,8 +43,9 @@
 //!   the two shapes until the supporting planes across it certify the distance to 1e-10 m. EPA's
 //!   depth of two overlapping cylinders is within 3e-10 m of the closed form, but it is slow
 //!   (about 13 us per pair);
-//! - a mesh against anything: the gap by a best-first descent of the mesh's BVH, then the
-//!   nearest (or, for an overlap, deepest) triangle's contact, each triangle measured as above.
+//! - a mesh against anything: the gap by a best-first descent of the mesh's sphere-and-capsule
+//!   tree (both trees for two meshes, see `mesh_tree`), then the nearest triangle's contact
+//!   measured as above; an overlap by parry's descent of its BVH, the deepest triangle's contact.
 //!   The depth of an overlap is measured to the nearest triangle. A mesh is a surface, so a body
 //!   wholly inside a closed mesh touches no triangle: when a mesh is closed (every edge shared by
 //!   exactly two triangles), a point of the other body is also tested for containment (parry's
