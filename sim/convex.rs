@@ -29,8 +29,12 @@ pub const FORMAT_VERSION: u32 = 1;
 pub const RESOLUTION: u32 = 64;
 /// Largest concavity VHACD leaves in a piece (fraction of the mesh's size).
 pub const CONCAVITY: f64 = 0.01;
-/// At most this many pieces per mesh: each is one more convex shape per contact test.
+/// VHACD's `max_convex_hulls`, a target it can overshoot by a few (5 to 10 pieces per Panda and
+/// UR5 link): each piece is one more convex shape per contact test.
 pub const MAX_PIECES: u32 = 16;
+/// The decomposing library, part of the key: another version may cut a mesh differently, and a
+/// cached decomposition must be the one this build would compute.
+const DECOMPOSER: &str = "parry3d-f64 0.31 VHACD, exact hulls";
 
 const MAGIC: &[u8; 8] = b"PGCONVEX";
 /// Larger cache files are not read (a real mesh's pieces are well below a megabyte).
@@ -84,11 +88,13 @@ pub fn cache_dir() -> PathBuf {
     base.join("proving-ground").join("convex")
 }
 
-/// The cache key of a mesh: hex SHA-256 of the format version, the parameters and the mesh.
+/// The cache key of a mesh: hex SHA-256 of the format version, the decomposer, the parameters
+/// and the mesh.
 pub fn key(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> String {
     let mut hash = Sha256::new();
     hash.update(MAGIC);
     hash.update(FORMAT_VERSION.to_le_bytes());
+    hash.update(DECOMPOSER.as_bytes());
     let p = parameters();
     hash.update(format!("{p:?}").as_bytes());
     hash.update((vertices.len() as u64).to_le_bytes());
