@@ -258,7 +258,7 @@ fn record(scratch: &mut super::Scratch, index: usize, pair: usize, measured: Mea
 }
 
 /// A key whose unsigned order is the total order of `value`.
-fn order_key(value: f64) -> u64 {
+pub(super) fn order_key(value: f64) -> u64 {
     let bits = value.to_bits();
     if bits >> 63 == 1 {
         !bits

@@ -15,6 +15,7 @@
 //! Only separated pairs are answered here: when a measured triangle touches or overlaps the
 //! other shape, the caller falls back to parry's descent, which gives the deepest triangle.
 
+use super::exact::order_key;
 use super::narrow::{leaf_contact, Measured};
 use super::triangles::{segment_segment, triangle_distance};
 use parry3d_f64::math::{Pose, Vector};
@@ -326,15 +327,6 @@ fn segment_point_distance([a, b]: [Vector; 2], p: Vector) -> f64 {
     (a + ab * t - p).length()
 }
 
-/// A key whose unsigned order is the total order of `value`.
-fn order_key(value: f64) -> u64 {
-    let bits = value.to_bits();
-    if bits >> 63 == 1 {
-        !bits
-    } else {
-        bits | 1 << 63
-    }
-}
 
 #[cfg(test)]
 mod tests {
