@@ -343,7 +343,7 @@ fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
 fn approximation(engine: &str) -> &'static str {
     match engine {
         "mujoco" => "MuJoCo collides meshes as convex pieces (up to about 12 mm beyond a UR5 link's surface) and cylinders through its general convex solver",
-        "rapier" => "rapier collides in f32, with up to centimetres of phantom depth on cylinders, and meshes as convex pieces",
+        "rapier" => "rapier collides in f32, with up to centimetres of phantom depth on cylinders",
         _ => "the engine's geometric approximation",
     }
 }
