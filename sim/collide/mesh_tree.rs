@@ -327,7 +327,6 @@ fn segment_point_distance([a, b]: [Vector; 2], p: Vector) -> f64 {
     (a + ab * t - p).length()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
