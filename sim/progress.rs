@@ -17,11 +17,3 @@ impl Progress for Silent {
     fn stage(&self, _name: &str, _total: Option<u64>) {}
     fn advance(&self) {}
 }
-
-/// A stage name alone is enough for a caller that shows a spinner.
-impl<F: Fn(&str) + Sync> Progress for F {
-    fn stage(&self, name: &str, _total: Option<u64>) {
-        self(name);
-    }
-    fn advance(&self) {}
-}

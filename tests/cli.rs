@@ -175,58 +175,33 @@ fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
 fn srdf_errors_name_the_file_and_line() {
     let dir = tempfile::tempdir().expect("temp dir");
     let srdf = dir.path().join("typo.srdf");
-    std::fs::write(
-        &srdf,
+    // Writes the SRDF, runs `--describe` with it, expects exit 2 and returns stderr.
+    let refused = |robot: &std::path::Path, text: &str| {
+        std::fs::write(&srdf, text).expect("write");
+        let output = validate_design()
+            .arg(robot)
+            .arg("--srdf")
+            .arg(&srdf)
+            .arg("--describe")
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        stderr
+    };
+    let stderr = refused(
+        &panda_urdf(),
         "<robot name=\"panda\">\n  <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\" reason=\"Adjacent\"/>\n</robot>\n",
-    )
-    .expect("write");
-    let output = validate_design()
-        .arg(panda_urdf())
-        .arg("--srdf")
-        .arg(&srdf)
-        .arg("--describe")
-        .output()
-        .expect("runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    );
     assert!(
         stderr.contains("typo.srdf: <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\"> (line 2): no link named `panda_lnk1`"),
         "{stderr}"
     );
-
-    std::fs::write(&srdf, "<robot><disable_collisions link1=\"panda_link0\"/></robot>").expect("write");
-    let output = validate_design()
-        .arg(panda_urdf())
-        .arg("--srdf")
-        .arg(&srdf)
-        .arg("--describe")
-        .output()
-        .expect("runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = refused(&panda_urdf(), "<robot><disable_collisions link1=\"panda_link0\"/></robot>");
     assert!(stderr.contains("<disable_collisions> (line 1): has no link2 attribute"), "{stderr}");
-
-    std::fs::write(&srdf, "<robot><unclosed></robot>").expect("write");
-    let output = validate_design()
-        .arg(panda_urdf())
-        .arg("--srdf")
-        .arg(&srdf)
-        .arg("--describe")
-        .output()
-        .expect("runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = refused(&panda_urdf(), "<robot><unclosed></robot>");
     assert!(stderr.contains("typo.srdf: the XML:"), "{stderr}");
-
-    let output = validate_design()
-        .arg("designs/ur5e.json")
-        .arg("--srdf")
-        .arg(&srdf)
-        .arg("--describe")
-        .output()
-        .expect("runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = refused(std::path::Path::new("designs/ur5e.json"), "<robot><unclosed></robot>");
     assert!(stderr.contains("--srdf: is for URDF input"), "{stderr}");
 }
 

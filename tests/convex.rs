@@ -5,7 +5,6 @@ mod common;
 use proving_ground::convex::{self, ConvexPiece};
 use proving_ground::model::{Model, Shape};
 use proving_ground::pipeline::{load_model, LoadOptions};
-use std::time::Instant;
 
 fn ur5() -> Model {
     let path = common::fixture("urdf/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf");
@@ -195,70 +194,4 @@ fn a_flat_or_empty_mesh_has_no_pieces() {
     let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     assert_eq!(convex::decompose(&flat, &[[0, 1, 2]]), None);
     assert_eq!(convex::decompose(&flat, &[[0, 1, 5]]), None, "an index out of range");
-}
-
-#[test]
-#[ignore = "measurement: cargo test --release --test convex -- --ignored --nocapture"]
-fn measure_parameters() {
-    use parry3d_f64::transformation::vhacd::VHACDParameters;
-    let (ur5, panda) = (ur5(), panda());
-    for (resolution, concavity, max) in [(32, 0.01, 16), (64, 0.01, 16), (64, 0.002, 32)] {
-        let params = VHACDParameters {
-            resolution,
-            concavity,
-            max_convex_hulls: max,
-            ..convex::parameters()
-        };
-        for (robot, model) in [("ur5", &ur5), ("panda", &panda)] {
-            let start = Instant::now();
-            let mut worst: f64 = 0.0;
-            let mut counts = Vec::new();
-            let mut slowest: f64 = 0.0;
-            let mut over: f64 = 0.0;
-            for (_, mesh) in meshes(model) {
-                let t = Instant::now();
-                let pieces = convex::decompose_with(&mesh.vertices, &mesh.triangles, &params).expect("decomposes");
-                slowest = slowest.max(t.elapsed().as_secs_f64());
-                worst = worst.max(uncovered(&mesh.vertices, &pieces));
-                over = over.max(overshoot(&mesh.vertices, &mesh.triangles, &pieces));
-                counts.push(pieces.len());
-            }
-            println!(
-                "res {resolution} conc {concavity} max {max} {robot}: {:.2} s total, slowest mesh {:.2} s, pieces {counts:?}, worst uncovered vertex {:.3e} m, pieces reach {:.1} mm off the surface",
-                start.elapsed().as_secs_f64(),
-                slowest,
-                worst,
-                over * 1e3
-            );
-        }
-    }
-    for (robot, model) in [("ur5", &ur5), ("panda", &panda)] {
-        for (name, mesh) in meshes(model) {
-            println!(
-                "{robot} {name}: {} vertices, {} triangles",
-                mesh.vertices.len(),
-                mesh.triangles.len()
-            );
-        }
-    }
-}
-
-#[test]
-#[ignore = "measurement: cargo test --release --test convex measure_cache -- --ignored --nocapture"]
-fn measure_cache_cold_and_warm() {
-    for (robot, model) in [("ur5", ur5()), ("panda", panda())] {
-        let dir = tempfile::tempdir().expect("temp dir");
-        let all = meshes(&model);
-        let run = || {
-            let start = Instant::now();
-            for (_, mesh) in &all {
-                convex::pieces_with_cache(&mesh.vertices, &mesh.triangles, Some(dir.path()));
-            }
-            start.elapsed().as_secs_f64()
-        };
-        let cold = run();
-        convex::forget_in_memory();
-        let warm = run();
-        println!("{robot}: {} meshes, cold {cold:.2} s, warm (disk) {:.1} ms", all.len(), warm * 1e3);
-    }
 }

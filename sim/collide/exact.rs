@@ -17,7 +17,7 @@ use std::cmp::Reverse;
 
 /// Subtracted from every AABB bound (m): the bound and a narrow phase round differently, and a
 /// bound a rounding error above the distance it bounds could skip the closest pair.
-const BOUND_ROUNDING_M: f64 = 1e-9;
+pub(super) const BOUND_ROUNDING_M: f64 = 1e-9;
 
 /// Signed distances of every checked pair at one configuration, in the exact geometry.
 ///

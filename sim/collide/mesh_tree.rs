@@ -15,7 +15,7 @@
 //! Only separated pairs are answered here: when a measured triangle touches or overlaps the
 //! other shape, the caller falls back to parry's descent, which gives the deepest triangle.
 
-use super::exact::order_key;
+use super::exact::{order_key, BOUND_ROUNDING_M};
 use super::narrow::{leaf_contact, Measured};
 use super::triangles::{segment_segment, triangle_distance};
 use parry3d_f64::math::{Pose, Vector};
@@ -26,9 +26,6 @@ use std::collections::BinaryHeap;
 
 /// Triangles per leaf: two measured leaves cost up to this squared in triangle contacts.
 const LEAF_TRIANGLES: usize = 4;
-/// Subtracted from every node bound (m): a bound that rounding puts above the gap it bounds could
-/// skip the nearest triangle.
-const BOUND_ROUNDING_M: f64 = 1e-9;
 
 /// A sphere tree over the triangles of one mesh, in the mesh's frame.
 #[derive(Debug, Clone)]

@@ -91,11 +91,6 @@ fn closest_on_first(p: &Vector3<f64>, u: &Vector3<f64>, q: &Vector3<f64>, v: &Ve
     p + u * t
 }
 
-/// `angle` wrapped into (-pi, pi].
-fn wrap(angle: f64) -> f64 {
-    super::wrap_angle(angle)
-}
-
 impl UrArm {
     /// The closed-form parametrisation of `model` when it is a UR-type 6R arm (see the module
     /// documentation); `None` for any other model, prismatic joints and other dof counts included.
@@ -274,8 +269,9 @@ impl UrArm {
                     let theta2 = y.atan2(x) - (a3 * s3).atan2(a2 + a3 * c3);
                     let theta4 = sum - theta2 - theta3;
                     let theta = [theta1, theta2, theta3, theta4, theta5, theta6];
-                    out.configurations
-                        .push(std::array::from_fn(|i| wrap(self.sign[i] * (theta[i] - self.offset[i]))));
+                    out.configurations.push(std::array::from_fn(|i| {
+                        super::wrap_angle(self.sign[i] * (theta[i] - self.offset[i]))
+                    }));
                 }
                 if s5.abs() < WRIST_SINGULAR {
                     // Both wrist signs are the same configuration family.
