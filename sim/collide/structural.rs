@@ -7,9 +7,7 @@
 //! the "always in collision" category of a MoveIt collision matrix. Pairs that merely touch at the
 //! home configuration are not excluded: one free sample keeps a pair checked.
 
-use super::{
-    distances, world, Body, CollideError, CollideOptions, Distances, ExcludedPair, ExcludedShapePair, QueryOptions, StructuralAllowance,
-};
+use super::{world, Body, CollideError, CollideOptions, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 use crate::model::Model;
 use crate::scenario::Scenario;
 use rand::SeedableRng;
@@ -20,6 +18,10 @@ pub const TOUCHING_M: f64 = 1e-9;
 /// Added to the deepest overlap sampled to make a structural allowance (m): sampling finds the
 /// deepest overlap of two slabs only approximately, and exactly that depth is construction too.
 pub(super) const DEPTH_SLACK_M: f64 = 1e-3;
+
+/// Gap (m) within which the cheap sampling query's GJK distance (at most 1.3e-5 m longer than
+/// the true one on curved shapes) is re-measured exactly before a pair counts as not touching.
+const ESTIMATE_SLACK_M: f64 = 1e-4;
 
 /// Mixed into the seed of the fold samples, so they are not the first samples again.
 const FOLD_STREAM: u64 = 0x464f_4c44;
@@ -64,6 +66,11 @@ pub struct StructuralExclusions {
 /// that are (excluded alone when the link pair is otherwise free at some sample, so a real fold
 /// of one link into the other is still caught), else the whole link pair; each with its reason.
 ///
+/// Each link pair is decided on its own, in the frame of its first link, so the answer is a
+/// function of the two links' shapes, the joints between them and the sampling alone: it is
+/// remembered for the process and reused for every model that shares them (a catalog sweep
+/// builds the same pairs thousands of times).
+///
 /// # Errors
 /// When the model's geometry cannot be built (see [`world`]).
 pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<StructuralExclusions, CollideError> {
@@ -77,118 +84,231 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
         provenance: None,
     };
     let world = world(model, &empty, &CollideOptions::default())?;
-    let pairs = world.pairs();
-    let mut always = vec![opts.samples > 0; pairs.len()];
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
-    let mut ws = model.workspace();
-    let mut out = Distances::new();
-    let query = QueryOptions {
-        // Touching counts as contact: tubes that meet end to end are at +-1e-17 m, and which
-        // side of zero rounding lands on says nothing about the design.
-        margin: TOUCHING_M,
-        hulls: false,
-        exact_depth: true,
-    };
-    let mut placements = Vec::with_capacity(opts.samples);
-    for _ in 0..opts.samples {
-        model.forward(&model.random_configuration(&mut rng), &mut ws);
-        placements.push(ws.link_in_world.clone());
-        distances(&world, &ws.link_in_world, &query, &mut out);
-        let mut touching = vec![false; pairs.len()];
-        for pair in &out.within_margin {
-            touching[pair.pair] = true;
-        }
-        for (always, touching) in always.iter_mut().zip(&touching) {
-            *always &= *touching;
-        }
-        if !always.iter().any(|a| *a) {
-            break;
-        }
-    }
-    let sampled = format!("in contact at all {} sampled configurations (seed {})", opts.samples, opts.seed);
+    let mut configurations: Option<Vec<Vec<f64>>> = None;
     let mut exclusions = StructuralExclusions::default();
-    for (pair, _) in pairs.iter().zip(&always).filter(|(_, always)| **always) {
+    for pair in world.pairs() {
         let (Body::Link(i), Body::Link(j)) = (pair.a, pair.b) else {
             continue;
         };
-        let shape_pairs: Vec<(usize, usize)> = (0..model.links[i].colliders.len())
-            .flat_map(|a| (0..model.links[j].colliders.len()).map(move |b| (a, b)))
-            .collect();
-        let distance = |placement: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize)| {
-            world.collider_distance(placement, (i, a), (j, b)).unwrap_or(f64::INFINITY)
+        let (first, second) = (i.min(j), i.max(j));
+        let key = pair_key(model, first, second, &pair.a_name, &pair.b_name, opts);
+        let cached = key.as_ref().and_then(|key| {
+            let cache = CACHE.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            cache.as_ref().and_then(|cache| cache.get(key).cloned())
+        });
+        let found = match cached {
+            Some(found) => found,
+            None => {
+                let samples = configurations.get_or_insert_with(|| {
+                    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
+                    (0..opts.samples).map(|_| model.random_configuration(&mut rng)).collect()
+                });
+                let found = analyse_pair(model, &world, (i, j), (&pair.a_name, &pair.b_name), samples, opts);
+                if let Some(key) = key {
+                    let mut guard = CACHE.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                    let cache = guard.get_or_insert_with(std::collections::HashMap::new);
+                    if cache.len() >= CACHE_ENTRIES {
+                        cache.clear();
+                    }
+                    cache.insert(key, found.clone());
+                }
+                found
+            }
         };
-        let overlapping: Vec<(usize, usize)> = shape_pairs
-            .iter()
-            .copied()
-            .filter(|&p| placements.iter().all(|placement| distance(placement, p) <= TOUCHING_M))
-            .collect();
-        // How deep the two links overlap by construction: the rest counts only beyond it, and
-        // beyond the slack 256 samples may fall short of the deepest configuration by.
-        let depth = DEPTH_SLACK_M
-            + overlapping
-                .iter()
-                .flat_map(|&p| placements.iter().map(move |placement| (p, placement)))
-                .map(|(p, placement)| -distance(placement, p))
-                .fold(0.0_f64, f64::max);
-        let rest: Vec<(usize, usize)> = shape_pairs.iter().copied().filter(|p| !overlapping.contains(p)).collect();
-        // Without the overlapping pieces, is the rest of the two links free at some sample?
-        let rest_free_somewhere = placements
-            .iter()
-            .any(|placement| rest.iter().all(|&p| distance(placement, p) + depth > TOUCHING_M));
-        if overlapping.is_empty() || rest.is_empty() || !rest_free_somewhere {
-            exclusions.pairs.push(ExcludedPair::new(
-                pair.a_name.clone(),
-                pair.b_name.clone(),
-                format!("{sampled}: the links overlap by construction, so checking them tells nothing about a motion"),
-            ));
-            continue;
-        }
-        // Can the rest of the two links fold into each other deeper than the construction does?
-        // Where no sample shows it (two `direct` slots: link i + 2 stays in a slab that shares
-        // only the construction's depth with link i), checking them would only slow every query.
-        let mut fold_rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed ^ FOLD_STREAM);
-        let folds = (0..opts.fold_samples).any(|_| {
-            model.forward(&model.random_configuration(&mut fold_rng), &mut ws);
-            rest.iter().any(|&p| distance(&ws.link_in_world, p) + depth <= 0.0)
-        });
-        if !folds {
-            let labels: Vec<String> = overlapping
-                .iter()
-                .map(|&(a, b)| format!("{} / {}", model.links[i].colliders[a].label, model.links[j].colliders[b].label))
-                .collect();
-            exclusions.pairs.push(ExcludedPair::new(
-                pair.a_name.clone(),
-                pair.b_name.clone(),
-                format!(
-                    "{sampled}, their shapes {} overlap by up to {:.1} mm by construction, and the others never overlap deeper at any of {} more (seed {}): no fold to check",
-                    labels.join(", "),
-                    depth * 1e3,
-                    opts.fold_samples,
-                    opts.seed
-                ),
-            ));
-            continue;
-        }
-        exclusions.allowances.push(StructuralAllowance {
-            a: pair.a_name.clone(),
-            b: pair.b_name.clone(),
-            depth_m: depth,
-            reason: format!(
-                "{sampled}, some of their shapes overlap by up to {:.1} mm by construction: the other shape pairs are checked and count as in contact only deeper than that",
-                depth * 1e3
-            ),
-        });
-        for (a, b) in overlapping {
-            exclusions.shapes.push(ExcludedShapePair {
-                a: pair.a_name.clone(),
-                a_shape: a,
-                a_label: model.links[i].colliders[a].label.clone(),
-                b: pair.b_name.clone(),
-                b_shape: b,
-                b_label: model.links[j].colliders[b].label.clone(),
-                reason: format!("{sampled}: these two pieces overlap by construction; the rest of the two links is checked"),
-            });
-        }
+        exclusions.pairs.extend(found.pairs);
+        exclusions.shapes.extend(found.shapes);
+        exclusions.allowances.extend(found.allowances);
     }
     Ok(exclusions)
+}
+
+/// Link pairs decided so far, by [`pair_key`].
+static CACHE: std::sync::Mutex<Option<std::collections::HashMap<String, StructuralExclusions>>> = std::sync::Mutex::new(None);
+
+/// Pairs remembered at most (a catalog robot has 15; the 15 625 of the modular catalog share a
+/// few thousand); beyond, the memory starts over.
+const CACHE_ENTRIES: usize = 1 << 16;
+
+/// Everything a link pair's answer depends on, exactly (floats by their shortest round-trip
+/// text): the sampling, every joint's kind and limits (they decide the random stream), the
+/// joints between the two links, their shapes, labels and names. `None` for a pair with a mesh,
+/// which is decided every time (a mesh's key would be the whole mesh).
+fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &str, opts: &StructuralOptions) -> Option<String> {
+    use std::fmt::Write;
+    let mut key = format!(
+        "{} {} {} {first} {second} {a_name} {b_name};",
+        opts.samples, opts.seed, opts.fold_samples
+    );
+    for joint in &model.joints {
+        let _ = write!(key, "{:?} {:?};", joint.kind, joint.limits);
+    }
+    for joint in &model.joints[first..second] {
+        let t = joint.parent_from_joint.translation.vector;
+        let r = joint.parent_from_joint.rotation.quaternion().coords;
+        let _ = write!(
+            key,
+            "[{:?} {:?} {:?} {:?}]",
+            t.as_slice(),
+            r.as_slice(),
+            joint.axis.as_slice(),
+            joint.kind
+        );
+    }
+    for link in [first, second] {
+        for collider in &model.links[link].colliders {
+            if matches!(collider.shape, crate::model::Shape::Mesh(_)) {
+                return None;
+            }
+            let t = collider.link_from_shape.translation.vector;
+            let r = collider.link_from_shape.rotation.quaternion().coords;
+            let _ = write!(
+                key,
+                "<{:?} {:?} {:?} {}>",
+                t.as_slice(),
+                r.as_slice(),
+                collider.shape,
+                collider.label
+            );
+        }
+        key.push('|');
+    }
+    Some(key)
+}
+
+/// Where link `second` is in link `first`'s frame at configuration `q`, laid out as the world
+/// queries want it (one pose per link; the others unused).
+fn placed(model: &Model, (first, second): (usize, usize), q: &[f64], out: &mut [nalgebra::Isometry3<f64>]) {
+    let mut first_from_second = nalgebra::Isometry3::identity();
+    for (joint, &value) in q.iter().enumerate().take(second).skip(first) {
+        first_from_second *= model.joint_transform(joint, value);
+    }
+    out[first] = nalgebra::Isometry3::identity();
+    out[second] = first_from_second;
+}
+
+/// The answer for the link pair `(i, j)` of `world` (built for `model` without obstacles), at
+/// the sampled `configurations`.
+fn analyse_pair(
+    model: &Model,
+    world: &super::CollisionWorld,
+    (i, j): (usize, usize),
+    (a_name, b_name): (&str, &str),
+    configurations: &[Vec<f64>],
+    opts: &StructuralOptions,
+) -> StructuralExclusions {
+    let mut found = StructuralExclusions::default();
+    if configurations.is_empty() {
+        return found;
+    }
+    let link_pair = (i.min(j), i.max(j));
+    let shape_pairs: Vec<(usize, usize)> = (0..model.links[i].colliders.len())
+        .flat_map(|a| (0..model.links[j].colliders.len()).map(move |b| (a, b)))
+        .collect();
+    let mut placements = Vec::with_capacity(configurations.len());
+    let mut pose = vec![nalgebra::Isometry3::identity(); model.links.len()];
+    // Touching counts as contact: tubes that meet end to end are at +-1e-17 m, and which side of
+    // zero rounding lands on says nothing about the design. The cheap measure first (no EPA: an
+    // overlap as the bounding capsules', a gap as GJK's own, at most 1.3e-5 m long), the exact
+    // one only for a gap it cannot tell from touching.
+    let touching = |pose: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize), exact: bool| {
+        world.collider_distance_with(pose, (i, a), (j, b), exact).unwrap_or(f64::INFINITY)
+    };
+    for q in configurations {
+        placed(model, link_pair, q, &mut pose);
+        let estimate = shape_pairs.iter().map(|&p| touching(&pose, p, false)).fold(f64::INFINITY, f64::min);
+        let in_contact = estimate <= TOUCHING_M
+            || (estimate <= ESTIMATE_SLACK_M
+                && shape_pairs.iter().map(|&p| touching(&pose, p, true)).fold(f64::INFINITY, f64::min) <= TOUCHING_M);
+        if !in_contact {
+            return found;
+        }
+        placements.push(pose.clone());
+    }
+    let sampled = format!("in contact at all {} sampled configurations (seed {})", opts.samples, opts.seed);
+    // Each shape pair at each sample is measured at most once (the tests below read it up to
+    // three times).
+    let mut measured: std::collections::HashMap<(usize, (usize, usize)), f64> = std::collections::HashMap::new();
+    let mut distance = |sample: usize, (a, b): (usize, usize)| -> f64 {
+        *measured.entry((sample, (a, b))).or_insert_with(|| {
+            world
+                .collider_distance(&placements[sample], (i, a), (j, b))
+                .unwrap_or(f64::INFINITY)
+        })
+    };
+    let mut overlapping: Vec<(usize, usize)> = Vec::new();
+    for &p in &shape_pairs {
+        if (0..configurations.len()).all(|k| distance(k, p) <= TOUCHING_M) {
+            overlapping.push(p);
+        }
+    }
+    // How deep the two links overlap by construction: the rest counts only beyond it, and beyond
+    // the slack the samples may fall short of the deepest configuration by.
+    let mut deepest = 0.0_f64;
+    for &p in &overlapping {
+        for k in 0..configurations.len() {
+            deepest = deepest.max(-distance(k, p));
+        }
+    }
+    let depth = DEPTH_SLACK_M + deepest;
+    let rest: Vec<(usize, usize)> = shape_pairs.iter().copied().filter(|p| !overlapping.contains(p)).collect();
+    // Without the overlapping pieces, is the rest of the two links free at some sample?
+    let rest_free_somewhere = (0..configurations.len()).any(|k| rest.iter().all(|&p| distance(k, p) + depth > TOUCHING_M));
+    if overlapping.is_empty() || rest.is_empty() || !rest_free_somewhere {
+        found.pairs.push(ExcludedPair::new(
+            a_name,
+            b_name,
+            format!("{sampled}: the links overlap by construction, so checking them tells nothing about a motion"),
+        ));
+        return found;
+    }
+    // Can the rest of the two links fold into each other deeper than the construction does?
+    // Where no sample shows it (two `direct` slots: link i + 2 stays in a slab that shares only
+    // the construction's depth with link i), checking them would only slow every query.
+    let mut fold_rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed ^ FOLD_STREAM);
+    let folds = (0..opts.fold_samples).any(|_| {
+        placed(model, link_pair, &model.random_configuration(&mut fold_rng), &mut pose);
+        // The capsule bound overlaps at least as deep as the shapes: where even it does not reach
+        // the construction's depth, the exact distance cannot either.
+        let deeper = |exact: bool, p: (usize, usize)| touching(&pose, p, exact) + depth <= 0.0;
+        rest.iter().any(|&p| deeper(false, p) && deeper(true, p))
+    });
+    if !folds {
+        let labels: Vec<String> = overlapping
+            .iter()
+            .map(|&(a, b)| format!("{} / {}", model.links[i].colliders[a].label, model.links[j].colliders[b].label))
+            .collect();
+        found.pairs.push(ExcludedPair::new(
+            a_name,
+            b_name,
+            format!(
+                "{sampled}, their shapes {} overlap by up to {:.1} mm by construction, and the others never overlap deeper at any of {} more (seed {}): no fold to check",
+                labels.join(", "),
+                depth * 1e3,
+                opts.fold_samples,
+                opts.seed
+            ),
+        ));
+        return found;
+    }
+    found.allowances.push(StructuralAllowance {
+        a: a_name.to_string(),
+        b: b_name.to_string(),
+        depth_m: depth,
+        reason: format!(
+            "{sampled}, some of their shapes overlap by up to {:.1} mm by construction: the other shape pairs are checked and count as in contact only deeper than that",
+            depth * 1e3
+        ),
+    });
+    for (a, b) in overlapping {
+        found.shapes.push(ExcludedShapePair {
+            a: a_name.to_string(),
+            a_shape: a,
+            a_label: model.links[i].colliders[a].label.clone(),
+            b: b_name.to_string(),
+            b_shape: b,
+            b_label: model.links[j].colliders[b].label.clone(),
+            reason: format!("{sampled}: these two pieces overlap by construction; the rest of the two links is checked"),
+        });
+    }
+    found
 }
