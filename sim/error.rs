@@ -27,6 +27,9 @@ pub enum Error {
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),
+    /// A sweep, merge or design-space experiment could not run.
+    #[error(transparent)]
+    Sweep(#[from] crate::sweep::SweepError),
     /// An input file type proving-ground does not read.
     #[error("{path}: unknown input type; expected a design (.json) or a URDF (.urdf) file")]
     UnknownInput {

@@ -64,3 +64,4 @@ pub mod report;
 pub mod scenario;
 pub mod srdf;
 pub mod suite;
+pub mod sweep;

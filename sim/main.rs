@@ -3,6 +3,8 @@
 //! report and exits 0 (passes), 1 (fails) or 2 (bad input); `validate-design generate` writes
 //! generated scenarios.
 
+mod sweep_cli;
+
 use clap::{Parser, Subcommand, ValueEnum};
 use proving_ground::engine::check_kinematics;
 use proving_ground::error::Error;
@@ -189,6 +191,16 @@ enum Command {
     /// snapshot in the suite's folder: exit 1 with a diff on any difference, missing snapshot
     /// (written as .snap.new) or orphan; --accept records them.
     Snapshot(SnapshotArgs),
+    /// Run many designs on many scenarios (reach-only by default, --full for the whole
+    /// validation), in parallel and resumable; results as JSON lines, CSV and ranked tables with
+    /// the paper's normalised score and percentile.
+    Sweep(sweep_cli::SweepArgs),
+    /// Join the shard folders of a sweep (`sweep --shard K/N`) into the folder the whole sweep
+    /// writes, byte for byte.
+    Merge(sweep_cli::MergeArgs),
+    /// The paper's Table 1 (UR15, UR20, ABB IRB 2600 on the cluttered tasks), its numbers
+    /// beside ours.
+    Table1(sweep_cli::Table1Args),
 }
 
 #[derive(Debug, clap::Args)]
@@ -302,6 +314,9 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Some(Command::Generate(args)) => generate_scenarios(args).map_err(Error::from),
         Some(Command::Snapshot(args)) => snapshot_suite(args),
+        Some(Command::Sweep(args)) => sweep_cli::sweep_command(args),
+        Some(Command::Merge(args)) => sweep_cli::merge_command(args),
+        Some(Command::Table1(args)) => sweep_cli::table1_command(args),
         None => run(&cli),
     };
     match result {

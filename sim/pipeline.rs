@@ -200,6 +200,16 @@ impl Engines {
         }
         Ok(engines)
     }
+
+    /// The names, comma-separated (`rapier,mujoco`), or `none`.
+    pub fn name(self) -> String {
+        match (self.rapier, self.mujoco) {
+            (true, true) => "rapier,mujoco".into(),
+            (true, false) => "rapier".into(),
+            (false, true) => "mujoco".into(),
+            (false, false) => "none".into(),
+        }
+    }
 }
 
 impl Default for Engines {
@@ -304,6 +314,7 @@ pub fn validate_with_progress(
         seed: opts.ik.seed,
         reach_only: opts.reach_only,
     };
+    let task_loss_terms = task_loss_terms(&model, &world, &scenario, &solutions);
     if opts.reach_only {
         let loss_terms = scenario
             .goals
@@ -336,6 +347,7 @@ pub fn validate_with_progress(
             static_load: None,
             gains: None,
             loss_terms,
+            task_loss_terms,
             settings,
         });
     }
@@ -443,12 +455,34 @@ pub fn validate_with_progress(
         static_load: Some(static_load),
         gains: Some(gains),
         loss_terms,
+        task_loss_terms,
         settings,
     })
 }
 
 /// Per goal, the exact clearance of its configuration and the pair that sets it: the one the
 /// trajectory reached, else IK's best solution.
+/// Per goal, the paper's loss terms at the IK solution that minimises them.
+fn task_loss_terms(
+    model: &Model,
+    world: &collide::CollisionWorld,
+    scenario: &crate::scenario::Scenario,
+    solutions: &[crate::ik::GoalSolutions],
+) -> Vec<Option<crate::ik::LossTerms>> {
+    scenario
+        .goals
+        .iter()
+        .zip(solutions)
+        .map(|(goal, found)| {
+            found
+                .solutions
+                .iter()
+                .map(|s| crate::ik::paper_loss_terms(model, world, goal, &s.q))
+                .min_by(|a, b| a.weighted().total_cmp(&b.weighted()))
+        })
+        .collect()
+}
+
 fn goal_clearances(
     model: &Model,
     world: &collide::CollisionWorld,

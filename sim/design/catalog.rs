@@ -77,6 +77,9 @@ pub enum Preset {
     /// Universal Robots UR10e.
     #[serde(rename = "UR10e")]
     Ur10e,
+    /// Universal Robots UR15.
+    #[serde(rename = "UR15")]
+    Ur15,
     /// Universal Robots UR20.
     #[serde(rename = "UR20")]
     Ur20,
@@ -86,6 +89,20 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// Every preset, in the order of the paper's tables.
+    pub const ALL: [Preset; 5] = [Self::Ur5e, Self::Ur10e, Self::Ur15, Self::Ur20, Self::AbbIrb2600];
+
+    /// The name used in design files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Ur5e => "UR5e",
+            Self::Ur10e => "UR10e",
+            Self::Ur15 => "UR15",
+            Self::Ur20 => "UR20",
+            Self::AbbIrb2600 => "ABB-IRB-2600",
+        }
+    }
+
     /// DH rows `(d, a, alpha)` per joint, standard convention.
     pub fn dh(self) -> Vec<[f64; 3]> {
         let ur = |d1: f64, a2: f64, a3: f64, d4: f64, d5: f64, d6: f64| {
@@ -101,6 +118,9 @@ impl Preset {
         match self {
             Self::Ur5e => ur(0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),
             Self::Ur10e => ur(0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),
+            // Universal Robots' published DH table for the UR15 (not reproduced in
+            // shared/reference/robots.md; the paper used it for Table 1).
+            Self::Ur15 => ur(0.2186, -0.6475, -0.5164, 0.1746, 0.1201, 0.1153),
             Self::Ur20 => ur(0.2363, -0.8620, -0.7287, 0.2010, 0.1593, 0.1543),
             Self::AbbIrb2600 => vec![
                 [0.445, 0.150, -FRAC_PI_2],

@@ -1,0 +1,246 @@
+//! `validate-design sweep`, `merge` and `table1`: the command-line side of [`proving_ground::sweep`].
+
+use proving_ground::error::Error;
+use proving_ground::pipeline::{Engines, LoadOptions};
+use proving_ground::sweep::{self, inputs, Shard, SweepMode, SweepOptions};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub(crate) struct SweepArgs {
+    /// Designs: files (.json, .urdf, .xml), folders (their design files), globs ('designs/*.json',
+    /// quoted), or catalog:modular6 (every 6-slot modular robot, 15 625), catalog:table1 (UR15,
+    /// UR20, ABB IRB 2600), catalog:presets.
+    #[arg(required = true, value_name = "DESIGN")]
+    designs: Vec<String>,
+    /// Scenarios: files, folders (their .json files) or globs (quoted), e.g. scenarios/cluttered.
+    #[arg(long, required = true, num_args = 1.., value_name = "SCENARIO")]
+    scenarios: Vec<String>,
+    /// Folder for sweep.json, the finished pairs and the results (results.jsonl, results.csv,
+    /// table.txt); a folder holding the same sweep is resumed [default: keep them in memory and
+    /// print the tables].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Replace another sweep's files in --out (only this tool's files; nothing else is touched).
+    #[arg(long)]
+    force: bool,
+    /// The whole validation per pair (trajectory, certified check, engines, verdict) instead of
+    /// the paper's reach-only metric.
+    #[arg(long)]
+    full: bool,
+    /// With --full: the engines to run.
+    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco", requires = "full")]
+    engines: String,
+    /// Run the K-th of N shards: every pair whose canonical index i has i mod N = K - 1.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Score against this finished sweep (e.g. the brute force over catalog:modular6) instead of
+    /// the sweep itself.
+    #[arg(long, value_name = "DIR")]
+    reference: Option<PathBuf>,
+    /// Seed of IK's random starts (and of the planner with --full).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    seed: u64,
+    /// IK starts per goal.
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
+    ik_seeds: u64,
+    /// Rows of each ranked table.
+    #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    top: u64,
+    /// Worker threads [default: the number of cores]; the results are the same for any number.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
+    threads: Option<u64>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct MergeArgs {
+    /// The shard folders (each a finished `sweep --shard K/N --out DIR`).
+    #[arg(required = true, value_name = "DIR")]
+    shards: Vec<PathBuf>,
+    /// Folder for the merged sweep (the files the unsharded sweep writes).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Replace another sweep's files in --out.
+    #[arg(long)]
+    force: bool,
+    /// Score against this finished sweep (as the shards' sweep was asked to).
+    #[arg(long, value_name = "DIR")]
+    reference: Option<PathBuf>,
+    /// Rows of each ranked table.
+    #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    top: u64,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct Table1Args {
+    /// Scenarios [default: scenarios/cluttered, this project's regeneration of the paper's 36
+    /// cluttered tasks].
+    #[arg(long, num_args = 1.., value_name = "SCENARIO")]
+    scenarios: Vec<String>,
+    /// Keep the sweep's files here too (see `sweep --out`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Replace another sweep's files in --out.
+    #[arg(long)]
+    force: bool,
+    /// Seed of IK's random starts.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    seed: u64,
+    /// Worker threads [default: the number of cores].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
+    threads: Option<u64>,
+}
+
+/// Pairs done of all, with the time taken and left, on stderr (drawn only on a terminal).
+struct PairBar(indicatif::ProgressBar);
+
+impl proving_ground::progress::Progress for PairBar {
+    fn stage(&self, name: &str, total: Option<u64>) {
+        self.0.set_length(total.unwrap_or(0));
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg}: {pos}/{len} pairs, {elapsed} (about {eta} left)") {
+            self.0.set_style(style);
+        }
+        self.0.set_message(name.to_string());
+    }
+
+    fn advance(&self) {
+        self.0.inc(1);
+    }
+}
+
+fn bar(quiet: bool) -> PairBar {
+    PairBar(if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(0)
+    })
+}
+
+fn threads(count: Option<u64>) {
+    if let Some(threads) = count {
+        // Only the first call configures the global pool; a second is harmless.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::try_from(threads).unwrap_or(usize::MAX))
+            .build_global();
+    }
+}
+
+fn reference(dir: Option<&PathBuf>) -> Result<Option<(String, Vec<sweep::record::Record>)>, Error> {
+    Ok(match dir {
+        Some(dir) => Some(sweep::read_reference(dir)?),
+        None => None,
+    })
+}
+
+/// `validate-design sweep ...`.
+pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
+    threads(args.threads);
+    let ik = proving_ground::ik::IkOptions {
+        seeds: usize::try_from(args.ik_seeds).unwrap_or(usize::MAX),
+        seed: args.seed,
+        ..Default::default()
+    };
+    let mode = if args.full {
+        let engines = match args.engines.as_str() {
+            "none" => Engines::from_names([]),
+            list => Engines::from_names(list.split(',').map(str::trim)),
+        }
+        .map_err(|name| sweep::SweepError::Designs {
+            argument: format!("--engines {}", args.engines),
+            message: format!("unknown engine `{name}`; expected rapier, mujoco or none"),
+        })?;
+        SweepMode::Full { ik, engines }
+    } else {
+        SweepMode::ReachOnly { ik }
+    };
+    let shard = args
+        .shard
+        .as_deref()
+        .map(Shard::parse)
+        .transpose()
+        .map_err(|_| sweep::SweepError::Shard(args.shard.clone().unwrap_or_default()))?;
+    let designs = inputs::resolve_designs(&args.designs, &LoadOptions::default())?;
+    let scenarios = inputs::resolve_scenarios(&args.scenarios)?;
+    let opts = SweepOptions {
+        mode,
+        out: args.out.clone(),
+        force: args.force,
+        shard,
+        reference: reference(args.reference.as_ref())?,
+        top: usize::try_from(args.top).unwrap_or(usize::MAX),
+    };
+    let progress = bar(args.quiet);
+    let result = sweep::run(&designs, &scenarios, &opts, &progress);
+    progress.0.finish_and_clear();
+    let result = result?;
+    if !args.quiet {
+        print!("{}", result.table);
+        eprintln!(
+            "{} pairs ({} computed now, {} resumed){}",
+            result.records.len(),
+            result.computed,
+            result.records.len() - result.computed,
+            args.out.as_ref().map_or(String::new(), |d| format!("; results in {}", d.display()))
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `validate-design merge ...`.
+pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Error> {
+    let result = sweep::merge(
+        &args.shards,
+        &args.out,
+        args.force,
+        reference(args.reference.as_ref())?,
+        usize::try_from(args.top).unwrap_or(usize::MAX),
+    )?;
+    if !args.quiet {
+        print!("{}", result.table);
+        eprintln!(
+            "{} records from {} shards; results in {}",
+            result.records.len(),
+            args.shards.len(),
+            args.out.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `validate-design table1 ...`.
+pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
+    threads(args.threads);
+    let scenario_args = if args.scenarios.is_empty() {
+        vec!["scenarios/cluttered".to_string()]
+    } else {
+        args.scenarios.clone()
+    };
+    let designs = inputs::resolve_designs(&["catalog:table1".to_string()], &LoadOptions::default())?;
+    let scenarios = inputs::resolve_scenarios(&scenario_args)?;
+    let opts = SweepOptions {
+        mode: SweepMode::ReachOnly {
+            ik: proving_ground::ik::IkOptions {
+                seed: args.seed,
+                ..Default::default()
+            },
+        },
+        out: args.out.clone(),
+        force: args.force,
+        shard: None,
+        reference: None,
+        top: sweep::table::DEFAULT_TOP,
+    };
+    let progress = bar(false);
+    let result = sweep::run(&designs, &scenarios, &opts, &progress);
+    progress.0.finish_and_clear();
+    let result = result?;
+    print!("{}", sweep::paper::table_1(&result.records, scenarios.len()));
+    Ok(ExitCode::SUCCESS)
+}
