@@ -559,3 +559,35 @@ fn describe_and_kinematics_only_conflict() {
         .expect("runs");
     assert_eq!(output.status.code(), Some(2));
 }
+
+#[test]
+fn a_float32_design_passes_strict_and_says_what_was_snapped() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("generated.json");
+    let alpha = f64::from(std::f32::consts::FRAC_PI_2);
+    std::fs::write(
+        &path,
+        format!(r#"{{"mode": "economic", "joints": [{{"d": 0.15, "a": 0, "alpha": {alpha}}}, {{"d": 0, "a": 0.4, "alpha": 0}}]}}"#),
+    )
+    .expect("write");
+    let sentence =
+        "joints[0].alpha = 1.5707963705062866 snapped to pi/2 (1.5707963267948966) (within 1e-6; a float32 generator's rounding)";
+    let output = validate_design()
+        .arg(&path)
+        .args(["--describe", "--strict"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "a snap is not a warning: {stdout}");
+    assert!(stdout.contains(&format!("model choices:\n  {sentence}")), "{stdout}");
+    // A run prints it on stderr, naming the file.
+    let output = validate_design()
+        .arg(&path)
+        .args(["--strict", "--reach-only", "--scenario", "scenarios/cluttered/task-03.json"])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_ne!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("info: {}: {sentence}", path.display())), "{stderr}");
+    assert!(!stderr.contains("warning"), "{stderr}");
+}

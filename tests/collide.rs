@@ -60,7 +60,10 @@ fn collider(pose: Isometry3<f64>, shape: Shape) -> Collider {
 fn one_link(colliders: Vec<Collider>, segments: Vec<Segment>) -> Model {
     Model {
         name: "probe".into(),
-        source: ModelSource::Design { mode: "free".into() },
+        source: ModelSource::Design {
+            mode: "free".into(),
+            choices: vec![],
+        },
         world_from_base: Isometry3::identity(),
         joints: vec![],
         links: vec![Link {

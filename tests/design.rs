@@ -4,7 +4,9 @@ mod common;
 
 use common::{design_files, stem};
 use proving_ground::design::{self, DesignMode};
+use proving_ground::ik::analytic::UrArm;
 use proving_ground::model::from_design;
+use std::f64::consts::FRAC_PI_2;
 
 #[test]
 fn ships_the_required_designs() {
@@ -67,4 +69,100 @@ fn paper_robot_tool_at_zero_matches_the_closed_form() {
     let tool = model.tool_pose(&[0.0; 5]);
     let expected = nalgebra::Vector3::new(0.2, 0.2, 0.0);
     assert!((tool.translation.vector - expected).norm() < 1e-12, "{}", tool.translation.vector);
+}
+
+/// An economic elbow arm as a float32 generator writes it: pi/2 as float32's nearest value.
+fn float32_economic_design(alpha: f64, d: f64) -> String {
+    format!(
+        r#"{{"mode": "economic", "joints": [
+            {{"d": 0.15, "a": 0, "alpha": 1.5707963267948966}},
+            {{"d": 0, "a": -0.4, "alpha": 0}},
+            {{"d": {d}, "a": 0, "alpha": {alpha}}}
+        ]}}"#
+    )
+}
+
+#[test]
+fn float32_pi_over_2_is_read_as_pi_over_2_and_said() {
+    let written = -f64::from(std::f32::consts::FRAC_PI_2);
+    assert_eq!(written.to_string(), "-1.5707963705062866");
+    let path = std::path::Path::new("designs/generated.json");
+    let design = design::parse(&float32_economic_design(written, 0.1), path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(design.joints[2].alpha.to_bits(), (-FRAC_PI_2).to_bits());
+    let model = from_design(&design);
+    assert!(model.diagnostics.is_empty(), "a snap is not a warning: {:?}", model.diagnostics);
+    let rotation = model.last_from_tool.rotation;
+    let exact = nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::x_axis(), -FRAC_PI_2);
+    assert_eq!(rotation, exact, "the model is built from the snapped value");
+    assert_eq!(
+        model.source.choices(),
+        ["joints[2].alpha = -1.5707963705062866 snapped to -pi/2 (-1.5707963267948966) (within 1e-6; a float32 generator's rounding)"]
+    );
+}
+
+#[test]
+fn two_millionths_off_is_still_not_economic() {
+    let path = std::path::Path::new("designs/generated.json");
+    let err = design::parse(&float32_economic_design(-FRAC_PI_2 - 2e-6, 0.1), path)
+        .expect_err("2e-6 off is not a rounding")
+        .to_string();
+    assert_eq!(
+        err,
+        format!(
+            "designs/generated.json: joint 3 (joints[2]): alpha = {} is not economic; allowed {{0, +pi/2, -pi/2}} rad",
+            -FRAC_PI_2 - 2e-6
+        )
+    );
+}
+
+#[test]
+fn a_length_next_to_an_interval_bound_is_read_as_the_bound() {
+    let path = std::path::Path::new("generated.json");
+    let design = design::parse(&float32_economic_design(-FRAC_PI_2, 0.1000000015), path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(design.joints[2].d, 0.1);
+    let sentences: Vec<String> = design.snapped.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        sentences,
+        ["joints[2].d = 0.1000000015 snapped to 0.1 (within 1e-6; a float32 generator's rounding)"]
+    );
+    // Just outside the interval (float32's 0.4 is 0.4000000059604645) is read as its bound too.
+    let design = design::parse(&float32_economic_design(0.0, f64::from(0.4_f32)), path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(design.joints[2].d, 0.4);
+}
+
+#[test]
+fn the_hardware_cost_of_a_snapped_design_uses_the_values_used() {
+    let path = std::path::Path::new("generated.json");
+    let design = design::parse(&float32_economic_design(0.0, f64::from(0.4_f32)), path).unwrap_or_else(|e| panic!("{e}"));
+    // 0.15 + 0.4 + 0.4 exactly, as the sum of the named values.
+    assert_eq!(design.hardware_cost(), 0.15 + 0.4 + 0.4);
+    assert_eq!(design.snapped.len(), 1);
+}
+
+#[test]
+fn shipped_economic_designs_snap_nothing() {
+    for path in design_files() {
+        let design = design::load(&path).expect("loads");
+        assert!(design.snapped.is_empty(), "{}: {:?}", path.display(), design.snapped);
+    }
+}
+
+#[test]
+fn ur15_preset_is_a_ur_arm_with_its_published_offsets() {
+    let path = std::path::Path::new("ur15.json");
+    let design = design::parse(r#"{"mode": "preset", "preset": "UR15"}"#, path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(design.preset, Some(design::catalog::Preset::Ur15));
+    assert_eq!(design.dof(), 6);
+    let expected = 0.2186 + 0.6475 + 0.5164 + 0.1746 + 0.1201 + 0.1153;
+    assert!((design.hardware_cost() - expected).abs() < 1e-12, "{}", design.hardware_cost());
+    let model = from_design(&design);
+    assert!(UrArm::detect(&model).is_some(), "the closed-form IK takes the UR15");
+}
+
+#[test]
+fn unknown_preset_lists_the_presets() {
+    let err = design::parse(r#"{"mode": "preset", "preset": "UR16"}"#, std::path::Path::new("x.json"))
+        .expect_err("no such preset")
+        .to_string();
+    assert!(err.contains("UR15") && err.contains("UR20"), "{err}");
 }

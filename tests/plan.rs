@@ -39,7 +39,10 @@ fn wand() -> Model {
     };
     Model {
         name: "wand".into(),
-        source: ModelSource::Design { mode: "free".into() },
+        source: ModelSource::Design {
+            mode: "free".into(),
+            choices: vec![],
+        },
         world_from_base: Isometry3::identity(),
         joints: vec![Joint {
             name: "turn".into(),

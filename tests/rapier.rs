@@ -38,7 +38,10 @@ fn pendulum(mass_kg: f64, length_m: f64) -> Model {
     };
     Model {
         name: "pendulum".into(),
-        source: ModelSource::Design { mode: "test".into() },
+        source: ModelSource::Design {
+            mode: "test".into(),
+            choices: vec![],
+        },
         world_from_base: Isometry3::identity(),
         joints: vec![Joint {
             name: "hinge".into(),

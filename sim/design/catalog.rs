@@ -20,6 +20,12 @@ pub const JOINT_MODULE_MAX_SPEED: f64 = PI;
 pub const JOINT_MODULE_LIMIT: f64 = 2.0 * PI;
 /// Tolerance on economic-mode constraints.
 pub const ECONOMIC_TOLERANCE: f64 = 1e-9;
+/// How far (absolute, in m or rad) an economic value may lie from one of the sets' named values
+/// (0, the interval bounds, +-pi/2) and still be read as that value. Designs come from float32
+/// generators (PyTorch's default dtype): float32 spacing is 1.2e-7 near pi/2 and 7.5e-9 near 0.1,
+/// so float32's rounding of pi/2 lands 4.4e-8 away; 1e-6 covers a few ulps of that and is still
+/// far below any length or angle that matters to the robot.
+pub const FLOAT32_SNAP: f64 = 1e-6;
 
 /// One connection-slot option of the modular catalog.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -118,8 +124,9 @@ impl Preset {
         match self {
             Self::Ur5e => ur(0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),
             Self::Ur10e => ur(0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),
-            // Universal Robots' published DH table for the UR15 (not reproduced in
-            // shared/reference/robots.md; the paper used it for Table 1).
+            // Universal Robots' DH table for the UR15 as we know it from their DH page;
+            // robots.md does not reproduce it and no second source here could confirm it: check
+            // it before quoting UR15 numbers.
             Self::Ur15 => ur(0.2186, -0.6475, -0.5164, 0.1746, 0.1201, 0.1153),
             Self::Ur20 => ur(0.2363, -0.8620, -0.7287, 0.2010, 0.1593, 0.1543),
             Self::AbbIrb2600 => vec![
@@ -155,6 +162,32 @@ pub fn economic_violation(parameter: &str, value: f64) -> Option<&'static str> {
     })
 }
 
+/// A named value of an economic set that a nearby value is read as.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EconomicSnap {
+    /// The value used (m or rad).
+    pub value: f64,
+    /// How the value is written in messages (`-pi/2`, `0.1`).
+    pub name: &'static str,
+}
+
+/// The named value of the economic set of `parameter` (`d`, `a` or `alpha`) that `value` lies
+/// within [`FLOAT32_SNAP`] of without being it exactly: 0, the bounds of the intervals, +-pi/2.
+/// `None` for a value that is exactly a named value or not near one (an interval's inside stays as
+/// written), and for other parameters.
+pub fn economic_snap(parameter: &str, value: f64) -> Option<EconomicSnap> {
+    let named: &[(f64, &'static str)] = match parameter {
+        "d" => &[(0.0, "0"), (0.1, "0.1"), (0.4, "0.4")],
+        "a" => &[(0.0, "0"), (0.1, "0.1"), (0.4, "0.4"), (-0.1, "-0.1"), (-0.4, "-0.4")],
+        "alpha" => &[(0.0, "0"), (FRAC_PI_2, "pi/2"), (-FRAC_PI_2, "-pi/2")],
+        _ => &[],
+    };
+    named
+        .iter()
+        .find(|(target, _)| value != *target && (value - target).abs() <= FLOAT32_SNAP)
+        .map(|&(value, name)| EconomicSnap { value, name })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -177,5 +210,30 @@ mod tests {
         assert!(economic_violation("a", -0.05).is_some());
         assert_eq!(economic_violation("a", -0.25), None);
         assert!(economic_violation("alpha", 1.0).is_some());
+    }
+
+    #[test]
+    fn float32_pi_over_2_snaps_to_pi_over_2() {
+        let written = f64::from(FRAC_PI_2 as f32);
+        assert_eq!(
+            economic_snap("alpha", -written),
+            Some(EconomicSnap {
+                value: -FRAC_PI_2,
+                name: "-pi/2"
+            })
+        );
+        assert_eq!(economic_snap("alpha", FRAC_PI_2), None, "an exact value is not snapped");
+        assert_eq!(economic_snap("alpha", FRAC_PI_2 + 2e-6), None);
+    }
+
+    #[test]
+    fn bounds_snap_from_both_sides_and_insides_stay() {
+        assert_eq!(economic_snap("d", 0.1000000015).map(|s| s.value), Some(0.1));
+        assert_eq!(economic_snap("d", 0.4 + 5e-7).map(|s| s.value), Some(0.4));
+        assert_eq!(economic_snap("a", -0.1 + 5e-7).map(|s| s.value), Some(-0.1));
+        assert_eq!(economic_snap("a", 3e-7).map(|s| s.value), Some(0.0));
+        assert_eq!(economic_snap("d", 0.25 + 1e-7), None, "inside an interval, not near a bound");
+        assert_eq!(economic_snap("d", -0.1 + 1e-7), None, "d has no negative interval");
+        assert_eq!(economic_snap("max_velocity", 1e-7), None);
     }
 }

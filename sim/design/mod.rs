@@ -27,6 +27,35 @@ pub struct Design {
     pub base: PoseSpec,
     /// Tool offset relative to frame n.
     pub tool: PoseSpec,
+    /// Economic values read as the named value of their set they lie next to (float32 rounding,
+    /// see [`catalog::FLOAT32_SNAP`]); `joints` holds the values used.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub snapped: Vec<SnappedValue>,
+}
+
+/// An economic value read as a named value of its set: `-1.5707963705062866` (float32's
+/// `-pi/2`) as `-pi/2`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SnappedValue {
+    /// The field (`joints[2].alpha`).
+    pub field: String,
+    /// The value as written in the file (m or rad).
+    pub written: f64,
+    /// The value used (m or rad).
+    pub used: f64,
+    /// How the value used is named (`-pi/2`, `0.1`).
+    pub name: &'static str,
+}
+
+impl std::fmt::Display for SnappedValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} = {} snapped to {}", self.field, self.written, self.name)?;
+        // A symbolic name (pi/2) gets its number too; a length is its own number.
+        if self.name != self.used.to_string() {
+            write!(f, " ({})", self.used)?;
+        }
+        write!(f, " (within {:e}; a float32 generator's rounding)", catalog::FLOAT32_SNAP)
+    }
 }
 
 /// Design mode, as in the paper.
@@ -191,7 +220,9 @@ struct PresetFile {
 ///
 /// # Errors
 /// [`DesignError`] naming the file and the field: unreadable file, malformed JSON, unknown mode or
-/// field, non-finite or out-of-range numbers, economic violations.
+/// field, non-finite or out-of-range numbers, economic violations (an economic value within
+/// [`catalog::FLOAT32_SNAP`] of a named value of its set is not one: it is read as that value and
+/// listed in [`Design::snapped`]).
 pub fn load(path: &Path) -> Result<Design, DesignError> {
     let text = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES).map_err(|source| DesignError::Read {
         path: path.to_path_buf(),
@@ -216,7 +247,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "design".into());
-    let design = match mode.mode.as_str() {
+    let mut design = match mode.mode.as_str() {
         "free" | "economic" => {
             let file: DhFile = serde_json::from_str(text).map_err(parse_error)?;
             let joints = file
@@ -244,6 +275,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
                 preset: None,
                 base: file.base.unwrap_or_default(),
                 tool: file.tool.unwrap_or_default(),
+                snapped: vec![],
             }
         }
         "modular" => {
@@ -261,6 +293,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
                 preset: None,
                 base: file.base.unwrap_or_default(),
                 tool: file.tool.unwrap_or_default(),
+                snapped: vec![],
             }
         }
         "preset" => {
@@ -275,6 +308,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
                 preset: Some(file.preset),
                 base: file.base.unwrap_or_default(),
                 tool: file.tool.unwrap_or_default(),
+                snapped: vec![],
             }
         }
         other => {
@@ -286,7 +320,39 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
         }
     };
     validate(&design, path)?;
+    if design.mode == DesignMode::Economic {
+        design.snapped = economic(&mut design.joints, path)?;
+    }
     Ok(design)
+}
+
+/// Checks the DH values of an economic design against the economic sets. A value within
+/// [`catalog::FLOAT32_SNAP`] of a named value of its set is set to that value and listed.
+fn economic(joints: &mut [DhJoint], path: &Path) -> Result<Vec<SnappedValue>, DesignError> {
+    let mut snapped = Vec::new();
+    for (index, joint) in joints.iter_mut().enumerate() {
+        for (parameter, value) in [("d", &mut joint.d), ("a", &mut joint.a), ("alpha", &mut joint.alpha)] {
+            if let Some(snap) = catalog::economic_snap(parameter, *value) {
+                snapped.push(SnappedValue {
+                    field: format!("joints[{index}].{parameter}"),
+                    written: *value,
+                    used: snap.value,
+                    name: snap.name,
+                });
+                *value = snap.value;
+            } else if let Some(allowed) = catalog::economic_violation(parameter, *value) {
+                return Err(DesignError::NotEconomic {
+                    path: path.to_path_buf(),
+                    joint: index + 1,
+                    index,
+                    parameter,
+                    value: *value,
+                    allowed,
+                });
+            }
+        }
+    }
+    Ok(snapped)
 }
 
 fn module_joint(row: [f64; 3], rated_torque: Option<f64>) -> DhJoint {
@@ -378,20 +444,6 @@ fn validate(design: &Design, path: &Path) -> Result<(), DesignError> {
                     format!("joints[{index}].rated_torque"),
                     format!("{torque} N m: expected > 0 and at most {MAX_RATING}"),
                 ));
-            }
-        }
-        if design.mode == DesignMode::Economic {
-            for (parameter, value) in [("d", joint.d), ("a", joint.a), ("alpha", joint.alpha)] {
-                if let Some(allowed) = catalog::economic_violation(parameter, value) {
-                    return Err(DesignError::NotEconomic {
-                        path: path.to_path_buf(),
-                        joint: index + 1,
-                        index,
-                        parameter,
-                        value,
-                        allowed,
-                    });
-                }
             }
         }
     }

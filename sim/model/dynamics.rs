@@ -207,7 +207,10 @@ mod tests {
         }
         Model {
             name: "planar".into(),
-            source: ModelSource::Design { mode: "free".into() },
+            source: ModelSource::Design {
+                mode: "free".into(),
+                choices: vec![],
+            },
             world_from_base: Isometry3::identity(),
             joints,
             links,

@@ -135,6 +135,7 @@ pub fn from_design(design: &Design) -> Model {
         name: design.name.clone(),
         source: ModelSource::Design {
             mode: design.mode.name().into(),
+            choices: design.snapped.iter().map(ToString::to_string).collect(),
         },
         world_from_base: design.base.isometry(),
         joints,

@@ -59,6 +59,10 @@ pub enum ModelSource {
     Design {
         /// Design mode as written in the file.
         mode: String,
+        /// What the reader chose, each a sentence: the economic values read as a named value of
+        /// their set (float32 rounding, see [`crate::design::SnappedValue`]).
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        choices: Vec<String>,
     },
     /// A URDF file.
     Urdf {
@@ -320,11 +324,10 @@ pub enum ModelError {
 }
 
 impl ModelSource {
-    /// The defaults the reader chose (see the `choices` fields); none for a design.
+    /// What the reader chose (see the `choices` fields).
     pub fn choices(&self) -> &[String] {
         match self {
-            ModelSource::Design { .. } => &[],
-            ModelSource::Urdf { choices, .. } | ModelSource::Mjcf { choices, .. } => choices,
+            ModelSource::Design { choices, .. } | ModelSource::Urdf { choices, .. } | ModelSource::Mjcf { choices, .. } => choices,
         }
     }
 

@@ -10,7 +10,7 @@ use std::fmt::Write;
 pub fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
     let mut out = String::new();
     let source = match &model.source {
-        crate::model::ModelSource::Design { mode } => format!("{mode} design"),
+        crate::model::ModelSource::Design { mode, .. } => format!("{mode} design"),
         crate::model::ModelSource::Urdf { base_link, tip_link, .. } => format!("URDF, chain {base_link} -> {tip_link}"),
         crate::model::ModelSource::Mjcf { base_body, tip_body, .. } => format!("MJCF, chain {base_body} -> {tip_body}"),
     };

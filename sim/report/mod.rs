@@ -62,8 +62,9 @@ pub struct InputsReport {
     pub warnings: Vec<String>,
     /// Our kinematics against MuJoCo's on the MJCF export; `None` when not run.
     pub kinematics_check: Option<crate::engine::KinematicsCheck>,
-    /// Defaults the model reader chose for a URDF or MJCF file, each with its reason (the tip
-    /// or tool frame, the joints left out of the arm as gripper joints); also printed on stderr.
+    /// Defaults the model reader chose, each with its reason (for a URDF or MJCF file the tip or
+    /// tool frame and the joints left out of the arm as gripper joints; for an economic design the
+    /// values a float32 generator rounded, read as their set's named value); also printed on stderr.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub model_choices: Vec<String>,
 }
@@ -383,7 +384,7 @@ fn design_summary(validation: &Validation) -> DesignSummary {
         None => DesignSummary {
             name: model.name.clone(),
             mode: match &model.source {
-                crate::model::ModelSource::Design { mode } => mode.clone(),
+                crate::model::ModelSource::Design { mode, .. } => mode.clone(),
                 crate::model::ModelSource::Urdf { .. } => "urdf".into(),
                 crate::model::ModelSource::Mjcf { .. } => "mjcf".into(),
             },

@@ -140,6 +140,7 @@ impl Design {
             preset: None,
             base: PoseSpec::default(),
             tool: PoseSpec::default(),
+            snapped: Vec::new(),
         }
     }
 
@@ -154,6 +155,7 @@ impl Design {
             preset: Some(preset),
             base: PoseSpec::default(),
             tool: PoseSpec::default(),
+            snapped: Vec::new(),
         }
     }
 }
