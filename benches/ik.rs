@@ -1,5 +1,6 @@
 //! IK for one goal without obstacles. Targets (issue 11): the numeric solver, 4 seeds on a 6-dof
-//! arm, <= 10 us per goal (`ik-4-seeds`, closed form off); the closed form of a UR-type arm a few
+//! arm, <= 10 us per goal (`ik-4-seeds`, closed form and branch restarts off; with the default
+//! branch restarts that find every branch: `ik-4-seeds-branches`); the closed form of a UR-type arm a few
 //! microseconds per goal, every solution found, polished and judged (`ik-closed-form`), of
 //! which the bare closed form (`closed-form-bare`) is a fraction.
 #![allow(missing_docs)] // criterion_group! generates undocumented items
@@ -37,14 +38,20 @@ fn ik(c: &mut Criterion) {
             analytic: false,
             ..Default::default()
         };
-        let mut solver = Ik::new(&model, numeric);
+        let plain = IkOptions {
+            branch_starts: 0,
+            ..numeric.clone()
+        };
         let mut i = 0;
-        c.bench_function(&format!("ik-4-seeds/{}", model.name), |b| {
-            b.iter(|| {
-                i = (i + 1) % goals.len();
-                black_box(solver.solve(black_box(&goals[i]), i, None).reached())
-            })
-        });
+        for (name, opts) in [("ik-4-seeds", plain), ("ik-4-seeds-branches", numeric)] {
+            let mut solver = Ik::new(&model, opts);
+            c.bench_function(&format!("{name}/{}", model.name), |b| {
+                b.iter(|| {
+                    i = (i + 1) % goals.len();
+                    black_box(solver.solve(black_box(&goals[i]), i, None).reached())
+                })
+            });
+        }
         let mut solver = Ik::new(&model, IkOptions::default());
         let Some(arm) = solver.closed_form().cloned() else { continue };
         c.bench_function(&format!("ik-closed-form/{}", model.name), |b| {

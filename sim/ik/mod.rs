@@ -4,6 +4,7 @@
 //! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
 pub mod analytic;
+mod branches;
 mod dls;
 mod error;
 mod loss;
@@ -52,6 +53,11 @@ pub struct IkOptions {
     /// Solve `pose` goals of UR-type arms in closed form (default true); false forces the
     /// numeric solver (to compare the two).
     pub analytic: bool,
+    /// Starts at most per `pose` goal of a 6R arm placed on the other branches (elbow, wrist,
+    /// shoulder flips) of each solution found, until no new one appears (default 32; 0 turns them
+    /// off). A UR-type arm has up to 8 solutions; the exact flips of a known one are skipped
+    /// unsolved, so the budget goes to the approximate ones.
+    pub branch_starts: usize,
 }
 
 impl Default for IkOptions {
@@ -64,6 +70,7 @@ impl Default for IkOptions {
             refinement_steps: 200,
             clearance_m: 0.0,
             analytic: true,
+            branch_starts: 32,
         }
     }
 }
@@ -387,17 +394,17 @@ impl<'a> Ik<'a> {
     }
 
     /// The numeric solver: `first_seed`, random starts and then `extra` starts (closed-form
-    /// configurations).
+    /// configurations); then, for `pose` goals of 6R arms, starts on the other branches of each
+    /// solution found (see [`branches`]).
     fn solve_numeric(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>, extra: &[[f64; 6]]) -> GoalSolutions {
         let mut rng = self.rng(goal_index);
-        let done = CONVERGED;
         let mut found: Vec<IkSolution> = Vec::new();
         let mut closest: Option<IkSolution> = None;
         let mut iterations = 0;
         let margin = self.margin();
-        let starts = self.opts.seeds + extra.len();
+        let mut starts = self.opts.seeds + extra.len();
         for start in 0..starts {
-            let mut q = match (start, first_seed) {
+            let q = match (start, first_seed) {
                 _ if start >= self.opts.seeds => extra[start - self.opts.seeds].to_vec(),
                 (0, Some(seed)) if seed.len() == self.model.dof() => seed.to_vec(),
                 _ => self.model.random_configuration(&mut rng),
@@ -405,34 +412,14 @@ impl<'a> Ik<'a> {
             if start >= self.opts.seeds && found.iter().any(|s| self.same_configuration(&s.q, &q)) {
                 continue;
             }
-            iterations += self.solver.solve(goal, &mut q, self.opts.max_iterations, done, &mut rng);
-            let mut clearance = None;
-            if let Some(checker) = self.checker.as_mut() {
-                let mut measured = checker.clearance(&q, false);
-                if measured.exact_m <= margin || !is_reached(&goal_error(goal, &self.model.tool_pose(&q))) {
-                    checker.margin = margin;
-                    refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, &mut rng);
-                    measured = checker.clearance(&q, false);
-                }
-                clearance = Some(measured);
-            }
-            let error = goal_error(goal, &self.model.tool_pose(&q));
-            let pose_reached = is_reached(&error);
-            let reached = pose_reached && clearance.is_none_or(|c| c.exact_m > margin);
-            let solution = IkSolution {
-                q,
-                error,
-                pose_reached,
-                clearance,
-                reached,
-            };
-            if pose_reached {
-                if !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
-                    found.push(solution);
-                }
-            } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
-                closest = Some(solution);
-            }
+            let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
+            iterations += used;
+            self.keep(solution, &mut found, &mut closest);
+        }
+        if goal.tolerance == Tolerance::Pose && branches::applies(self.model) {
+            let (branch_starts, used) = self.branch_restarts(goal, &mut found, &mut closest, margin, &mut rng);
+            starts += branch_starts;
+            iterations += used;
         }
         // Clearances were estimated while searching (overlap depths from bounding capsules, gaps
         // unpolished); the solutions kept are measured exactly.
@@ -456,6 +443,98 @@ impl<'a> Ik<'a> {
             iterations,
             complete: false,
             proof: None,
+        }
+    }
+
+    /// Starts on the other branches of every solution in `found` (of the `closest` attempt when
+    /// none reaches the pose: a local minimum of one branch is a fair guess at the others'), the
+    /// new solutions' own branches included, until none is new or [`IkOptions::branch_starts`]
+    /// are spent; returns the starts and iterations used. Starts that are already a known
+    /// solution (the flip was exact) are not solved.
+    fn branch_restarts<R: rand::Rng>(
+        &mut self,
+        goal: &Goal,
+        found: &mut Vec<IkSolution>,
+        closest: &mut Option<IkSolution>,
+        margin: f64,
+        rng: &mut R,
+    ) -> (usize, usize) {
+        let (mut starts, mut iterations) = (0, 0);
+        let mut origins: Vec<Vec<f64>> = found.iter().map(|s| s.q.clone()).collect();
+        if origins.is_empty() {
+            origins.extend(closest.as_ref().map(|c| c.q.clone()));
+        }
+        let mut tried: Vec<Vec<f64>> = Vec::new();
+        let mut next = 0;
+        while next < origins.len() && starts < self.opts.branch_starts {
+            let tolerance = self.opts.distinct_tolerance;
+            let shoulder_known = |angle: f64| found.iter().any(|s| wrap_angle(s.q[0] - angle).abs() <= tolerance);
+            let candidates = branches::flips(self.model, &mut self.ws, &origins[next], &goal.position, &shoulder_known);
+            next += 1;
+            for q in candidates {
+                if starts >= self.opts.branch_starts {
+                    break;
+                }
+                let known = |ik: &Self, q: &[f64]| {
+                    found.iter().any(|s| ik.same_configuration(&s.q, q)) || tried.iter().any(|t| ik.same_configuration(t, q))
+                };
+                if known(self, &q) {
+                    continue;
+                }
+                tried.push(q.clone());
+                starts += 1;
+                // No collision refinement: a colliding branch is a solution of its own, and
+                // refining it would only look for another branch, which this loop does.
+                let (solution, used) = self.attempt(goal, q, false, margin, rng);
+                iterations += used;
+                let before = found.len();
+                self.keep(solution, found, closest);
+                if found.len() > before {
+                    origins.push(found[before].q.clone());
+                }
+            }
+        }
+        (starts, iterations)
+    }
+
+    /// Solves from start `q`, refining a colliding or unreached result when `refine` is set (and
+    /// there is a collision world); returns the solution, its clearance estimated, and the
+    /// iterations used.
+    fn attempt<R: rand::Rng>(&mut self, goal: &Goal, mut q: Vec<f64>, refine: bool, margin: f64, rng: &mut R) -> (IkSolution, usize) {
+        let done = CONVERGED;
+        let iterations = self.solver.solve(goal, &mut q, self.opts.max_iterations, done, rng);
+        let mut clearance = None;
+        if let Some(checker) = self.checker.as_mut() {
+            let mut measured = checker.clearance(&q, false);
+            if refine && (measured.exact_m <= margin || !is_reached(&goal_error(goal, &self.model.tool_pose(&q)))) {
+                checker.margin = margin;
+                refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, rng);
+                measured = checker.clearance(&q, false);
+            }
+            clearance = Some(measured);
+        }
+        let error = goal_error(goal, &self.model.tool_pose(&q));
+        let pose_reached = is_reached(&error);
+        let reached = pose_reached && clearance.is_none_or(|c| c.exact_m > margin);
+        let solution = IkSolution {
+            q,
+            error,
+            pose_reached,
+            clearance,
+            reached,
+        };
+        (solution, iterations)
+    }
+
+    /// Adds `solution` to `found` when it reaches the pose and is new, else keeps it as
+    /// `closest` when it is the best miss so far.
+    fn keep(&self, solution: IkSolution, found: &mut Vec<IkSolution>, closest: &mut Option<IkSolution>) {
+        if solution.pose_reached {
+            if !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
+                found.push(solution);
+            }
+        } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
+            *closest = Some(solution);
         }
     }
 
