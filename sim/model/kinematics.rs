@@ -1,7 +1,8 @@
 //! Forward kinematics and the geometric Jacobian, in f64, without heap allocation per call.
 
+use super::chain::FastChain;
 use super::{JointKind, Model};
-use nalgebra::{Isometry3, Matrix3, Matrix6xX, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix6xX, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 /// Buffers for [`Model::forward`] and [`Model::jacobian`]; make one per model and thread with
 /// [`Model::workspace`] and reuse it.
@@ -16,60 +17,6 @@ pub struct KinematicsWorkspace {
     pub jacobian: Matrix6xX<f64>,
     /// Per-joint constants of the matrix form, and its scratch space.
     fast: FastChain,
-}
-
-/// Per joint `i`, with `F` the fixed rotation of `parent_from_joint` and `K` the cross-product
-/// matrix of the unit axis: Rodrigues gives `F * Rot(axis, q) = F + sin(q) F K + (1 - cos(q)) F K^2`,
-/// so a revolute joint costs one `sin_cos` and a 3x3 multiply-add.
-#[derive(Debug, Clone)]
-struct FastChain {
-    fixed: Vec<Matrix3<f64>>,
-    fixed_k: Vec<Matrix3<f64>>,
-    fixed_k2: Vec<Matrix3<f64>>,
-    offset: Vec<Vector3<f64>>,
-    axis_in_parent: Vec<Vector3<f64>>,
-    revolute: Vec<bool>,
-    /// The axis is the joint frame's z (every DH joint): `F Rot_z(q)` mixes two columns of `F`.
-    about_z: Vec<bool>,
-    tool_rotation: Matrix3<f64>,
-    tool_offset: Vector3<f64>,
-    base_rotation: Matrix3<f64>,
-    base_offset: Vector3<f64>,
-    /// World position and rotated axis of every joint, filled by `tool_jacobian`.
-    joint_position: Vec<Vector3<f64>>,
-    joint_axis: Vec<Vector3<f64>>,
-}
-
-impl FastChain {
-    fn new(model: &Model) -> Self {
-        let mut chain = FastChain {
-            fixed: vec![],
-            fixed_k: vec![],
-            fixed_k2: vec![],
-            offset: vec![],
-            axis_in_parent: vec![],
-            revolute: vec![],
-            about_z: vec![],
-            tool_rotation: *model.last_from_tool.rotation.to_rotation_matrix().matrix(),
-            tool_offset: model.last_from_tool.translation.vector,
-            base_rotation: *model.world_from_base.rotation.to_rotation_matrix().matrix(),
-            base_offset: model.world_from_base.translation.vector,
-            joint_position: vec![Vector3::zeros(); model.dof()],
-            joint_axis: vec![Vector3::zeros(); model.dof()],
-        };
-        for joint in &model.joints {
-            let fixed = *joint.parent_from_joint.rotation.to_rotation_matrix().matrix();
-            let k = joint.axis.into_inner().cross_matrix();
-            chain.fixed.push(fixed);
-            chain.fixed_k.push(fixed * k);
-            chain.fixed_k2.push(fixed * k * k);
-            chain.offset.push(joint.parent_from_joint.translation.vector);
-            chain.axis_in_parent.push(fixed * joint.axis.into_inner());
-            chain.revolute.push(joint.kind != JointKind::Prismatic);
-            chain.about_z.push(joint.axis.into_inner() == Vector3::z());
-        }
-        chain
-    }
 }
 
 impl Model {
@@ -90,46 +37,7 @@ impl Model {
     /// When `q.len()` differs from [`Model::dof`] or `ws` was made for another model.
     pub fn tool_jacobian(&self, q: &[f64], ws: &mut KinematicsWorkspace) {
         assert_eq!(q.len(), self.dof(), "configuration length must equal the model's dof");
-        let chain = &mut ws.fast;
-        let mut rotation = chain.base_rotation;
-        let mut position = chain.base_offset;
-        for (i, &qi) in q.iter().enumerate() {
-            position += rotation * chain.offset[i];
-            let parent = rotation;
-            if chain.revolute[i] && chain.about_z[i] {
-                let (sin, cos) = super::trig::sin_cos(qi);
-                let g = parent * chain.fixed[i];
-                let (x, y) = (g.column(0).into_owned(), g.column(1).into_owned());
-                rotation = g;
-                rotation.set_column(0, &(x * cos + y * sin));
-                rotation.set_column(1, &(y * cos - x * sin));
-                chain.joint_axis[i] = g.column(2).into_owned();
-            } else if chain.revolute[i] {
-                let (sin, cos) = super::trig::sin_cos(qi);
-                rotation = parent * (chain.fixed[i] + chain.fixed_k[i] * sin + chain.fixed_k2[i] * (1.0 - cos));
-                chain.joint_axis[i] = parent * chain.axis_in_parent[i];
-            } else {
-                rotation = parent * chain.fixed[i];
-                position += rotation * (self.joints[i].axis.into_inner() * qi);
-                chain.joint_axis[i] = parent * chain.axis_in_parent[i];
-            }
-            chain.joint_position[i] = position;
-        }
-        let tool_position = position + rotation * chain.tool_offset;
-        let tool_rotation = rotation * chain.tool_rotation;
-        for i in 0..q.len() {
-            let axis = chain.joint_axis[i];
-            let mut column = ws.jacobian.column_mut(i);
-            if chain.revolute[i] {
-                column
-                    .fixed_rows_mut::<3>(0)
-                    .copy_from(&axis.cross(&(tool_position - chain.joint_position[i])));
-                column.fixed_rows_mut::<3>(3).copy_from(&axis);
-            } else {
-                column.fixed_rows_mut::<3>(0).copy_from(&axis);
-                column.fixed_rows_mut::<3>(3).fill(0.0);
-            }
-        }
+        let (tool_position, tool_rotation) = ws.fast.evaluate(q, &mut ws.jacobian);
         ws.tool_in_world = Isometry3::from_parts(
             Translation3::from(tool_position),
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(tool_rotation)),
@@ -223,27 +131,22 @@ impl Model {
 
 #[cfg(test)]
 mod tests {
-    use crate::design;
-    use crate::model::from_design;
-    use rand::SeedableRng;
-    use std::path::Path;
+    use crate::model::chain::tests::{configurations, kernel_models};
 
+    /// Every kernel of the matrix form (identity, alpha-only, permutation and general fixed
+    /// rotations; revolute about z and about other axes; prismatic; 4, 7 dof) against the
+    /// isometry form.
     #[test]
     fn matrix_form_equals_isometry_form() {
-        let text = r#"{"mode": "free", "base": {"position": [0.1, 0.2, 0.3], "rpy": [0.1, -0.2, 0.3]},
-            "tool": {"position": [0.0, 0.05, 0.1], "rpy": [0.4, 0.0, -0.3]}, "joints": [
-            {"d": 0.3, "a": 0.1, "alpha": 1.2}, {"d": -0.2, "a": 0.4, "alpha": -0.4},
-            {"d": 0.0, "a": 0.0, "alpha": 0.7}, {"d": 0.15, "a": -0.3, "alpha": 0.0}]}"#;
-        let model = from_design(&design::parse(text, Path::new("t.json")).expect("valid"));
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let (mut slow, mut fast) = (model.workspace(), model.workspace());
-        for _ in 0..100 {
-            let q = model.random_configuration(&mut rng);
-            model.jacobian(&q, &mut slow);
-            model.tool_jacobian(&q, &mut fast);
-            let (dt, da) = crate::frames::pose_difference(&slow.tool_in_world, &fast.tool_in_world);
-            assert!(dt < 1e-14 && da < 1e-14, "{dt} {da}");
-            assert!((slow.jacobian.clone() - &fast.jacobian).abs().max() < 1e-14);
+        for model in kernel_models() {
+            let (mut slow, mut fast) = (model.workspace(), model.workspace());
+            for q in configurations(&model) {
+                model.jacobian(&q, &mut slow);
+                model.tool_jacobian(&q, &mut fast);
+                let (dt, da) = crate::frames::pose_difference(&slow.tool_in_world, &fast.tool_in_world);
+                assert!(dt < 1e-14 && da < 1e-14, "{} {dt} {da}", model.name);
+                assert!((slow.jacobian.clone() - &fast.jacobian).abs().max() < 1e-14, "{}", model.name);
+            }
         }
     }
 }

@@ -39,9 +39,36 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if x.is_nan() || x.abs() >= FAST_RANGE {
         return x.sin_cos();
     }
+    reduced_sin_cos(x)
+}
+
+/// `sin_cos` of every angle of `x` into `out` (same length): the kinematics chain takes all its
+/// sines first, so that they leave the chain's dependent products and the compiler can pair them
+/// in SSE2 registers (each lane computes exactly what [`sin_cos`] does, bit for bit).
+#[inline]
+pub(crate) fn sin_cos_all(x: &[f64], out: &mut [(f64, f64)]) {
+    debug_assert_eq!(x.len(), out.len());
+    if x.iter().all(|x| x.abs() < FAST_RANGE) {
+        // `abs() < FAST_RANGE` is false for NaN, so a NaN takes the libm path below.
+        for (x, out) in x.iter().zip(out.iter_mut()) {
+            *out = reduced_sin_cos(*x);
+        }
+    } else {
+        for (x, out) in x.iter().zip(out.iter_mut()) {
+            *out = sin_cos(*x);
+        }
+    }
+}
+
+/// Cody-Waite reduction and the fdlibm kernels for `|x| < FAST_RANGE`, without branches: a
+/// quadrant taken by `match` mispredicts on random angles, which cost more than the polynomials.
+#[inline(always)]
+fn reduced_sin_cos(x: f64) -> (f64, f64) {
     // Adding and removing 1.5 * 2^52 rounds to the nearest integer in two additions; `round()`
-    // is a libm call on baseline x86_64 (no SSE4.1).
-    let quadrant = (x * FRAC_2_PI + ROUNDING_SHIFT) - ROUNDING_SHIFT;
+    // is a libm call on baseline x86_64 (no SSE4.1). The shifted sum's low mantissa bits are
+    // that integer in two's complement, so they give the quadrant without a conversion.
+    let shifted = x * FRAC_2_PI + ROUNDING_SHIFT;
+    let quadrant = shifted - ROUNDING_SHIFT;
     let r = ((x - quadrant * PIO2_1) - quadrant * PIO2_2) - quadrant * PIO2_3;
     let z = r * r;
     let sin = r + r * z * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
@@ -50,12 +77,17 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     let half = 0.5 * z;
     let w = 1.0 - half;
     let cos = w + (((1.0 - w) - half) + tail);
-    match (quadrant as i64) & 3 {
-        0 => (sin, cos),
-        1 => (cos, -sin),
-        2 => (-sin, -cos),
-        _ => (-cos, sin),
-    }
+    // Quadrant n: (sin, cos) -> (sin, cos), (cos, -sin), (-sin, -cos), (-cos, sin); a swap on
+    // odd n, then the sign bit of sin flips when bit 1 of n is set and that of cos when bit 1
+    // of n + 1 is (negation is exactly a sign-bit flip, so this equals the `match`).
+    let n = shifted.to_bits();
+    let odd = (n & 1).wrapping_neg();
+    let (sin_bits, cos_bits) = (sin.to_bits(), cos.to_bits());
+    let first = (sin_bits & !odd) | (cos_bits & odd);
+    let second = (cos_bits & !odd) | (sin_bits & odd);
+    let sign_first = (n & 2) << 62;
+    let sign_second = (n.wrapping_add(1) & 2) << 62;
+    (f64::from_bits(first ^ sign_first), f64::from_bits(second ^ sign_second))
 }
 
 #[cfg(test)]
@@ -73,6 +105,45 @@ mod tests {
             worst = worst.max((s - x.sin()).abs()).max((c - x.cos()).abs());
         }
         assert!(worst < 4.0 * f64::EPSILON, "worst error {worst:e}");
+    }
+
+    /// The former quadrant `match`, kept as the reference of the branch-free selection.
+    fn by_match(x: f64) -> (f64, f64) {
+        let quadrant = (x * FRAC_2_PI + ROUNDING_SHIFT) - ROUNDING_SHIFT;
+        let r = ((x - quadrant * PIO2_1) - quadrant * PIO2_2) - quadrant * PIO2_3;
+        let z = r * r;
+        let sin = r + r * z * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
+        let tail = z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+        let half = 0.5 * z;
+        let w = 1.0 - half;
+        let cos = w + (((1.0 - w) - half) + tail);
+        match (quadrant as i64) & 3 {
+            0 => (sin, cos),
+            1 => (cos, -sin),
+            2 => (-sin, -cos),
+            _ => (-cos, sin),
+        }
+    }
+
+    #[test]
+    fn branch_free_quadrant_and_batch_equal_the_match_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let mut angles: Vec<f64> = (0..100_000).map(|_| rng.random_range(-1e4..1e4)).collect();
+        angles.extend((-40..=40).map(|k| f64::from(k) * std::f64::consts::FRAC_PI_4));
+        angles.extend([0.0, -0.0, 1e-300, -1e-300, 9.9e5, -9.9e5]);
+        let mut batch = vec![(0.0, 0.0); angles.len()];
+        sin_cos_all(&angles, &mut batch);
+        for (&x, &(s, c)) in angles.iter().zip(&batch) {
+            let (rs, rc) = by_match(x);
+            let (fs, fc) = sin_cos(x);
+            assert_eq!((fs.to_bits(), fc.to_bits()), (rs.to_bits(), rc.to_bits()), "{x}");
+            assert_eq!((s.to_bits(), c.to_bits()), (rs.to_bits(), rc.to_bits()), "{x}");
+        }
+        let mut out = [(0.0, 0.0); 3];
+        sin_cos_all(&[0.5, f64::NAN, 2e9], &mut out);
+        assert_eq!(out[0], sin_cos(0.5));
+        assert!(out[1].0.is_nan() && out[1].1.is_nan());
+        assert_eq!(out[2], 2e9f64.sin_cos());
     }
 
     #[test]
