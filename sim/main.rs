@@ -201,6 +201,9 @@ enum Command {
     /// The paper's Table 1 (UR15, UR20, ABB IRB 2600 on the cluttered tasks), its numbers
     /// beside ours.
     Table1(sweep_cli::Table1Args),
+    /// The paper's genetic-algorithm baseline over the 6-slot modular catalog on one scenario
+    /// (population 128, 100 generations, single-point crossover, tournament 4, mutation 0.05).
+    Ga(sweep_cli::GaArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -317,6 +320,7 @@ fn main() -> ExitCode {
         Some(Command::Sweep(args)) => sweep_cli::sweep_command(args),
         Some(Command::Merge(args)) => sweep_cli::merge_command(args),
         Some(Command::Table1(args)) => sweep_cli::table1_command(args),
+        Some(Command::Ga(args)) => sweep_cli::ga_command(args),
         None => run(&cli),
     };
     match result {

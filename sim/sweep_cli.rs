@@ -98,6 +98,38 @@ pub(crate) struct Table1Args {
     threads: Option<u64>,
 }
 
+#[derive(Debug, clap::Args)]
+pub(crate) struct GaArgs {
+    /// The scenario (one task).
+    #[arg(long, value_name = "FILE")]
+    scenario: String,
+    /// Seed of the GA's random choices (and of IK's starts).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    seed: u64,
+    /// Designs per generation.
+    #[arg(long, value_name = "N", default_value_t = 128, value_parser = clap::value_parser!(u64).range(2..=100_000))]
+    population: u64,
+    /// Generations after the random first one.
+    #[arg(long, value_name = "N", default_value_t = 100, value_parser = clap::value_parser!(u64).range(0..=100_000))]
+    generations: u64,
+    /// Score the best design against this finished brute force (`sweep catalog:modular6 --out DIR`).
+    #[arg(long, value_name = "DIR")]
+    reference: Option<PathBuf>,
+    /// Write the run (settings, best design and record, best per generation) as JSON to FILE
+    /// (never over an existing file unless --force).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Replace --out if it exists.
+    #[arg(long)]
+    force: bool,
+    /// Worker threads [default: the number of cores]; the run is the same for any number.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
+    threads: Option<u64>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
 /// Pairs done of all, with the time taken and left, on stderr (drawn only on a terminal).
 struct PairBar(indicatif::ProgressBar);
 
@@ -242,5 +274,75 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
     progress.0.finish_and_clear();
     let result = result?;
     print!("{}", sweep::paper::table_1(&result.records, scenarios.len()));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `validate-design ga ...`.
+pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
+    threads(args.threads);
+    let scenario = inputs::resolve_scenarios(std::slice::from_ref(&args.scenario))?;
+    let [scenario] = scenario.as_slice() else {
+        return Err(sweep::SweepError::Scenarios {
+            argument: args.scenario.clone(),
+            message: "the GA runs on one scenario; this names several".into(),
+        }
+        .into());
+    };
+    let reference = reference(args.reference.as_ref())?;
+    let opts = sweep::ga::GaOptions {
+        population: usize::try_from(args.population).unwrap_or(usize::MAX),
+        generations: usize::try_from(args.generations).unwrap_or(usize::MAX),
+        seed: args.seed,
+        ..Default::default()
+    };
+    let mode = SweepMode::ReachOnly {
+        ik: proving_ground::ik::IkOptions {
+            seed: args.seed,
+            ..Default::default()
+        },
+    };
+    let progress = bar(args.quiet);
+    let result = sweep::ga::run(scenario, &mode, &opts, &progress);
+    progress.0.finish_and_clear();
+    let result = result?;
+    if let Some(path) = &args.out {
+        let text = serde_json::to_string_pretty(&result).map_err(|e| Error::Report { message: e.to_string() })? + "\n";
+        proving_ground::files::write_atomic(path, text.as_bytes(), args.force).map_err(|e| sweep::SweepError::Write {
+            path: path.clone(),
+            message: match e {
+                proving_ground::files::WriteError::Exists => "the file exists; pass --force to replace it".into(),
+                other => other.to_string(),
+            },
+        })?;
+    }
+    if !args.quiet {
+        let best = &result.best;
+        println!(
+            "GA ({} x {} generations, seed {}) on {}: {} distinct designs evaluated",
+            opts.population, opts.generations, opts.seed, result.scenario, result.evaluations
+        );
+        println!(
+            "best {}: task loss {}, {}/{} goals solved{}",
+            best.design,
+            best.task_loss.map_or_else(|| "none".into(), |l| format!("{l:.4}")),
+            best.goals_solved,
+            best.goals,
+            if best.task_solved { ", task solved" } else { "" }
+        );
+        if let Some((name, records)) = &reference {
+            let distributions = sweep::table::distributions(std::slice::from_ref(best), Some(records));
+            if let Some(distribution) = distributions.get(&best.scenario) {
+                println!(
+                    "against {name}: score {}, percentile {}",
+                    distribution
+                        .score(best.task_loss)
+                        .map_or_else(|| "n/a".into(), |s| format!("{s:.4}")),
+                    distribution
+                        .percentile(best.task_loss)
+                        .map_or_else(|| "n/a".into(), |p| format!("{p:.1}"))
+                );
+            }
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -73,10 +73,14 @@ pub fn modular6_slots(index: usize) -> [SlotOption; CATALOG_SLOTS] {
 }
 
 fn modular6(index: usize) -> DesignEntry {
-    let slots = modular6_slots(index);
+    catalog_entry(&modular6_slots(index))
+}
+
+/// The catalog robot of `slots`, with its id (`modular6/D-Ls-...` for six slots).
+pub fn catalog_entry(slots: &[SlotOption]) -> DesignEntry {
     let code: Vec<&str> = slots.iter().map(|s| slot_code(*s)).collect();
     DesignEntry {
-        id: format!("modular6/{}", code.join("-")),
+        id: format!("modular{}/{}", slots.len(), code.join("-")),
         source: DesignSource::Modular(slots.to_vec()),
     }
 }

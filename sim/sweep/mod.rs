@@ -9,6 +9,7 @@
 //! sweep resumes where it stopped; `--shard K/N` runs every N-th pair, and [`merge`] joins the
 //! shards into the folder the whole sweep would have written, byte for byte.
 
+pub mod ga;
 pub mod inputs;
 pub mod paper;
 pub mod record;
@@ -344,7 +345,7 @@ pub fn read_reference(dir: &Path) -> Result<(String, Vec<Record>), SweepError> {
             message: "holds no finished sweep (no results.jsonl)".into(),
         });
     }
-    let records = store::read_records(&results)?;
+    let records = store::read_input_records(&results)?;
     let designs = records
         .iter()
         .map(|r| r.design.as_str())

@@ -68,13 +68,23 @@ fn write(path: &Path, text: &str) -> Result<(), SweepError> {
     })
 }
 
+/// Results of 15 625 designs x 36 tasks run to about 150 MB.
+const MAX_RESULTS_BYTES: u64 = 1 << 30;
+
+/// Reads one of the sweep's own files, which it rewrites when it finishes: not recorded as an
+/// input of the run (an input is never overwritten).
 fn read_text(path: &Path) -> Result<String, SweepError> {
-    // Results of 15 625 designs x 36 tasks run to about 150 MB.
-    const MAX_RESULTS_BYTES: u64 = 1 << 30;
-    crate::files::read_text(path, MAX_RESULTS_BYTES).map_err(|source| SweepError::Read {
+    let error = |source: std::io::Error| SweepError::Read {
         path: path.to_path_buf(),
         source,
-    })
+    };
+    let size = std::fs::metadata(path).map_err(error)?.len();
+    if size > MAX_RESULTS_BYTES {
+        return Err(error(std::io::Error::other(format!(
+            "{size} bytes; at most {MAX_RESULTS_BYTES} are read"
+        ))));
+    }
+    std::fs::read_to_string(path).map_err(error)
 }
 
 /// Reads `DIR/sweep.json`; `None` when there is none.
@@ -219,12 +229,27 @@ fn record_line(record: &Record) -> Result<String, SweepError> {
     })
 }
 
-/// Reads a results file: every line a record.
+/// Reads a sweep's own results file: every line a record.
 ///
 /// # Errors
 /// [`SweepError::Folder`] naming the line that is not a record.
 pub fn read_records(path: &Path) -> Result<Vec<Record>, SweepError> {
-    let text = read_text(path)?;
+    parse_records(path, &read_text(path)?)
+}
+
+/// Reads another sweep's results (a reference): an input of this run, never overwritten by it.
+///
+/// # Errors
+/// As [`read_records`].
+pub fn read_input_records(path: &Path) -> Result<Vec<Record>, SweepError> {
+    let text = crate::files::read_text(path, MAX_RESULTS_BYTES).map_err(|source| SweepError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_records(path, &text)
+}
+
+fn parse_records(path: &Path, text: &str) -> Result<Vec<Record>, SweepError> {
     text.lines()
         .enumerate()
         .map(|(index, line)| {

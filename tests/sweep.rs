@@ -1,0 +1,275 @@
+//! Design-space sweeps through the binary: shards merge into the unsharded sweep byte for byte,
+//! an interrupted sweep resumes, folders are never taken over, the GA repeats for a seed, scores
+//! span 0 to 1 over the reference, and a record is what a single run reports.
+
+mod common;
+
+use assert_cmd::Command;
+use common::repo;
+use std::path::Path;
+
+fn validate_design() -> Command {
+    let mut cmd = Command::cargo_bin("validate-design").expect("binary is built");
+    cmd.current_dir(repo());
+    cmd
+}
+
+/// Two presets, two shipped designs and two tasks: ten pairs, a second or two of work.
+const DESIGNS: [&str; 3] = ["designs/ur5e.json", "designs/modular-elbow.json", "catalog:table1"];
+const SCENARIOS: [&str; 2] = ["scenarios/cluttered/task-00.json", "scenarios/cluttered/task-01.json"];
+const FILES: [&str; 4] = ["sweep.json", "results.jsonl", "results.csv", "table.txt"];
+
+fn sweep(out: &Path, extra: &[&str]) -> std::process::Output {
+    let output = validate_design()
+        .arg("sweep")
+        .args(DESIGNS)
+        .arg("--scenarios")
+        .args(SCENARIOS)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .expect("runs");
+    assert!(
+        output.status.success(),
+        "sweep {extra:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn assert_same_files(a: &Path, b: &Path) {
+    for name in FILES {
+        assert_eq!(read(&a.join(name)), read(&b.join(name)), "{name} differs");
+    }
+    assert!(!b.join("pairs.partial.jsonl").exists(), "a finished sweep keeps no partial log");
+}
+
+#[test]
+fn shards_run_as_separate_processes_merge_into_the_unsharded_sweep_byte_for_byte() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let whole = dir.path().join("whole");
+    sweep(&whole, &["--threads", "2"]);
+    let records = read(&whole.join("results.jsonl"));
+    assert_eq!(records.lines().count(), 10, "{records}");
+    let shards: Vec<_> = (1..=3).map(|k| dir.path().join(format!("shard-{k}"))).collect();
+    for (k, shard) in shards.iter().enumerate() {
+        sweep(shard, &["--shard", &format!("{}/3", k + 1), "--threads", "1"]);
+    }
+    let merged = dir.path().join("merged");
+    let output = validate_design()
+        .arg("merge")
+        .args(&shards)
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_same_files(&whole, &merged);
+
+    // Two shards of three do not make the sweep.
+    let output = validate_design()
+        .arg("merge")
+        .args(&shards[..2])
+        .arg("--out")
+        .arg(dir.path().join("partial"))
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("shards missing: 3/3"));
+}
+
+#[test]
+fn an_interrupted_sweep_resumes_without_running_its_finished_pairs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let whole = dir.path().join("whole");
+    sweep(&whole, &[]);
+    // The state of an interruption: the manifest, six finished pairs, a seventh cut short.
+    let resumed = dir.path().join("resumed");
+    std::fs::create_dir(&resumed).expect("mkdir");
+    std::fs::copy(whole.join("sweep.json"), resumed.join("sweep.json")).expect("copy");
+    let text = read(&whole.join("results.jsonl"));
+    let lines: Vec<&str> = text.lines().collect();
+    let mut partial: String = lines[..6].iter().rev().map(|l| format!("{l}\n")).collect();
+    partial.push_str(&lines[6][..lines[6].len() / 2]);
+    std::fs::write(resumed.join("pairs.partial.jsonl"), partial).expect("write");
+    let output = sweep(&resumed, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("10 pairs (4 computed now, 6 resumed)"), "{stderr}");
+    assert_same_files(&whole, &resumed);
+    // A finished sweep run again computes nothing.
+    let output = sweep(&resumed, &[]);
+    assert!(String::from_utf8_lossy(&output.stderr).contains("(0 computed now, 10 resumed)"));
+}
+
+#[test]
+fn a_folder_holding_another_sweep_or_other_files_is_not_taken_over() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    sweep(&out, &[]);
+    let other_seed = validate_design()
+        .arg("sweep")
+        .args(DESIGNS)
+        .arg("--scenarios")
+        .args(SCENARIOS)
+        .arg("--out")
+        .arg(&out)
+        .args(["--seed", "1"])
+        .output()
+        .expect("runs");
+    assert_eq!(other_seed.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&other_seed.stderr);
+    assert!(
+        stderr.contains("holds another sweep (seed 0 and 4 IK seeds instead of 1 and 4)") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    sweep(&out, &["--seed", "1", "--force"]);
+
+    let foreign = dir.path().join("foreign");
+    std::fs::create_dir(&foreign).expect("mkdir");
+    std::fs::write(foreign.join("notes.txt"), "mine").expect("write");
+    for extra in [&[][..], &["--force"][..]] {
+        let output = validate_design()
+            .arg("sweep")
+            .arg("designs/ur5e.json")
+            .arg("--scenarios")
+            .arg(SCENARIOS[0])
+            .arg("--out")
+            .arg(&foreign)
+            .args(extra)
+            .output()
+            .expect("runs");
+        assert_eq!(output.status.code(), Some(2), "{extra:?}");
+        assert!(String::from_utf8_lossy(&output.stderr).contains("is not empty and holds no sweep (notes.txt)"));
+    }
+    assert_eq!(read(&foreign.join("notes.txt")), "mine");
+}
+
+#[test]
+fn the_ga_repeats_itself_for_a_seed_on_any_number_of_threads() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let run = |threads: &str, seed: &str, name: &str| {
+        let out = dir.path().join(name);
+        let output = validate_design()
+            .args(["ga", "--scenario", SCENARIOS[0], "--population", "12", "--generations", "4"])
+            .args(["--seed", seed, "--threads", threads, "--out"])
+            .arg(&out)
+            .output()
+            .expect("runs");
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        read(&out)
+    };
+    let first = run("1", "3", "a.json");
+    assert_eq!(first, run("2", "3", "b.json"));
+    assert_ne!(first, run("2", "4", "c.json"), "another seed searches elsewhere");
+    let result: serde_json::Value = serde_json::from_str(&first).expect("json");
+    assert_eq!(result["history"].as_array().map(Vec::len), Some(5));
+    // Elitist survival: the best loss never gets worse.
+    let best: Vec<f64> = result["history"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|g| g["best_loss"].as_f64().unwrap_or(f64::INFINITY))
+        .collect();
+    assert!(best.windows(2).all(|w| w[1] <= w[0]), "{best:?}");
+}
+
+#[test]
+fn scores_are_zero_and_one_at_the_reference_worst_and_best_and_a_reference_is_reused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Every 500th robot of the catalog: 32 designs stand in for the brute force.
+    let reference = dir.path().join("reference");
+    let output = validate_design()
+        .args([
+            "sweep",
+            "catalog:modular6",
+            "--shard",
+            "1/500",
+            "--scenarios",
+            SCENARIOS[0],
+            "--out",
+        ])
+        .arg(&reference)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let csv = read(&reference.join("results.csv"));
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 32);
+    let scores: Vec<f64> = rows.iter().filter_map(|r| r[10].parse().ok()).collect();
+    assert!(scores.iter().any(|&s| s == 0.0) && scores.iter().any(|&s| s == 1.0), "{scores:?}");
+    assert!(scores.iter().all(|&s| (0.0..=1.0).contains(&s)));
+
+    // A design scored against the saved distribution: its loss placed among the 32.
+    let losses: Vec<f64> = rows.iter().filter_map(|r| r[9].parse().ok()).collect();
+    let (best, worst) = losses
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(b, w), &l| (b.min(l), w.max(l)));
+    let scored = dir.path().join("scored");
+    let output = validate_design()
+        .args(["sweep", "designs/modular-elbow.json", "--scenarios", SCENARIOS[0], "--reference"])
+        .arg(&reference)
+        .arg("--out")
+        .arg(&scored)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let csv = read(&scored.join("results.csv"));
+    let row: Vec<&str> = csv.lines().nth(1).expect("one record").split(',').collect();
+    let loss: f64 = row[9].parse().expect("a loss");
+    let score: f64 = row[10].parse().expect("a score");
+    assert!(
+        (score - (worst - loss) / (worst - best)).abs() < 1e-4,
+        "{row:?} best {best} worst {worst}"
+    );
+    assert!(read(&scored.join("table.txt")).contains("against the 32 designs of"));
+}
+
+#[test]
+fn a_sweep_record_is_what_the_single_reach_only_run_reports() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    sweep(&out, &[]);
+    let records: Vec<serde_json::Value> = read(&out.join("results.jsonl"))
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a record"))
+        .collect();
+    for (design, scenario) in [("designs/ur5e.json", SCENARIOS[0]), ("designs/modular-elbow.json", SCENARIOS[1])] {
+        let json = dir.path().join("single.json");
+        let output = validate_design()
+            .args([design, "--scenario", scenario, "--reach-only", "--quiet", "--json"])
+            .arg(&json)
+            .output()
+            .expect("runs");
+        assert!(output.status.code().is_some_and(|c| c <= 1));
+        let report: serde_json::Value = serde_json::from_str(&read(&json)).expect("report");
+        let goals = report["goals"].as_array().expect("goals");
+        let reached = goals.iter().filter(|g| g["outcome"] == "reached").count();
+        let record = records
+            .iter()
+            .find(|r| r["design"] == design && r["scenario"] == scenario)
+            .expect("the pair is in the sweep");
+        assert_eq!(record["goals_solved"].as_u64(), Some(reached as u64), "{design} on {scenario}");
+        assert_eq!(
+            record["task_solved"].as_bool(),
+            Some(report["verdict"]["passed"].as_bool() == Some(true))
+        );
+    }
+}
+
+#[test]
+fn table_1_puts_the_papers_numbers_beside_ours() {
+    let output = validate_design()
+        .args(["table1", "--scenarios", SCENARIOS[0]])
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    for expected in ["UR15", "36 %", "UR20", "77.43 %", "ABB2600", "20.50 mm", "regeneration"] {
+        assert!(stdout.contains(expected), "{expected}: {stdout}");
+    }
+}
