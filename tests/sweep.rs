@@ -201,7 +201,7 @@ fn scores_are_zero_and_one_at_the_reference_worst_and_best_and_a_reference_is_re
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 32);
     let scores: Vec<f64> = rows.iter().filter_map(|r| r[10].parse().ok()).collect();
-    assert!(scores.iter().any(|&s| s == 0.0) && scores.iter().any(|&s| s == 1.0), "{scores:?}");
+    assert!(scores.contains(&0.0) && scores.contains(&1.0), "{scores:?}");
     assert!(scores.iter().all(|&s| (0.0..=1.0).contains(&s)));
 
     // A design scored against the saved distribution: its loss placed among the 32.
