@@ -33,6 +33,12 @@ Examples:
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
   validate-design snapshot --suite proving-ground.json             # your own golden suite
   validate-design snapshot --suite proving-ground.json --accept    # record its new snapshots
+  validate-design sweep catalog:modular6 --scenarios scenarios/cluttered/task-00.json --out bf-00   # brute force
+  validate-design sweep 'designs/*.json' --scenarios scenarios/cluttered --full --engines none --out runs-1 --shard 1/2
+  validate-design merge runs-1 runs-2 --out runs      # the shards joined: what the unsharded sweep writes
+  validate-design sweep designs/ur5e.json --scenarios scenarios/cluttered/task-00.json --reference bf-00
+  validate-design table1                              # the paper's Table 1 beside ours
+  validate-design ga --scenario scenarios/cluttered/task-00.json --seed 1 --reference bf-00 --out ga-00.json
 
 Exit codes:
   0  the design passes the scenario (every goal reached by a certified collision-free path,
@@ -44,6 +50,8 @@ Exit codes:
      passed, an output that is a file the run read, a failed write, MuJoCo missing)
   snapshot: 0 every snapshot matches (or was accepted), 1 a difference, new snapshot or
      orphan, 2 bad input
+  sweep, merge, table1, ga: 0 the runs finished (whatever the designs' verdicts: they are in the
+     results), 2 bad input, a folder that holds something else, or a pair that could not run
 
 Environment:
   ROS_PACKAGE_PATH  extra ':'-separated roots for package:// mesh URIs
