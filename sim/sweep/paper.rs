@@ -1,7 +1,7 @@
 //! The paper's Table 1 (industrial manipulators on its 36 cluttered tasks) beside ours.
 
 use super::record::Record;
-use super::table;
+use super::table::{self, percent};
 use std::fmt::Write;
 
 /// One row of the paper's Table 1: solved tasks (%), solved goals (%), mean error (mm).
@@ -92,12 +92,4 @@ pub fn table_1(records: &[Record], scenarios: usize) -> String {
     }
     let _ = writeln!(out, "\n(\"Ours\" in the paper is its generated modular designs, best of eight per task; run `validate-design sweep catalog:modular6 ...` for our brute force.)");
     out
-}
-
-fn percent(part: usize, whole: usize) -> f64 {
-    if whole == 0 {
-        0.0
-    } else {
-        100.0 * part as f64 / whole as f64
-    }
 }

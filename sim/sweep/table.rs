@@ -195,7 +195,8 @@ pub fn overall(records: &[Record], distributions: &BTreeMap<String, Distribution
         .collect()
 }
 
-fn percent(part: usize, whole: usize) -> f64 {
+/// `part` of `whole` in percent (0 for nothing of nothing).
+pub(super) fn percent(part: usize, whole: usize) -> f64 {
     if whole == 0 {
         0.0
     } else {
