@@ -103,9 +103,12 @@ pub(crate) struct GaArgs {
     /// The scenario (one task).
     #[arg(long, value_name = "FILE")]
     scenario: String,
-    /// Seed of the GA's random choices (and of IK's starts).
+    /// Seed of the GA's random choices.
     #[arg(long, value_name = "N", default_value_t = 0)]
     seed: u64,
+    /// Seed of IK's random starts (as `sweep --seed`; a --reference must have been run with it).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    ik_seed: u64,
     /// Designs per generation.
     #[arg(long, value_name = "N", default_value_t = 128, value_parser = clap::value_parser!(u64).range(2..=100_000))]
     population: u64,
@@ -164,7 +167,7 @@ fn threads(count: Option<u64>) {
     }
 }
 
-fn reference(dir: Option<&PathBuf>) -> Result<Option<(String, Vec<sweep::record::Record>)>, Error> {
+fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Error> {
     Ok(match dir {
         Some(dir) => Some(sweep::read_reference(dir)?),
         None => None,
@@ -280,7 +283,13 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
 /// `validate-design ga ...`.
 pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
     threads(args.threads);
-    let scenario = inputs::resolve_scenarios(std::slice::from_ref(&args.scenario))?;
+    let scenario = inputs::resolve_scenarios(std::slice::from_ref(&args.scenario)).map_err(|e| match e {
+        sweep::SweepError::Scenarios { message, .. } => sweep::SweepError::Scenarios {
+            argument: format!("{} (--scenario)", args.scenario),
+            message,
+        },
+        other => other,
+    })?;
     let [scenario] = scenario.as_slice() else {
         return Err(sweep::SweepError::Scenarios {
             argument: args.scenario.clone(),
@@ -297,10 +306,14 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
     };
     let mode = SweepMode::ReachOnly {
         ik: proving_ground::ik::IkOptions {
-            seed: args.seed,
+            seed: args.ik_seed,
             ..Default::default()
         },
     };
+    let reference_records = reference
+        .as_ref()
+        .map(|r| sweep::reference_records(r, &mode, std::slice::from_ref(scenario)))
+        .transpose()?;
     let progress = bar(args.quiet);
     let result = sweep::ga::run(scenario, &mode, &opts, &progress);
     progress.0.finish_and_clear();
@@ -329,11 +342,13 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
             best.goals,
             if best.task_solved { ", task solved" } else { "" }
         );
-        if let Some((name, records)) = &reference {
+        if let (Some(reference), Some(records)) = (&reference, &reference_records) {
             let distributions = sweep::table::distributions(std::slice::from_ref(best), Some(records));
             if let Some(distribution) = distributions.get(&best.scenario) {
                 println!(
-                    "against {name}: score {}, percentile {}",
+                    "against the {} designs of {}: score {}, percentile {}",
+                    distribution.len(),
+                    reference.dir.display(),
                     distribution
                         .score(best.task_loss)
                         .map_or_else(|| "n/a".into(), |s| format!("{s:.4}")),

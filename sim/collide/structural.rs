@@ -135,8 +135,9 @@ const CACHE_ENTRIES: usize = 1 << 16;
 /// which is decided every time (a mesh's key would be the whole mesh).
 fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &str, opts: &StructuralOptions) -> Option<String> {
     use std::fmt::Write;
+    // Names and labels quoted ({:?}), so no two different lists of them read the same.
     let mut key = format!(
-        "{} {} {} {first} {second} {a_name} {b_name};",
+        "{} {} {} {first} {second} {a_name:?} {b_name:?};",
         opts.samples, opts.seed, opts.fold_samples
     );
     for joint in &model.joints {
@@ -163,7 +164,7 @@ fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &s
             let r = collider.link_from_shape.rotation.quaternion().coords;
             let _ = write!(
                 key,
-                "<{:?} {:?} {:?} {}>",
+                "<{:?} {:?} {:?} {:?}>",
                 t.as_slice(),
                 r.as_slice(),
                 collider.shape,

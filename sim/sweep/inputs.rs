@@ -82,6 +82,7 @@ pub fn catalog_entry(slots: &[SlotOption]) -> DesignEntry {
     DesignEntry {
         id: format!("modular{}/{}", slots.len(), code.join("-")),
         source: DesignSource::Modular(slots.to_vec()),
+        sha256: None,
     }
 }
 
@@ -89,6 +90,7 @@ fn preset(preset: Preset) -> DesignEntry {
     DesignEntry {
         id: format!("preset/{}", preset.name()),
         source: DesignSource::Preset(preset),
+        sha256: None,
     }
 }
 
@@ -99,6 +101,8 @@ pub struct DesignEntry {
     pub id: String,
     /// Where the design comes from.
     pub source: DesignSource,
+    /// Files: SHA-256 of the file's bytes and of the model read from it.
+    pub sha256: Option<String>,
 }
 
 /// How a sweep's design is built.
@@ -207,11 +211,18 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
         }
         for path in expand(argument, &DESIGN_EXTENSIONS, "design")? {
             let loaded = pipeline::load(&path, load).map_err(|e| SweepError::Load(Box::new(e)))?;
-            let id = path.to_string_lossy().into_owned();
+            let bytes = crate::files::read_bytes(&path, crate::limits::MAX_TEXT_BYTES).map_err(|source| SweepError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            // The model's text covers what the file names (meshes, included files) too.
+            let mut identity = bytes;
+            identity.extend_from_slice(format!("{:?}", loaded.model).as_bytes());
             push(
                 DesignEntry {
-                    id,
+                    id: path.to_string_lossy().into_owned(),
                     source: DesignSource::File(Arc::new(loaded)),
+                    sha256: Some(super::store::sha256_hex(&identity)),
                 },
                 &mut entries,
             );
@@ -254,7 +265,9 @@ pub fn resolve_scenarios(arguments: &[String]) -> Result<Vec<ScenarioEntry>, Swe
                 path: path.clone(),
                 source,
             })?;
-            let scenario = pipeline::load_scenario(&path).map_err(|e| SweepError::Load(Box::new(e)))?;
+            // Parsed from the bytes hashed, so the hash is of what was run.
+            let scenario = crate::scenario::parse(&String::from_utf8_lossy(&bytes), &path)
+                .map_err(|e| SweepError::Load(Box::new(crate::error::Error::from(e))))?;
             entries.push(ScenarioEntry {
                 id,
                 scenario,

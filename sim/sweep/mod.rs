@@ -174,9 +174,9 @@ pub struct SweepOptions {
     pub force: bool,
     /// Run this shard only.
     pub shard: Option<Shard>,
-    /// Records to score against (a brute-force sweep's `results.jsonl`), per scenario id; `None`
-    /// scores against the sweep itself.
-    pub reference: Option<(String, Vec<Record>)>,
+    /// A finished sweep to score against (the brute force); `None` scores against the sweep
+    /// itself.
+    pub reference: Option<Reference>,
     /// Rows per ranked table.
     pub top: usize,
 }
@@ -207,7 +207,13 @@ fn manifest(designs: &[DesignEntry], scenarios: &[ScenarioEntry], opts: &SweepOp
         engines,
         seed: opts.mode.ik().seed,
         ik_seeds: opts.mode.ik().seeds,
-        designs: designs.iter().map(|d| d.id.clone()).collect(),
+        designs: designs
+            .iter()
+            .map(|d| store::DesignRef {
+                id: d.id.clone(),
+                sha256: d.sha256.clone(),
+            })
+            .collect(),
         scenarios: scenarios
             .iter()
             .map(|s| store::ScenarioRef {
@@ -216,6 +222,7 @@ fn manifest(designs: &[DesignEntry], scenarios: &[ScenarioEntry], opts: &SweepOp
             })
             .collect(),
         shard: opts.shard.map(Shard::text),
+        reference: opts.reference.as_ref().map(|r| r.sha256.clone()),
     }
 }
 
@@ -232,6 +239,11 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<SweepResult, SweepError> {
     let manifest = manifest(designs, scenarios, opts);
+    let reference = opts
+        .reference
+        .as_ref()
+        .map(|r| reference_records(r, &opts.mode, scenarios))
+        .transpose()?;
     let mut done = match &opts.out {
         Some(dir) => store::open(dir, &manifest, opts.force)?,
         None => Vec::new(),
@@ -242,6 +254,20 @@ pub fn run(
         .map(|i| (i / scenarios.len(), i % scenarios.len()))
         .collect();
     let finished: std::collections::HashSet<(String, String)> = done.iter().map(|r| (r.design.clone(), r.scenario.clone())).collect();
+    // A line of another sweep in the folder is found before any work, not after it.
+    let expected: std::collections::HashSet<(&str, &str)> = pairs
+        .iter()
+        .map(|&(d, s)| (designs[d].id.as_str(), scenarios[s].id.as_str()))
+        .collect();
+    if let Some(record) = done.iter().find(|r| !expected.contains(&(r.design.as_str(), r.scenario.as_str()))) {
+        return Err(SweepError::Folder {
+            dir: opts.out.clone().unwrap_or_default(),
+            message: format!(
+                "holds a record of design `{}` on `{}`, which this sweep does not have",
+                record.design, record.scenario
+            ),
+        });
+    }
     let todo: Vec<(usize, usize)> = pairs
         .iter()
         .copied()
@@ -277,14 +303,9 @@ pub fn run(
         }
         done.extend(records);
     }
-    let records = canonical(done, designs, scenarios, &pairs)?;
-    let reference_name = opts
-        .reference
-        .as_ref()
-        .map_or("this sweep's designs".to_string(), |(name, _)| name.clone());
-    let reference = opts.reference.as_ref().map(|(_, r)| r.as_slice());
-    check_reference(&records, reference, opts)?;
-    let distributions = table::distributions(&records, reference);
+    let records = canonical(done, designs, scenarios, &pairs);
+    let reference_name = reference_name(opts.reference.as_ref());
+    let distributions = table::distributions(&records, reference.as_deref());
     let text = table::text(&records, &distributions, &reference_name, opts.top);
     if let Some(dir) = &opts.out {
         store::finish(dir, &records, &table::csv(&records, &distributions), &text)?;
@@ -296,111 +317,169 @@ pub fn run(
     })
 }
 
-/// The records in pair order; a record the manifest has no pair for is an error (a foreign line).
-fn canonical(
-    done: Vec<Record>,
-    designs: &[DesignEntry],
-    scenarios: &[ScenarioEntry],
-    pairs: &[(usize, usize)],
-) -> Result<Vec<Record>, SweepError> {
+/// The records in pair order (every record is of a pair: checked before computing).
+fn canonical(done: Vec<Record>, designs: &[DesignEntry], scenarios: &[ScenarioEntry], pairs: &[(usize, usize)]) -> Vec<Record> {
     let mut by_pair: std::collections::HashMap<(String, String), Record> =
         done.into_iter().map(|r| ((r.design.clone(), r.scenario.clone()), r)).collect();
-    let records: Vec<Record> = pairs
+    pairs
         .iter()
         .filter_map(|&(d, s)| by_pair.remove(&(designs[d].id.clone(), scenarios[s].id.clone())))
-        .collect();
-    if let Some(((design, scenario), _)) = by_pair.into_iter().next() {
-        return Err(SweepError::Folder {
-            dir: PathBuf::new(),
-            message: format!("holds a record of design `{design}` on `{scenario}`, which this sweep does not have"),
-        });
+        .collect()
+}
+
+/// A finished sweep to score against.
+#[derive(Debug, Clone)]
+pub struct Reference {
+    /// Its folder, for messages.
+    pub dir: PathBuf,
+    /// What it was asked.
+    pub manifest: store::Manifest,
+    /// Its records.
+    pub records: Vec<Record>,
+    /// SHA-256 of its `results.jsonl`.
+    pub sha256: String,
+}
+
+/// How the tables name the reference: no path, so a merged sweep's tables are the unsharded
+/// sweep's whatever the folder was called.
+fn reference_name(reference: Option<&Reference>) -> String {
+    match reference {
+        Some(r) => format!(
+            "a reference sweep of {} designs (results sha256 {})",
+            r.manifest.designs.len(),
+            r.sha256.get(..12).unwrap_or(&r.sha256)
+        ),
+        None => "this sweep's designs".into(),
+    }
+}
+
+/// Reads a finished, whole sweep to score against.
+///
+/// # Errors
+/// [`SweepError::Reference`] when `dir` holds no finished sweep, or a shard of one.
+pub fn read_reference(dir: &Path) -> Result<Reference, SweepError> {
+    let error = |message: String| SweepError::Reference {
+        dir: dir.to_path_buf(),
+        message,
+    };
+    let manifest = store::read_manifest(dir)?.ok_or_else(|| error(format!("holds no sweep (no {})", store::MANIFEST)))?;
+    if let Some(shard) = &manifest.shard {
+        return Err(error(format!(
+            "holds shard {shard} of a sweep: merge the shards and give the merged folder"
+        )));
+    }
+    let results = dir.join(store::RESULTS);
+    if !results.exists() {
+        return Err(error("holds no finished sweep (no results.jsonl): run it to the end first".into()));
+    }
+    let (records, sha256) = store::read_input_records(&results)?;
+    Ok(Reference {
+        dir: dir.to_path_buf(),
+        manifest,
+        records,
+        sha256,
+    })
+}
+
+/// The reference's records of `scenarios` (matched by content, renamed to this sweep's ids),
+/// once the reference is known to have been computed as this sweep computes.
+///
+/// # Errors
+/// [`SweepError::Reference`] for another mode, seed or IK seed count, or a scenario it lacks.
+pub fn reference_records(reference: &Reference, mode: &SweepMode, scenarios: &[ScenarioEntry]) -> Result<Vec<Record>, SweepError> {
+    let error = |message: String| SweepError::Reference {
+        dir: reference.dir.clone(),
+        message,
+    };
+    let theirs = &reference.manifest;
+    let (name, engines) = match mode {
+        SweepMode::ReachOnly { .. } => ("reach_only", None),
+        SweepMode::Full { engines, .. } => ("full", Some(engines.name())),
+    };
+    if theirs.mode != name || theirs.engines != engines {
+        return Err(error(format!(
+            "was run in mode {}, this run is {name}: scores compare like with like",
+            theirs.mode
+        )));
+    }
+    let ik = mode.ik();
+    if (theirs.seed, theirs.ik_seeds) != (ik.seed, ik.seeds) {
+        return Err(error(format!(
+            "was run with IK seed {} and {} IK starts, this run with {} and {}",
+            theirs.seed, theirs.ik_seeds, ik.seed, ik.seeds
+        )));
+    }
+    let mut records = Vec::new();
+    for scenario in scenarios {
+        let same = theirs.scenarios.iter().find(|s| s.sha256 == scenario.sha256).ok_or_else(|| {
+            error(format!(
+                "has no results for scenario `{}` (no scenario with its contents)",
+                scenario.id
+            ))
+        })?;
+        records.extend(reference.records.iter().filter(|r| r.scenario == same.id).map(|r| Record {
+            scenario: scenario.id.clone(),
+            ..r.clone()
+        }));
     }
     Ok(records)
 }
 
-fn check_reference(records: &[Record], reference: Option<&[Record]>, opts: &SweepOptions) -> Result<(), SweepError> {
-    let (Some(reference), Some((name, _))) = (reference, &opts.reference) else {
-        return Ok(());
-    };
-    for record in records {
-        if !reference.iter().any(|r| r.scenario == record.scenario) {
-            return Err(SweepError::Reference {
-                dir: PathBuf::from(name),
-                message: format!("has no results for scenario `{}`", record.scenario),
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Reads a finished sweep's records to score against.
-///
-/// # Errors
-/// [`SweepError::Reference`] when `dir` holds no finished sweep.
-pub fn read_reference(dir: &Path) -> Result<(String, Vec<Record>), SweepError> {
-    let results = dir.join(store::RESULTS);
-    if !results.exists() {
-        return Err(SweepError::Reference {
-            dir: dir.to_path_buf(),
-            message: "holds no finished sweep (no results.jsonl)".into(),
-        });
-    }
-    let records = store::read_input_records(&results)?;
-    let designs = records
-        .iter()
-        .map(|r| r.design.as_str())
-        .collect::<std::collections::BTreeSet<_>>()
-        .len();
-    Ok((format!("the {designs} designs of {}", dir.display()), records))
-}
-
 /// Joins the shard folders `dirs` into `out`: the files the unsharded sweep writes, byte for
-/// byte.
+/// byte. Everything is checked before `out` is touched.
 ///
 /// # Errors
-/// [`SweepError::Merge`] for folders that are not the finished shards of one sweep;
-/// [`SweepError::Folder`] for an `out` that holds something else (unless `force`).
-pub fn merge(
-    dirs: &[PathBuf],
-    out: &Path,
-    force: bool,
-    reference: Option<(String, Vec<Record>)>,
-    top: usize,
-) -> Result<SweepResult, SweepError> {
+/// [`SweepError::Merge`] for folders that are not the finished shards of one sweep, or a
+/// reference other than the shards'; [`SweepError::Folder`] for an `out` that holds something
+/// else (unless `force`) or is one of the shards.
+pub fn merge(dirs: &[PathBuf], out: &Path, force: bool, reference: Option<Reference>, top: usize) -> Result<SweepResult, SweepError> {
     let (manifest, records) = store::read_shards(dirs)?;
-    store::open(out, &manifest, force)?;
-    let position = |id: &str, list: &[String]| list.iter().position(|x| x == id);
-    let scenario_ids: Vec<String> = manifest.scenarios.iter().map(|s| s.id.clone()).collect();
+    let merge_error = |message: String| SweepError::Merge {
+        dir: out.to_path_buf(),
+        message,
+    };
+    if manifest.reference != reference.as_ref().map(|r| r.sha256.clone()) {
+        return Err(merge_error(match &manifest.reference {
+            Some(sha) => format!("the shards were scored against a reference (results sha256 {sha}): give the same --reference"),
+            None => "the shards were not scored against a reference: leave out --reference".into(),
+        }));
+    }
+    let position = |id: &str, list: &[&str]| list.iter().position(|x| *x == id);
+    let design_ids: Vec<&str> = manifest.designs.iter().map(|d| d.id.as_str()).collect();
+    let scenario_ids: Vec<&str> = manifest.scenarios.iter().map(|s| s.id.as_str()).collect();
     let mut keyed = Vec::with_capacity(records.len());
     for record in records {
-        let (Some(d), Some(s)) = (
-            position(&record.design, &manifest.designs),
-            position(&record.scenario, &scenario_ids),
-        ) else {
-            return Err(SweepError::Merge {
-                dir: out.to_path_buf(),
-                message: format!(
-                    "a shard holds design `{}` on `{}`, which its manifest does not list",
-                    record.design, record.scenario
-                ),
-            });
+        let (Some(d), Some(s)) = (position(&record.design, &design_ids), position(&record.scenario, &scenario_ids)) else {
+            return Err(merge_error(format!(
+                "a shard holds design `{}` on `{}`, which its manifest does not list",
+                record.design, record.scenario
+            )));
         };
         keyed.push(((d, s), record));
     }
     keyed.sort_by_key(|(key, _)| *key);
-    let expected = manifest.designs.len() * manifest.scenarios.len();
+    let expected = design_ids.len() * scenario_ids.len();
     if keyed.len() != expected || keyed.windows(2).any(|w| w[0].0 == w[1].0) {
-        return Err(SweepError::Merge {
-            dir: out.to_path_buf(),
-            message: format!("the shards hold {} records for {expected} pairs", keyed.len()),
-        });
+        return Err(merge_error(format!("the shards hold {} records for {expected} pairs", keyed.len())));
     }
     let records: Vec<Record> = keyed.into_iter().map(|(_, r)| r).collect();
-    let reference_name = reference
-        .as_ref()
-        .map_or("this sweep's designs".to_string(), |(name, _)| name.clone());
-    let distributions = table::distributions(&records, reference.as_ref().map(|(_, r)| r.as_slice()));
-    let text = table::text(&records, &distributions, &reference_name, top);
+    // The reference's records renamed to the shards' scenario ids, matched by content as the
+    // sweep matched them (the sweep checked mode and seeds; the manifest holds its hash).
+    let reference_records = reference.as_ref().map(|r| {
+        let mut renamed = Vec::new();
+        for ours in &manifest.scenarios {
+            if let Some(theirs) = r.manifest.scenarios.iter().find(|s| s.sha256 == ours.sha256) {
+                renamed.extend(r.records.iter().filter(|x| x.scenario == theirs.id).map(|x| Record {
+                    scenario: ours.id.clone(),
+                    ..x.clone()
+                }));
+            }
+        }
+        renamed
+    });
+    store::open(out, &manifest, force)?;
+    let distributions = table::distributions(&records, reference_records.as_deref());
+    let text = table::text(&records, &distributions, &reference_name(reference.as_ref()), top);
     store::finish(out, &records, &table::csv(&records, &distributions), &text)?;
     Ok(SweepResult {
         records,

@@ -38,13 +38,28 @@ pub struct Manifest {
     pub seed: u64,
     /// IK starts per goal.
     pub ik_seeds: usize,
-    /// The designs, in order, by id.
-    pub designs: Vec<String>,
+    /// The designs, in order: id and, for a file, SHA-256 of its bytes and its model.
+    pub designs: Vec<DesignRef>,
     /// The scenarios, in order: id and SHA-256 of the file.
     pub scenarios: Vec<ScenarioRef>,
     /// `K/N` when this folder holds one shard of the sweep.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<String>,
+    /// The reference scored against: SHA-256 of its `results.jsonl` (records do not depend on
+    /// it, the CSV and tables do).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
+}
+
+/// A design as the manifest names it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignRef {
+    /// Its id.
+    pub id: String,
+    /// Files: SHA-256 of the file and of the model read from it (meshes included), so an edited
+    /// design is not taken for the one already run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sha256: Option<String>,
 }
 
 /// A scenario as the manifest names it.
@@ -122,7 +137,15 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
             }
             let partial = dir.join(PARTIAL);
             if partial.exists() {
-                return read_partial(&partial);
+                let records = read_partial(&partial)?;
+                // A line cut short by an interruption is dropped here and in the file, so the
+                // next batch appends after whole lines.
+                let mut text = String::new();
+                for record in &records {
+                    text.push_str(&record_line(record)?);
+                }
+                write(&partial, &text)?;
+                return Ok(records);
             }
             Ok(Vec::new())
         }
@@ -144,13 +167,27 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
                 .map(|e| e.file_name().to_string_lossy().into_owned())
                 .filter(|name| !ours.contains(&name.as_str()))
                 .collect();
-            if !foreign.is_empty() && existing.is_none() {
+            if existing.is_none() {
+                let mut present: Vec<String> = ours
+                    .iter()
+                    .filter(|name| dir.join(name).exists())
+                    .map(|name| (*name).to_string())
+                    .collect();
+                present.extend(foreign);
+                if !present.is_empty() {
+                    return Err(SweepError::Folder {
+                        dir: dir.to_path_buf(),
+                        message: format!(
+                            "is not empty and holds no sweep ({}): give a new or empty folder",
+                            present.join(", ")
+                        ),
+                    });
+                }
+            }
+            if let Some(name) = ours.iter().find(|name| crate::files::is_input(&dir.join(name))) {
                 return Err(SweepError::Folder {
                     dir: dir.to_path_buf(),
-                    message: format!(
-                        "is not empty and holds no sweep ({}): give a new or empty folder",
-                        foreign.join(", ")
-                    ),
+                    message: format!("{name} is an input of this run (the reference, or a shard being merged): give another --out"),
                 });
             }
             for name in ours {
@@ -190,8 +227,18 @@ fn difference(found: &Manifest, wanted: &Manifest) -> String {
             found.seed, found.ik_seeds, wanted.seed, wanted.ik_seeds
         );
     }
-    if found.designs != wanted.designs {
-        return format!("{} designs, not the same {}", found.designs.len(), wanted.designs.len());
+    if found.designs.len() != wanted.designs.len() {
+        return format!("{} designs instead of {}", found.designs.len(), wanted.designs.len());
+    }
+    if let Some((old, new)) = found.designs.iter().zip(&wanted.designs).find(|(a, b)| a != b) {
+        return if old.id == new.id {
+            format!("design `{}` has changed since", new.id)
+        } else {
+            format!("design `{}` where this sweep has `{}`", old.id, new.id)
+        };
+    }
+    if found.reference != wanted.reference {
+        return "another --reference".into();
     }
     if found.scenarios != wanted.scenarios {
         return "other scenarios, or the same files changed".into();
@@ -234,30 +281,34 @@ fn record_line(record: &Record) -> Result<String, SweepError> {
 /// # Errors
 /// [`SweepError::Folder`] naming the line that is not a record.
 pub fn read_records(path: &Path) -> Result<Vec<Record>, SweepError> {
-    parse_records(path, &read_text(path)?)
+    parse_records(&read_text(path)?).map_err(|message| SweepError::Folder {
+        dir: path.to_path_buf(),
+        message,
+    })
 }
 
-/// Reads another sweep's results (a reference): an input of this run, never overwritten by it.
+/// Reads another sweep's results (a reference, a shard): an input of this run, never overwritten
+/// by it; with the SHA-256 of the file.
 ///
 /// # Errors
 /// As [`read_records`].
-pub fn read_input_records(path: &Path) -> Result<Vec<Record>, SweepError> {
+pub fn read_input_records(path: &Path) -> Result<(Vec<Record>, String), SweepError> {
     let text = crate::files::read_text(path, MAX_RESULTS_BYTES).map_err(|source| SweepError::Read {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_records(path, &text)
+    let records = parse_records(&text).map_err(|message| SweepError::Reference {
+        dir: path.to_path_buf(),
+        message,
+    })?;
+    Ok((records, sha256_hex(text.as_bytes())))
 }
 
-fn parse_records(path: &Path, text: &str) -> Result<Vec<Record>, SweepError> {
+/// Every line a record; else the message naming the first line that is not.
+fn parse_records(text: &str) -> Result<Vec<Record>, String> {
     text.lines()
         .enumerate()
-        .map(|(index, line)| {
-            serde_json::from_str(line).map_err(|e| SweepError::Folder {
-                dir: path.to_path_buf(),
-                message: format!("line {}: not a sweep record: {e}", index + 1),
-            })
-        })
+        .map(|(index, line)| serde_json::from_str(line).map_err(|e| format!("line {}: not a sweep record: {e}", index + 1)))
         .collect()
 }
 
@@ -352,7 +403,8 @@ pub fn read_shards(dirs: &[PathBuf]) -> Result<(Manifest, Vec<Record>), SweepErr
                 "is not finished (no results.jsonl): run its sweep again to resume it".into(),
             ));
         }
-        records.extend(read_records(&results)?);
+        // Read as inputs: the merge's --out may then not replace them.
+        records.extend(read_input_records(&results).map_err(|e| merge_error(e.to_string()))?.0);
     }
     let n = count.unwrap_or(0);
     let missing: Vec<String> = (1..=n).filter(|k| !seen.contains(k)).map(|k| format!("{k}/{n}")).collect();
@@ -367,4 +419,70 @@ pub fn read_shards(dirs: &[PathBuf]) -> Result<(Manifest, Vec<Record>), SweepErr
         message: "no shard folders given".into(),
     })?;
     Ok((manifest, records))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(design: &str) -> Record {
+        Record {
+            design: design.into(),
+            scenario: "t".into(),
+            goals: 1,
+            goals_solved: 1,
+            goals_proven_unreachable: 0,
+            task_solved: true,
+            position_error_mm: Some(0.0),
+            orientation_error_deg: Some(0.0),
+            hardware_cost_m: None,
+            task_loss: Some(1.0),
+            verdict: None,
+        }
+    }
+
+    fn manifest() -> Manifest {
+        Manifest {
+            format: FORMAT,
+            mode: "reach_only".into(),
+            engines: None,
+            seed: 0,
+            ik_seeds: 4,
+            designs: ["a", "b", "c"]
+                .into_iter()
+                .map(|id| DesignRef {
+                    id: id.into(),
+                    sha256: None,
+                })
+                .collect(),
+            scenarios: vec![],
+            shard: None,
+            reference: None,
+        }
+    }
+
+    #[test]
+    fn a_resumed_partial_log_loses_its_cut_line_so_the_next_batch_appends_after_whole_lines() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        assert!(open(dir.path(), &manifest(), false).expect("new folder").is_empty());
+        append(dir.path(), &[record("a"), record("b")]).expect("append");
+        let partial = dir.path().join(PARTIAL);
+        let mut text = std::fs::read_to_string(&partial).expect("read");
+        text.push_str("{\"design\":\"c\",\"sce");
+        std::fs::write(&partial, &text).expect("write");
+        assert_eq!(open(dir.path(), &manifest(), false).expect("resumed").len(), 2);
+        append(dir.path(), &[record("c")]).expect("append");
+        assert_eq!(open(dir.path(), &manifest(), false).expect("resumed again").len(), 3);
+    }
+
+    #[test]
+    fn a_folder_without_a_sweep_is_refused_even_when_its_files_have_our_names() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        std::fs::write(dir.path().join(CSV), "mine").expect("write");
+        for force in [false, true] {
+            let error = open(dir.path(), &manifest(), force).expect_err("refused").to_string();
+            assert!(error.contains("is not empty and holds no sweep (results.csv)"), "{error}");
+        }
+        assert_eq!(std::fs::read_to_string(dir.path().join(CSV)).expect("kept"), "mine");
+    }
 }

@@ -2,7 +2,8 @@
 //!
 //! Normalised score (the paper's): `(L_worst - L) / (L_worst - L_best)` over the reference
 //! designs' task losses of the same scenario, so 0 is the worst reference design and 1 the best
-//! (a design better than every reference design scores above 1). Percentile: the share of
+//! (a design better than every reference design scores above 1; where all reference losses are
+//! equal, 1 when at least as good, else 0). Percentile: the share of
 //! reference designs whose loss is worse, ties counted half (mid-rank), in percent; a reference
 //! design with no loss (a goal without any configuration) counts as worse than any loss.
 
