@@ -144,7 +144,7 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
                 for record in &records {
                     text.push_str(&record_line(record)?);
                 }
-                write(&partial, &text)?;
+                rewrite_log(&partial, &text)?;
                 return Ok(records);
             }
             Ok(Vec::new())
@@ -248,6 +248,18 @@ fn difference(found: &Manifest, wanted: &Manifest) -> String {
         found.shard.as_deref().unwrap_or("none"),
         wanted.shard.as_deref().unwrap_or("none")
     )
+}
+
+/// Replaces the sweep's own partial log (never an input: the folder was checked to be this
+/// sweep's) through a temporary file beside it, so an interruption leaves the old or the new.
+fn rewrite_log(path: &Path, text: &str) -> Result<(), SweepError> {
+    let error = |e: std::io::Error| SweepError::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let temporary = path.with_extension("jsonl.rewrite");
+    std::fs::write(&temporary, text).map_err(error)?;
+    std::fs::rename(&temporary, path).map_err(error)
 }
 
 /// Appends finished records to the partial log, flushed: an interrupted sweep keeps them.
