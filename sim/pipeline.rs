@@ -241,6 +241,9 @@ pub struct ValidateOptions {
     /// The paper's static metric alone: per goal a collision-free IK solution, no trajectory,
     /// no engines (default false).
     pub reach_only: bool,
+    /// Also fill [`Validation::task_loss_terms`] (the sweeps' task loss; default false: a single
+    /// run's report does not use it).
+    pub task_loss: bool,
 }
 
 /// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
@@ -314,7 +317,11 @@ pub fn validate_with_progress(
         seed: opts.ik.seed,
         reach_only: opts.reach_only,
     };
-    let task_loss_terms = task_loss_terms(&model, &world, &scenario, &solutions);
+    let task_loss_terms = if opts.task_loss {
+        task_loss_terms(&model, &world, &scenario, &solutions)
+    } else {
+        Vec::new()
+    };
     if opts.reach_only {
         let loss_terms = scenario
             .goals

@@ -102,6 +102,38 @@ pub struct DhJoint {
 }
 
 impl Design {
+    /// A modular design of catalog `slots`, named `name`, at the origin without a tool offset.
+    pub fn modular(name: &str, slots: &[SlotOption]) -> Design {
+        Design {
+            name: name.to_string(),
+            mode: DesignMode::Modular,
+            joints: slots
+                .iter()
+                .map(|m| module_joint(m.dh(), Some(catalog::JOINT_MODULE_RATED_TORQUE_NM)))
+                .collect(),
+            modules: Some(slots.to_vec()),
+            preset: None,
+            base: PoseSpec::default(),
+            tool: PoseSpec::default(),
+            snapped: vec![],
+        }
+    }
+
+    /// An industrial preset, named `name`, at the origin without a tool offset.
+    pub fn preset(name: &str, preset: Preset) -> Design {
+        // The paper ignores preset joint limits and publishes no ratings in its tables.
+        Design {
+            name: name.to_string(),
+            mode: DesignMode::Preset,
+            joints: preset.dh().into_iter().map(|row| module_joint(row, None)).collect(),
+            modules: None,
+            preset: Some(preset),
+            base: PoseSpec::default(),
+            tool: PoseSpec::default(),
+            snapped: vec![],
+        }
+    }
+
     /// Number of joints.
     pub fn dof(&self) -> usize {
         self.joints.len()
@@ -280,35 +312,18 @@ pub fn parse(text: &str, path: &Path) -> Result<Design, DesignError> {
         }
         "modular" => {
             let file: ModularFile = serde_json::from_str(text).map_err(parse_error)?;
-            let joints = file
-                .modules
-                .iter()
-                .map(|m| module_joint(m.dh(), Some(catalog::JOINT_MODULE_RATED_TORQUE_NM)))
-                .collect();
             Design {
-                name: file.name.unwrap_or(stem),
-                mode: DesignMode::Modular,
-                joints,
-                modules: Some(file.modules),
-                preset: None,
                 base: file.base.unwrap_or_default(),
                 tool: file.tool.unwrap_or_default(),
-                snapped: vec![],
+                ..Design::modular(&file.name.unwrap_or(stem), &file.modules)
             }
         }
         "preset" => {
             let file: PresetFile = serde_json::from_str(text).map_err(parse_error)?;
-            // The paper ignores preset joint limits and publishes no ratings in its tables.
-            let joints = file.preset.dh().into_iter().map(|row| module_joint(row, None)).collect();
             Design {
-                name: file.name.unwrap_or(stem),
-                mode: DesignMode::Preset,
-                joints,
-                modules: None,
-                preset: Some(file.preset),
                 base: file.base.unwrap_or_default(),
                 tool: file.tool.unwrap_or_default(),
-                snapped: vec![],
+                ..Design::preset(&file.name.unwrap_or(stem), file.preset)
             }
         }
         other => {

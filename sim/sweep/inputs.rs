@@ -3,8 +3,7 @@
 
 use super::SweepError;
 use crate::design::catalog::{Preset, SlotOption};
-use crate::design::{Design, DesignMode, DhJoint};
-use crate::frames::PoseSpec;
+use crate::design::Design;
 use crate::pipeline::{self, LoadOptions, Loaded};
 use crate::scenario::Scenario;
 use std::path::{Path, PathBuf};
@@ -131,52 +130,6 @@ fn from_design(design: Design) -> Loaded {
     Loaded {
         model: crate::model::from_design(&design),
         design: Some(design),
-    }
-}
-
-impl Design {
-    /// A modular design of catalog slots, named `name`.
-    pub fn modular(name: &str, slots: &[SlotOption]) -> Design {
-        Design {
-            name: name.to_string(),
-            mode: DesignMode::Modular,
-            joints: slots
-                .iter()
-                .map(|s| catalog_joint(s.dh(), Some(crate::design::catalog::JOINT_MODULE_RATED_TORQUE_NM)))
-                .collect(),
-            modules: Some(slots.to_vec()),
-            preset: None,
-            base: PoseSpec::default(),
-            tool: PoseSpec::default(),
-            snapped: Vec::new(),
-        }
-    }
-
-    /// An industrial preset, named `name` (joint limits +-2 pi, as the paper ignores the robots'
-    /// own).
-    pub fn preset(name: &str, preset: Preset) -> Design {
-        Design {
-            name: name.to_string(),
-            mode: DesignMode::Preset,
-            joints: preset.dh().into_iter().map(|row| catalog_joint(row, None)).collect(),
-            modules: None,
-            preset: Some(preset),
-            base: PoseSpec::default(),
-            tool: PoseSpec::default(),
-            snapped: Vec::new(),
-        }
-    }
-}
-
-fn catalog_joint(row: [f64; 3], rated_torque: Option<f64>) -> DhJoint {
-    use crate::design::catalog::{JOINT_MODULE_LIMIT, JOINT_MODULE_MAX_SPEED};
-    DhJoint {
-        d: row[0],
-        a: row[1],
-        alpha: row[2],
-        limits: [-JOINT_MODULE_LIMIT, JOINT_MODULE_LIMIT],
-        max_velocity: JOINT_MODULE_MAX_SPEED,
-        rated_torque,
     }
 }
 
