@@ -694,6 +694,70 @@ fn parry_collider(c: &Collider) -> (Isometry3<f64>, SharedShape) {
 }
 
 #[test]
+fn clear_agrees_with_the_closest_pair_against_the_margin() {
+    // A DH design among spheres, a box and a cylinder over the floor, and the Panda's meshes among
+    // the same: `clear` must say what comparing `distances`' closest pair with the margin says.
+    let panda = load_model(&panda_urdf(), &LoadOptions::default()).expect("the Panda loads");
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let mut obstacles: Vec<Obstacle> = (0..3)
+        .map(|k| {
+            let centre = Isometry3::translation(rng.random_range(-0.6..0.6), rng.random_range(-0.6..0.6), rng.random_range(0.0..0.9));
+            obstacle(
+                &format!("o{k}"),
+                centre,
+                Shape::Sphere {
+                    radius: rng.random_range(0.03..0.08),
+                },
+            )
+        })
+        .collect();
+    obstacles.push(obstacle(
+        "box",
+        random_pose(&mut rng, 0.7),
+        Shape::Box {
+            half_extents: [0.05, 0.1, 0.03],
+        },
+    ));
+    obstacles.push(obstacle(
+        "can",
+        random_pose(&mut rng, 0.7),
+        Shape::Cylinder {
+            radius: 0.03,
+            length: 0.15,
+        },
+    ));
+    for model in [design("modular-elbow.json"), design("free-offset-6dof.json"), panda] {
+        // With the structural exclusions and allowances, as every validation builds it.
+        let world = proving_ground::pipeline::collision_world(&model, &scenario(obstacles.clone(), Some(-0.3)), &[]).expect("valid");
+        let mut ws = model.workspace();
+        let (mut out, mut scratch) = (Distances::new(), Distances::new());
+        let mut outcomes = [0usize; 2];
+        for sample in 0..600 {
+            let q = model.random_configuration(&mut rng);
+            model.forward(&q, &mut ws);
+            for margin in [0.0, 0.03] {
+                let query = QueryOptions {
+                    margin,
+                    hulls: false,
+                    exact_depth: false,
+                };
+                distances(&world, &ws.link_in_world, &query, &mut out);
+                let expected = out.closest.is_none_or(|c| c.distance > margin);
+                let got = collide::clear(&world, &ws.link_in_world, margin, &mut scratch);
+                assert_eq!(
+                    got, expected,
+                    "{} sample {sample} margin {margin} q {q:?}: closest {:?}",
+                    model.name, out.closest
+                );
+                outcomes[usize::from(got)] += 1;
+            }
+        }
+        // Both answers occur, or the comparison proves little.
+        assert!(outcomes.iter().all(|&n| n > 50), "{}: {outcomes:?} {:?}", model.name, out.closest);
+    }
+}
+
+#[test]
 fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
     let model = design("modular-elbow.json");
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);

@@ -45,30 +45,11 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
         ..
     } = out;
 
-    scratch.link_poses.clear();
-    scratch.link_poses.extend(link_in_world.iter().map(parry_pose));
-    scratch.poses.clear();
-    scratch.aabbs.clear();
-    scratch.segments.clear();
-    for collider in &world.colliders {
-        let pose = scratch.link_poses[collider.link] * collider.link_from_shape;
-        let bounding = &collider.geometry.bounding;
-        scratch.aabbs.push(aabb_of(&*collider.geometry.shape, &pose));
-        scratch
-            .segments
-            .push([bounding.start, bounding.end].map(|end| vector_from_parry(pose * end)));
-        scratch.poses.push(pose);
-    }
+    place(world, link_in_world, scratch);
     scratch.bounds.clear();
     scratch.stages.clear();
-    for candidate in &world.candidates {
-        let a = &scratch.aabbs[candidate.a];
-        let bound = match candidate.b {
-            Other::Link(b) => aabb_bound(a, &scratch.aabbs[b]),
-            Other::Obstacle(k) => aabb_bound(a, &world.obstacles[k].aabb),
-            Other::Floor => a.mins.z - world.floor.expect("floor pairs exist only with a floor"),
-        };
-        scratch.bounds.push(bound + candidate.allowance - BOUND_ROUNDING_M);
+    for index in 0..world.candidates.len() {
+        scratch.bounds.push(box_bound(world, index, scratch));
         scratch.stages.push(Stage::Boxed);
     }
 
@@ -129,6 +110,93 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
         }
     }
     out.collect();
+}
+
+/// Whether every checked pair is farther apart than `margin` (m; NaN and negative count as 0) at
+/// one configuration: the comparison of [`distances`]' closest pair with the margin, with
+/// `exact_depth` false and no hulls, decided without looking for the closest pair. Each pair is
+/// bounded by its boxes and bounding capsules, and measured only when those cannot clear it; the
+/// first pair within the margin ends the search. `out` lends its buffers; its answer fields are
+/// left as they were.
+///
+/// # Panics
+/// When `link_in_world.len()` differs from [`CollisionWorld::link_count`].
+pub fn clear(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], margin: f64, out: &mut Distances) -> bool {
+    assert_eq!(
+        link_in_world.len(),
+        world.link_count(),
+        "one pose per link of the model the collision world was built for"
+    );
+    let margin = effective_margin(margin);
+    let scratch = &mut out.scratch;
+    place(world, link_in_world, scratch);
+    for (index, candidate) in world.candidates.iter().enumerate() {
+        if box_bound(world, index, scratch) > margin || capsule_bound(world, index, scratch).is_some_and(|bound| bound > margin) {
+            continue;
+        }
+        let a = &world.colliders[candidate.a];
+        let pose_a = &scratch.poses[candidate.a];
+        // As `measure`: the allowance applies to pairs of links, the floor has none.
+        let distance = match candidate.b {
+            Other::Floor => measure_floor(pose_a, &a.geometry, world.floor.expect("floor pairs exist only with a floor")).distance,
+            Other::Link(j) => {
+                measure_shapes(pose_a, &a.geometry, &scratch.poses[j], &world.colliders[j].geometry, false).distance + candidate.allowance
+            }
+            Other::Obstacle(k) => {
+                let obstacle = &world.obstacles[k];
+                measure_shapes(pose_a, &a.geometry, &obstacle.world_from_shape, &obstacle.geometry, false).distance + candidate.allowance
+            }
+        };
+        if distance <= margin {
+            return false;
+        }
+    }
+    true
+}
+
+/// Fills `scratch` with every link's and collider's world pose, every collider's world AABB and
+/// its bounding capsule's segment.
+fn place(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], scratch: &mut super::Scratch) {
+    scratch.link_poses.clear();
+    scratch.link_poses.extend(link_in_world.iter().map(parry_pose));
+    scratch.poses.clear();
+    scratch.aabbs.clear();
+    scratch.segments.clear();
+    for collider in &world.colliders {
+        let pose = scratch.link_poses[collider.link] * collider.link_from_shape;
+        let bounding = &collider.geometry.bounding;
+        scratch.aabbs.push(aabb_of(&*collider.geometry.shape, &pose));
+        scratch
+            .segments
+            .push([bounding.start, bounding.end].map(|end| vector_from_parry(pose * end)));
+        scratch.poses.push(pose);
+    }
+}
+
+/// Candidate `index`'s lower bound from the boxes (the floor's is exact for the lowest point).
+fn box_bound(world: &CollisionWorld, index: usize, scratch: &super::Scratch) -> f64 {
+    let candidate = &world.candidates[index];
+    let a = &scratch.aabbs[candidate.a];
+    let bound = match candidate.b {
+        Other::Link(b) => aabb_bound(a, &scratch.aabbs[b]),
+        Other::Obstacle(k) => aabb_bound(a, &world.obstacles[k].aabb),
+        Other::Floor => a.mins.z - world.floor.expect("floor pairs exist only with a floor"),
+    };
+    bound + candidate.allowance - BOUND_ROUNDING_M
+}
+
+/// Candidate `index`'s lower bound from the bounding capsules; `None` for the floor.
+fn capsule_bound(world: &CollisionWorld, index: usize, scratch: &super::Scratch) -> Option<f64> {
+    let candidate = &world.candidates[index];
+    let [start, end] = scratch.segments[candidate.a];
+    let radius = world.colliders[candidate.a].geometry.bounding.radius;
+    let ([other_start, other_end], other_radius) = match candidate.b {
+        Other::Link(b) => (scratch.segments[b], world.colliders[b].geometry.bounding.radius),
+        Other::Obstacle(k) => (world.obstacles[k].bounding, world.obstacles[k].geometry.bounding.radius),
+        Other::Floor => return None,
+    };
+    let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance;
+    Some(capsules + candidate.allowance - BOUND_ROUNDING_M)
 }
 
 /// Measures candidate `index` (and its hulls when `with_hulls` and a side is a mesh), records it
@@ -199,18 +267,9 @@ fn measure(
 /// Raises candidate `index`'s bound to its bounding capsules' signed distance (the floor keeps
 /// its AABB bound, which is exact for the lowest point) and returns the bound.
 fn tighten(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch) -> f64 {
-    let candidate = &world.candidates[index];
-    let [start, end] = scratch.segments[candidate.a];
-    let radius = world.colliders[candidate.a].geometry.bounding.radius;
-    let other = match candidate.b {
-        Other::Link(b) => Some((scratch.segments[b], world.colliders[b].geometry.bounding.radius)),
-        Other::Obstacle(k) => Some((world.obstacles[k].bounding, world.obstacles[k].geometry.bounding.radius)),
-        Other::Floor => None,
-    };
-    if let Some(([other_start, other_end], other_radius)) = other {
-        let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance + candidate.allowance;
+    if let Some(capsules) = capsule_bound(world, index, scratch) {
         let bound = &mut scratch.bounds[index];
-        *bound = bound.max(capsules - BOUND_ROUNDING_M);
+        *bound = bound.max(capsules);
     }
     scratch.stages[index] = Stage::Capsuled;
     scratch.bounds[index]

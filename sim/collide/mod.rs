@@ -102,7 +102,7 @@ mod world;
 
 pub use approx::approximate_distances;
 pub use compare::compare;
-pub use exact::distances;
+pub use exact::{clear, distances};
 pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 pub use structural::{structural_overlaps, StructuralExclusions, StructuralOptions, TOUCHING_M};
 pub use world::{world, CollisionWorld};

@@ -2,6 +2,7 @@
 //! analytic Jacobian and joint limits.
 
 use super::error::task_error;
+use super::spd6::Cholesky6;
 use crate::model::{JointKind, KinematicsWorkspace, Model};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{DVector, Isometry3, Matrix3, Matrix6, Matrix6xX, Vector3, Vector6};
@@ -125,7 +126,7 @@ impl<'a> Solver<'a> {
             let projection = self.projection(goal);
             let mut normal = Matrix6::<f64>::identity() * (damping * damping);
             self.project_columns(&projection, &mut normal);
-            let Some(cholesky) = normal.cholesky() else {
+            let Some(cholesky) = Cholesky6::new(&normal) else {
                 damping = (damping * 10.0).min(MAX_DAMPING);
                 since_improvement += 1;
                 continue;
@@ -190,7 +191,7 @@ impl<'a> Solver<'a> {
         let projection = self.projection(goal);
         let mut normal = Matrix6::<f64>::identity() * (NULL_SPACE_DAMPING * NULL_SPACE_DAMPING);
         self.project_columns(&projection, &mut normal);
-        let Some(cholesky) = normal.cholesky() else { return };
+        let Some(cholesky) = Cholesky6::new(&normal) else { return };
         // v - P^T (P P^T + l^2 I)^-1 P v, with P the projected Jacobian (rows of `projected` are
         // its columns).
         let mut p_v = Vector6::<f64>::zeros();
@@ -205,14 +206,20 @@ impl<'a> Solver<'a> {
     }
 
     /// Fills `self.projected` with the projected Jacobian columns and adds their outer products
-    /// to `normal` (fixed-size arithmetic: the generic GEMM was a quarter of the solve time).
+    /// to the lower triangle of `normal`, the part [`Cholesky6`] reads (fixed-size arithmetic: the
+    /// generic GEMM was a quarter of the solve time).
     fn project_columns(&mut self, projection: &Matrix6<f64>, normal: &mut Matrix6<f64>) {
         let angular = projection.fixed_view::<3, 3>(3, 3).into_owned();
         for (column, projected) in self.ws.jacobian.column_iter().zip(self.projected.iter_mut()) {
             let linear = Vector3::new(column[0], column[1], column[2]);
             let rotated = angular * Vector3::new(column[3], column[4], column[5]);
             *projected = Vector6::new(linear.x, linear.y, linear.z, rotated.x, rotated.y, rotated.z);
-            *normal += *projected * projected.transpose();
+            // The lower triangle only: all the factorisation reads.
+            for c in 0..6 {
+                for r in c..6 {
+                    normal[(r, c)] += projected[r] * projected[c];
+                }
+            }
         }
     }
 

@@ -10,6 +10,7 @@ mod error;
 mod loss;
 mod reach;
 mod refine;
+mod spd6;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
@@ -505,13 +506,15 @@ impl<'a> Ik<'a> {
         let iterations = self.solver.solve(goal, &mut q, self.opts.max_iterations, done, rng);
         let mut clearance = None;
         if let Some(checker) = self.checker.as_mut() {
-            let mut measured = checker.clearance(&q, false);
-            if refine && (measured.exact_m <= margin || !is_reached(&goal_error(goal, &self.model.tool_pose(&q)))) {
+            // An unreached pose is refined whatever its clearance: measure only what is kept.
+            let unreached = refine && !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
+            let mut measured = (!unreached).then(|| checker.clearance(&q, false));
+            if refine && measured.is_none_or(|m| m.exact_m <= margin) {
                 checker.margin = margin;
                 refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, rng);
-                measured = checker.clearance(&q, false);
+                measured = Some(checker.clearance(&q, false));
             }
-            clearance = Some(measured);
+            clearance = measured;
         }
         let error = goal_error(goal, &self.model.tool_pose(&q));
         let pose_reached = is_reached(&error);

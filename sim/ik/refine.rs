@@ -5,11 +5,17 @@
 //! `L(d) = (exp(-d / t) - e^-1) / (1 - e^-1)` for `d <= t`, else 0. Its gradient in joint space is
 //! `L'(d) * dd/dq`, with `dd/dq = n . (J_b(p_b) - J_a(p_a))` from the witness points `p_a`, `p_b`
 //! and the normal `n` (from `a` to `b`); `J_x(p)` is the linear Jacobian of point `p` on link `x`.
+//!
+//! Without redundancy (no more joints than the goal constrains: a 6-joint arm on a `pose` goal)
+//! the task has no null space: a solution is an isolated point, and a colliding one stays in
+//! collision however the loss is descended. There the gradient is not computed, only the sign of
+//! the clearance (remembered while the configuration stays the same), and the search waits out
+//! the same steps before a fresh start.
 
 use super::dls::{Convergence, Solver};
 use crate::collide::{self, Body, CollisionWorld, Distances, QueryOptions};
 use crate::model::{JointKind, KinematicsWorkspace, Model};
-use crate::scenario::Goal;
+use crate::scenario::{Goal, Tolerance};
 use nalgebra::{DVector, Isometry3, Vector3};
 
 /// The paper's collision loss threshold `t` (m).
@@ -38,6 +44,8 @@ pub(crate) struct Checker<'a> {
     exact: Distances,
     approximate: Distances,
     gradient: DVector<f64>,
+    /// The last configuration [`Self::keeps_margin`] measured, the margin's bits, and the answer.
+    kept: (Vec<f64>, u64, bool),
     /// Clearance a configuration must keep to count as free (m).
     pub(crate) margin: f64,
 }
@@ -51,6 +59,7 @@ impl<'a> Checker<'a> {
             exact: Distances::new(),
             approximate: Distances::new(),
             gradient: DVector::zeros(model.dof()),
+            kept: (Vec::new(), 0, false),
             margin: 0.0,
         }
     }
@@ -71,6 +80,19 @@ impl<'a> Checker<'a> {
             exact_m: smallest(&self.exact),
             approximate_m: smallest(&self.approximate),
         }
+    }
+
+    /// Whether `q` keeps the margin in exact geometry (the sign of the clearance against it).
+    fn keeps_margin(&mut self, q: &[f64]) -> bool {
+        let same = self.kept.0.len() == q.len() && self.kept.0.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same || self.kept.1 != self.margin.to_bits() {
+            self.model.forward(q, &mut self.ws);
+            let clear = collide::clear(self.world, &self.ws.link_in_world, self.margin, &mut self.exact);
+            self.kept.0.clear();
+            self.kept.0.extend_from_slice(q);
+            self.kept = (std::mem::take(&mut self.kept.0), self.margin.to_bits(), clear);
+        }
+        self.kept.2
     }
 
     /// Exact clearance at `q`, and the gradient of the weighted collision loss in `self.gradient`.
@@ -150,12 +172,20 @@ pub(crate) fn refine<R: rand::Rng>(
     rng: &mut R,
 ) -> bool {
     let margin = checker.margin;
+    let redundant = checker.model.dof() > constrained_dimensions(goal.tolerance);
+    let free = |checker: &mut Checker, q: &[f64]| {
+        if redundant {
+            checker.loss_gradient(q) > margin
+        } else {
+            checker.keeps_margin(q)
+        }
+    };
     let mut stuck = 0;
     let mut step = 0;
     while step < steps {
-        let clearance = checker.loss_gradient(q);
+        let is_free = free(checker, q);
         let pose_ok = solver.converged_at(goal, q, done);
-        if clearance > margin {
+        if is_free {
             if pose_ok {
                 return true;
             }
@@ -175,11 +205,21 @@ pub(crate) fn refine<R: rand::Rng>(
         }
         // Descend the loss inside the task's null space, then restore the task.
         let largest = checker.gradient.amax();
-        if largest > 0.0 {
+        if redundant && largest > 0.0 {
             let scale = (MAX_AVOIDANCE_STEP / largest).min(1.0);
             solver.null_space_step(goal, q, &checker.gradient, -scale);
         }
         step += 1 + solver.solve(goal, q, 3, done, rng);
     }
-    checker.loss_gradient(q) > margin && solver.converged_at(goal, q, done)
+    free(checker, q) && solver.converged_at(goal, q, done)
+}
+
+/// Dimensions of the tool pose a goal of this tolerance constrains.
+fn constrained_dimensions(tolerance: Tolerance) -> usize {
+    match tolerance {
+        Tolerance::Pose => 6,
+        // Free about the tool's z axis.
+        Tolerance::ZSymmetric => 5,
+        Tolerance::Position => 3,
+    }
 }
