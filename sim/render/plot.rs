@@ -73,7 +73,6 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
     for tick in labels {
         svg::text(&mut out, left - 8.0, y(tick) + 4.0, 11, "end", "#555555", &format!("{:.0} mm", tick * 1000.0));
     }
-    svg::text(&mut out, 18.0, (top + bottom) / 2.0, 12, "middle", "#333333", "m");
     // Goal arrivals: where the next segment heads for another goal.
     out.push_str("<g id=\"goals\" stroke=\"#bbbbbb\" stroke-dasharray=\"2 3\">\n");
     let label_every = (segments.len() / 40).max(1);
