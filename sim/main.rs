@@ -535,7 +535,10 @@ fn write_pictures(cli: &Cli, validation: &pipeline::Validation, report: &report:
     if cli.svg.is_some() || cli.png.is_some() {
         let pictures = render::pictures(validation, report);
         if let Some(dir) = &cli.svg {
-            let files: Vec<(String, Vec<u8>)> = pictures.iter().map(|p| (format!("{}.svg", p.name), p.svg.clone().into_bytes())).collect();
+            let files: Vec<(String, Vec<u8>)> = pictures
+                .iter()
+                .map(|p| (format!("{}.svg", p.name), p.svg.clone().into_bytes()))
+                .collect();
             pipeline::write_files_into(dir, &files)?;
             if !cli.quiet {
                 println!("wrote {} SVG pictures into {}", files.len(), dir.display());

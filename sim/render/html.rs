@@ -29,13 +29,21 @@ pub fn page(validation: &Validation, report: &Report) -> String {
         .as_ref()
         .map(|_| {
             let names: Vec<String> = validation.scenario.goals.iter().map(|g| g.name.clone()).collect();
-            super::plot::clearance(&validation.replayed, &names, validation.settings.margin_m, "clearance along the trajectory")
+            super::plot::clearance(
+                &validation.replayed,
+                &names,
+                validation.settings.margin_m,
+                "clearance along the trajectory",
+            )
         })
         .unwrap_or_default();
     let title = format!("{} on {}", validation.model.name, validation.scenario.name);
     let mut out = String::with_capacity(THREE.len() + data.len() + 65_536);
     out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-    out.push_str(&format!("<title>loading: {}</title>\n<style>\n{STYLE}</style>\n</head>\n<body>\n", escape(&title)));
+    out.push_str(&format!(
+        "<title>loading: {}</title>\n<style>\n{STYLE}</style>\n</head>\n<body>\n",
+        escape(&title)
+    ));
     out.push_str(&format!(
         "<header><h1>{}</h1><p class=\"{}\">{}</p>{}</header>\n",
         escape(&title),
@@ -100,8 +108,14 @@ fn goal_table(report: &Report) -> String {
 fn findings(report: &Report) -> String {
     let mut out = String::from("<section id=\"findings\"><h2>Findings</h2><ul>\n");
     for finding in &report.findings {
-        let kind = serde_json::to_value(finding.kind).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
-        let severity = serde_json::to_value(finding.severity).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+        let kind = serde_json::to_value(finding.kind)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        let severity = serde_json::to_value(finding.severity)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
         out.push_str(&format!(
             "<li class=\"{}\"{}><b>{}</b> {}: {}</li>\n",
             escape(&severity),
@@ -265,7 +279,15 @@ mod tests {
 
     #[test]
     fn base64_matches_the_rfc_4648_vectors() {
-        for (plain, encoded) in [("", ""), ("f", "Zg=="), ("fo", "Zm8="), ("foo", "Zm9v"), ("foob", "Zm9vYg=="), ("fooba", "Zm9vYmE="), ("foobar", "Zm9vYmFy")] {
+        for (plain, encoded) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
             assert_eq!(base64(plain.as_bytes()), encoded, "{plain}");
         }
     }

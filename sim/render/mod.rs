@@ -69,7 +69,10 @@ pub fn pictures(validation: &Validation, report: &Report) -> Vec<Picture> {
             triangle.corners.iter().for_each(|p| bounds.add(p));
         }
     }
-    let floor = validation.scenario.floor.map(|floor| floor_rectangle(&surfaces, model, &home, floor.height, &validation.scenario));
+    let floor = validation
+        .scenario
+        .floor
+        .map(|floor| floor_rectangle(&surfaces, model, &home, floor.height, &validation.scenario));
     if let Some(corners) = &floor {
         corners.iter().for_each(|p| bounds.add(p));
     }
@@ -82,8 +85,10 @@ pub fn pictures(validation: &Validation, report: &Report) -> Vec<Picture> {
         bounds,
     };
     let width = validation.scenario.goals.len().saturating_sub(1).to_string().len().max(3);
+    // Each picture on its own: the order and the bytes do not depend on the threads.
+    use rayon::prelude::*;
     let mut pictures: Vec<Picture> = shots
-        .into_iter()
+        .into_par_iter()
         .enumerate()
         .map(|(n, (q, mut shot))| {
             shot.robot = surfaces.robot(model, &q);
@@ -152,7 +157,11 @@ fn pair_text(point: &SegmentPoint) -> String {
 fn goal_shot(validation: &Validation, report: &Report, index: usize) -> (Vec<f64>, Shot) {
     let goal = &validation.scenario.goals[index];
     let margin = validation.settings.margin_m;
-    let ik_best = validation.solutions.get(index).and_then(|s| s.solutions.first()).map(|s| s.q.clone());
+    let ik_best = validation
+        .solutions
+        .get(index)
+        .and_then(|s| s.solutions.first())
+        .map(|s| s.q.clone());
     let clearance = validation.goal_clearances.get(index).cloned().flatten();
     let step = validation.trajectory.as_ref().and_then(|t| t.steps.get(index));
     let outcome = report.goals.get(index).map_or("", |g| g.outcome);
@@ -161,7 +170,10 @@ fn goal_shot(validation: &Validation, report: &Report, index: usize) -> (Vec<f64
     let (q, what) = match step {
         Some(GoalStep::Reached { q, clearance, .. }) => {
             closest.extend(clearance.iter().flat_map(|c| [c.a.clone(), c.b.clone()]));
-            (Some(q.clone()), format!("reached{}", clearance.as_ref().map(pair_text).unwrap_or_default()))
+            (
+                Some(q.clone()),
+                format!("reached{}", clearance.as_ref().map(pair_text).unwrap_or_default()),
+            )
         }
         Some(step @ GoalStep::NoPath { stop, .. }) => {
             let attempt = step.attempt();
@@ -199,7 +211,10 @@ fn goal_shot(validation: &Validation, report: &Report, index: usize) -> (Vec<f64
             let text = match (&ik_best, outcome) {
                 (None, _) => format!("{outcome}: IK found no configuration{proof}; the robot at home"),
                 (Some(_), "reached") => format!("reached (IK){}", clearance.as_ref().map(pair_text).unwrap_or_default()),
-                (Some(_), _) => format!("{outcome}: IK's best configuration{}{proof}", clearance.as_ref().map(pair_text).unwrap_or_default()),
+                (Some(_), _) => format!(
+                    "{outcome}: IK's best configuration{}{proof}",
+                    clearance.as_ref().map(pair_text).unwrap_or_default()
+                ),
             };
             (ik_best, text)
         }
@@ -237,7 +252,11 @@ fn floor_rectangle(
             high[axis] = high[axis].max(p[axis]);
         }
     };
-    surfaces.obstacles().iter().chain(&surfaces.robot(model, home)).for_each(|t| t.corners.iter().for_each(&mut add));
+    surfaces
+        .obstacles()
+        .iter()
+        .chain(&surfaces.robot(model, home))
+        .for_each(|t| t.corners.iter().for_each(&mut add));
     scenario.goals.iter().for_each(|g| add(&Point3::from(g.position)));
     let margin = 0.1 * (high[0] - low[0]).max(high[1] - low[1]).max(0.2);
     let (x0, x1, y0, y1) = (low[0] - margin, high[0] + margin, low[1] - margin, high[1] + margin);

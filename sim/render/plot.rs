@@ -71,7 +71,15 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
     }
     out.push_str("</g>\n");
     for tick in labels {
-        svg::text(&mut out, left - 8.0, y(tick) + 4.0, 11, "end", "#555555", &format!("{:.0} mm", tick * 1000.0));
+        svg::text(
+            &mut out,
+            left - 8.0,
+            y(tick) + 4.0,
+            11,
+            "end",
+            "#555555",
+            &format!("{:.0} mm", tick * 1000.0),
+        );
     }
     // Goal arrivals: where the next segment heads for another goal.
     out.push_str("<g id=\"goals\" stroke=\"#bbbbbb\" stroke-dasharray=\"2 3\">\n");
@@ -114,7 +122,15 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             px(y(margin_m)),
             px(y(margin_m))
         ));
-        svg::text(&mut out, right, y(margin_m) - 4.0, 11, "end", "#d62728", &format!("margin {}", svg::mm(margin_m)));
+        svg::text(
+            &mut out,
+            right,
+            y(margin_m) - 4.0,
+            11,
+            "end",
+            "#d62728",
+            &format!("margin {}", svg::mm(margin_m)),
+        );
     }
     out.push_str("<g id=\"certified\" stroke=\"#1f5fb4\" stroke-width=\"2\">\n");
     for (k, segment) in segments.iter().enumerate() {
@@ -175,13 +191,26 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             px(cy)
         ));
         let goal = goal_names.get(segments[k].goal).map_or("", String::as_str);
-        let label = format!("closest: {} and {}, {} (segment {k}, to {goal})", point.a, point.b, svg::mm(point.distance_m));
+        let label = format!(
+            "closest: {} and {}, {} (segment {k}, to {goal})",
+            point.a,
+            point.b,
+            svg::mm(point.distance_m)
+        );
         let anchor = if cx > (left + right) / 2.0 { "end" } else { "start" };
         let dx = if anchor == "end" { -10.0 } else { 10.0 };
         svg::text(&mut out, cx + dx, (cy - 10.0).max(top + 12.0), 12, anchor, "#000000", &label);
     }
     if segments.is_empty() {
-        svg::text(&mut out, (left + right) / 2.0, (top + bottom) / 2.0, 14, "middle", "#555555", "no segment: no goal has a path or an attempt");
+        svg::text(
+            &mut out,
+            (left + right) / 2.0,
+            (top + bottom) / 2.0,
+            14,
+            "middle",
+            "#555555",
+            "no segment: no goal has a path or an attempt",
+        );
     }
     out.push_str(&format!(
         "<rect x=\"{left}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888888\"/>\n",

@@ -230,13 +230,25 @@ mod tests {
         let cases = [
             (Shape::Sphere { radius: 0.2 }, 4.0 / 3.0 * pi * 0.008),
             (Shape::Cylinder { radius: 0.1, length: 0.5 }, pi * 0.01 * 0.5),
-            (Shape::Capsule { radius: 0.1, length: 0.3 }, pi * 0.01 * 0.3 + 4.0 / 3.0 * pi * 0.001),
-            (Shape::Box { half_extents: [0.1, 0.2, 0.3] }, 0.2 * 0.4 * 0.6),
+            (
+                Shape::Capsule { radius: 0.1, length: 0.3 },
+                pi * 0.01 * 0.3 + 4.0 / 3.0 * pi * 0.001,
+            ),
+            (
+                Shape::Box {
+                    half_extents: [0.1, 0.2, 0.3],
+                },
+                0.2 * 0.4 * 0.6,
+            ),
         ];
         for (shape, exact) in cases {
             let got = volume(&surface(&shape));
             // The inscribed polyhedron loses at most about 2 % at 32 steps around, 16 rings.
-            assert!(got > 0.0 && got <= exact * (1.0 + 1e-12) && got > 0.97 * exact, "{} volume {got} against {exact}", shape.kind());
+            assert!(
+                got > 0.0 && got <= exact * (1.0 + 1e-12) && got > 0.97 * exact,
+                "{} volume {got} against {exact}",
+                shape.kind()
+            );
         }
     }
 }

@@ -78,9 +78,9 @@ impl Bounds {
     pub(super) fn add(&mut self, point: &Point3<f64>) {
         for (k, camera) in cameras().iter().enumerate() {
             let screen = [point.coords.dot(&camera.right), point.coords.dot(&camera.up)];
-            for axis in 0..2 {
-                self.min[k][axis] = self.min[k][axis].min(screen[axis]);
-                self.max[k][axis] = self.max[k][axis].max(screen[axis]);
+            for (axis, value) in screen.into_iter().enumerate() {
+                self.min[k][axis] = self.min[k][axis].min(value);
+                self.max[k][axis] = self.max[k][axis].max(value);
             }
         }
     }
@@ -189,7 +189,7 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
 
 fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
     if let Some(floor) = &stage.floor {
-        let points: Vec<String> = floor.iter().map(|p| project(p)).map(|(x, y)| format!("{},{}", px(x), px(y))).collect();
+        let points: Vec<String> = floor.iter().map(project).map(|(x, y)| format!("{},{}", px(x), px(y))).collect();
         out.push_str(&format!(
             "<polygon class=\"floor\" points=\"{}\" fill=\"#e4e1da\" stroke=\"#b9b4a8\"/>\n",
             points.join(" ")
@@ -242,7 +242,9 @@ fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: 
         if ((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)).abs() < 0.02 {
             continue;
         }
-        let alpha = opacity.map(|o| format!(" fill-opacity=\"{o}\" stroke-opacity=\"{o}\"")).unwrap_or_default();
+        let alpha = opacity
+            .map(|o| format!(" fill-opacity=\"{o}\" stroke-opacity=\"{o}\""))
+            .unwrap_or_default();
         out.push_str(&format!(
             "<path d=\"M{} {}L{} {}L{} {}Z\" fill=\"{colour}\" stroke=\"{colour}\"{alpha}/>\n",
             px(x0),
@@ -257,15 +259,27 @@ fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: 
     goal_frames(out, stage, shot, project);
 }
 
+/// Above this many goals only the shot's goal gets a frame; the others are dots, one path per
+/// outcome (a thousand frames in four views would be most of the picture's bytes).
+const MANY_GOALS: usize = 60;
+
 /// Each goal's frame (x red, y green, z blue) and a dot in its outcome's colour; the shot's
 /// goal larger and named.
 fn goal_frames(out: &mut String, stage: &Stage, shot: &Shot, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
     let axis_length = 0.04 * stage.bounds.size();
+    let many = stage.scenario.goals.len() > MANY_GOALS;
     out.push_str("<g class=\"goals\" stroke-width=\"1.2\">\n");
+    let mut dots: [(&str, String); 4] = ["reached", "no_path", "unreachable", ""].map(|o| (o, String::new()));
     for (index, goal) in stage.scenario.goals.iter().enumerate() {
         let focus = shot.goal == Some(index);
         let origin = Point3::from(goal.position);
         let (ox, oy) = project(&origin);
+        let outcome = stage.outcomes.get(index).copied().unwrap_or("");
+        if many && !focus {
+            let slot = dots.iter().position(|(o, _)| *o == outcome).unwrap_or(3);
+            dots[slot].1.push_str(&format!("M{} {}h3v3h-3z", px(ox - 1.5), px(oy - 1.5)));
+            continue;
+        }
         let length = if focus { 2.0 * axis_length } else { axis_length };
         for (axis, colour) in [(Vector3::x(), "#d62728"), (Vector3::y(), "#2ca02c"), (Vector3::z(), "#1f77b4")] {
             let (ex, ey) = project(&(origin + goal.rotation * axis * length));
@@ -277,7 +291,6 @@ fn goal_frames(out: &mut String, stage: &Stage, shot: &Shot, project: &dyn Fn(&P
                 px(ey)
             ));
         }
-        let outcome = stage.outcomes.get(index).copied().unwrap_or("");
         let radius = if focus { 5.0 } else { 2.5 };
         out.push_str(&format!(
             "<circle cx=\"{}\" cy=\"{}\" r=\"{radius}\" fill=\"{}\" stroke=\"#000000\" stroke-width=\"{}\"/>\n",
@@ -289,6 +302,12 @@ fn goal_frames(out: &mut String, stage: &Stage, shot: &Shot, project: &dyn Fn(&P
         if focus {
             svg::text(out, ox + 8.0, oy - 8.0, 12, "start", "#000000", &goal.name);
         }
+    }
+    for (outcome, path) in dots.iter().filter(|(_, path)| !path.is_empty()) {
+        out.push_str(&format!(
+            "<path d=\"{path}\" fill=\"{}\" stroke=\"none\"/>\n",
+            outcome_colour(outcome)
+        ));
     }
     out.push_str("</g>\n");
 }
@@ -344,7 +363,11 @@ mod tests {
             for v in [r, u, f] {
                 assert!((v.norm() - 1.0).abs() < 1e-12, "{}", camera.name);
             }
-            assert!(r.dot(&u).abs() < 1e-12 && r.dot(&f).abs() < 1e-12 && u.dot(&f).abs() < 1e-12, "{}", camera.name);
+            assert!(
+                r.dot(&u).abs() < 1e-12 && r.dot(&f).abs() < 1e-12 && u.dot(&f).abs() < 1e-12,
+                "{}",
+                camera.name
+            );
             // right x up points at the viewer: the screen is not mirrored.
             assert!((r.cross(&u) + f).norm() < 1e-12, "{}", camera.name);
         }
