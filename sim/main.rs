@@ -30,7 +30,7 @@ Examples:
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
   validate-design robot.xml --kinematics-only --mujoco-checks 20
   validate-design designs/ur5e.json --describe --export-urdf ur5e.urdf --export-mjcf ur5e.xml
-  validate-design designs/paper-real-world.json --png pictures --html report.html
+  validate-design designs/paper-real-world.json --svg pictures --png pictures --html report.html
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-07.json --export-mjcf scene.xml --scene --describe
   validate-design generate cluttered --all --out scenarios/cluttered --force
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
