@@ -27,6 +27,9 @@ pub enum Error {
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),
+    /// A picture could not be made.
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
     /// A sweep, merge or design-space experiment could not run.
     #[error(transparent)]
     Sweep(#[from] crate::sweep::SweepError),
@@ -44,6 +47,15 @@ pub enum Error {
         /// The I/O error.
         #[source]
         source: std::io::Error,
+    },
+    /// A picture folder is a file, or holds a file of another kind under one of the names the
+    /// pictures use.
+    #[error("cannot write pictures into {path}: {message}")]
+    PictureFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What is in the way.
+        message: String,
     },
     /// An output file would overwrite an input.
     #[error("refusing to write {path}: this run read that file (the design, the scenario, a mesh, an included file, or a link to one)")]

@@ -17,7 +17,7 @@
 //! their generators), [`collide`] (exact and approximate distances), [`ik`] (every collision-free
 //! solution of a goal), [`plan`] (the trajectory, certified continuous checking, timing),
 //! [`engine`] (rapier and MuJoCo runs, the static load, MuJoCo as kinematic oracle), [`report`]
-//! (findings and the verdict), [`pipeline`] (runs the stages in order: [`pipeline::validate`]).
+//! (findings and the verdict), [`render`] (pictures and the HTML report), [`pipeline`] (runs the stages in order: [`pipeline::validate`]).
 //!
 //! ```no_run
 //! let model = proving_ground::pipeline::load_model(
@@ -60,6 +60,7 @@ pub mod model;
 pub mod pipeline;
 pub mod plan;
 pub mod progress;
+pub mod render;
 pub mod report;
 pub mod scenario;
 pub mod srdf;

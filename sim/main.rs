@@ -10,6 +10,7 @@ use proving_ground::engine::check_kinematics;
 use proving_ground::error::Error;
 use proving_ground::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
 use proving_ground::pipeline::{self, LoadOptions};
+use proving_ground::render;
 use proving_ground::report;
 use proving_ground::scenario::{self, generate, ScenarioError, Tolerance};
 use std::path::PathBuf;
@@ -29,6 +30,8 @@ Examples:
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
   validate-design robot.xml --kinematics-only --mujoco-checks 20
   validate-design designs/ur5e.json --describe --export-urdf ur5e.urdf --export-mjcf ur5e.xml
+  validate-design designs/paper-real-world.json --svg pictures --png pictures --html report.html
+  validate-design designs/ur5e.json --scenario scenarios/cluttered/task-07.json --export-mjcf scene.xml --scene --describe
   validate-design generate cluttered --all --out scenarios/cluttered --force
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
   validate-design snapshot --suite proving-ground.json             # your own golden suite
@@ -95,6 +98,22 @@ struct Cli {
     /// Write the model as MJCF to FILE (never over an input file).
     #[arg(long, value_name = "FILE")]
     export_mjcf: Option<PathBuf>,
+    /// With --export-mjcf: write the scenario too (the robot at its base pose, the obstacles, the
+    /// floor and a site `goal/K` per goal), so MuJoCo's own viewer shows the whole scene.
+    #[arg(long, requires = "export_mjcf")]
+    scene: bool,
+    /// Write pictures as SVG into DIR (created if missing; only the files named scene.svg,
+    /// goal-NNN.svg and clearance.svg are written): four views of the robot in exact geometry per
+    /// goal and at home, and the clearance along the trajectory.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["describe", "kinematics_only"])]
+    svg: Option<PathBuf>,
+    /// The same pictures as PNG into DIR.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["describe", "kinematics_only"])]
+    png: Option<PathBuf>,
+    /// Write the report as one self-contained HTML page to FILE (opens offline: verdict, goals,
+    /// findings, a 3D view with a timeline, the clearance plot).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["describe", "kinematics_only"])]
+    html: Option<PathBuf>,
     /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips).
     #[arg(long, value_name = "N", default_value_t = 100, value_parser = clap::value_parser!(u64).range(0..=100_000))]
     mujoco_checks: u64,
@@ -413,7 +432,12 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         }
     }
     if let Some(path) = &cli.export_mjcf {
-        pipeline::write_output(path, &mjcf)?;
+        let text = if cli.scene {
+            pipeline::scene_mjcf(model, &scenario)?
+        } else {
+            mjcf.clone()
+        };
+        pipeline::write_output(path, &text)?;
         if !cli.quiet {
             println!("wrote MJCF {}", path.display());
         }
@@ -492,6 +516,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
         let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Report { message: e.to_string() })?;
         pipeline::write_output(path, &(text + "\n"))?;
     }
+    write_pictures(cli, &validation, &report)?;
     if cli.quiet {
         println!("{}", report::verdict_line(&report.verdict));
     } else {
@@ -502,6 +527,42 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// `--svg DIR`, `--png DIR`, `--html FILE`.
+fn write_pictures(cli: &Cli, validation: &pipeline::Validation, report: &report::Report) -> Result<(), Error> {
+    use rayon::prelude::*;
+    if cli.svg.is_some() || cli.png.is_some() {
+        let pictures = render::pictures(validation, report);
+        if let Some(dir) = &cli.svg {
+            let files: Vec<(String, Vec<u8>)> = pictures
+                .iter()
+                .map(|p| (format!("{}.svg", p.name), p.svg.clone().into_bytes()))
+                .collect();
+            pipeline::write_files_into(dir, &files)?;
+            if !cli.quiet {
+                println!("wrote {} SVG pictures into {}", files.len(), dir.display());
+            }
+        }
+        if let Some(dir) = &cli.png {
+            // Each picture on its own: the order and the bytes do not depend on the threads.
+            let files = pictures
+                .par_iter()
+                .map(|p| Ok((format!("{}.png", p.name), render::png::to_png(&p.name, &p.svg)?)))
+                .collect::<Result<Vec<_>, render::RenderError>>()?;
+            pipeline::write_files_into(dir, &files)?;
+            if !cli.quiet {
+                println!("wrote {} PNG pictures into {}", files.len(), dir.display());
+            }
+        }
+    }
+    if let Some(path) = &cli.html {
+        pipeline::write_output(path, &render::page(validation, report))?;
+        if !cli.quiet {
+            println!("wrote HTML report {}", path.display());
+        }
+    }
+    Ok(())
 }
 
 /// `validate-design generate ...`: builds the scenarios and writes them.

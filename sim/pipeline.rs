@@ -133,7 +133,15 @@ pub fn scenario_or_default(path: Option<&Path>) -> Result<crate::scenario::Scena
 /// # Errors
 /// [`Error::WouldOverwriteInput`] or [`Error::Write`] (the old file is then intact).
 pub fn write_output(path: &Path, text: &str) -> Result<(), Error> {
-    crate::files::write_atomic(path, text.as_bytes(), true).map_err(|error| match error {
+    write_output_bytes(path, text.as_bytes())
+}
+
+/// [`write_output`] for bytes (a PNG).
+///
+/// # Errors
+/// As [`write_output`].
+pub fn write_output_bytes(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    crate::files::write_atomic(path, bytes, true).map_err(|error| match error {
         crate::files::WriteError::Input => Error::WouldOverwriteInput { path: path.to_path_buf() },
         other => Error::Write {
             path: path.to_path_buf(),
@@ -142,12 +150,75 @@ pub fn write_output(path: &Path, text: &str) -> Result<(), Error> {
     })
 }
 
+/// Writes `files` (file name, bytes) into the folder `dir`, creating it: only these names are
+/// written (a file of the same name is replaced, never an input of this run); anything else in
+/// the folder is left alone. Returns the paths written, in order.
+///
+/// # Errors
+/// [`Error::PictureFolder`] when `dir` is not a folder or a name in it is a folder,
+/// [`Error::WouldOverwriteInput`] or [`Error::Write`] as [`write_output`].
+pub fn write_files_into(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<Vec<PathBuf>, Error> {
+    let folder_error = |message: String| Error::PictureFolder {
+        path: dir.to_path_buf(),
+        message,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(folder_error("it exists and is not a folder".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| folder_error(format!("cannot create it: {e}")))?;
+    let mut written = Vec::with_capacity(files.len());
+    for (name, bytes) in files {
+        let path = dir.join(name);
+        if path.is_dir() {
+            return Err(folder_error(format!("{name} in it is a folder")));
+        }
+        write_output_bytes(&path, bytes)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
 /// MJCF text for a model with default export options.
 ///
 /// # Errors
 /// [`Error::Export`].
 pub fn mjcf_of(model: &Model) -> Result<String, Error> {
     Ok(export::to_mjcf(model, &export::MjcfOptions::default())?)
+}
+
+/// MJCF text of the whole scene: the model at the scenario's base pose, the obstacles as static
+/// geoms named as in the scenario, the floor plane `floor`, and a site `goal/K` at each goal's
+/// frame, so MuJoCo's viewer shows what the run checks.
+///
+/// # Errors
+/// [`Error::Export`] (e.g. an obstacle named like a link geom).
+pub fn scene_mjcf(model: &Model, scenario: &crate::scenario::Scenario) -> Result<String, Error> {
+    let placed = model.placed(&scenario.world_from_base);
+    let world_colliders = scenario
+        .obstacles
+        .iter()
+        .map(|o| crate::model::Collider {
+            link_from_shape: o.world_from_shape,
+            shape: o.shape.clone(),
+            label: o.name.clone(),
+        })
+        .collect();
+    let world_sites = scenario
+        .goals
+        .iter()
+        .enumerate()
+        .map(|(k, goal)| {
+            let pose = nalgebra::Isometry3::from_parts(goal.position.into(), goal.rotation);
+            (format!("goal/{k}"), pose)
+        })
+        .collect();
+    let opts = export::MjcfOptions {
+        world_colliders,
+        floor_height: scenario.floor.map(|f| f.height),
+        world_sites,
+        ..Default::default()
+    };
+    Ok(export::to_mjcf(&placed, &opts)?)
 }
 
 /// The exact collision world of a placed model in a scenario, with the model's structurally

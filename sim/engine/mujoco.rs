@@ -84,6 +84,16 @@ impl MujocoKinematics {
         self.model.ffi().nbody as usize
     }
 
+    /// Number of geoms (every body's, the world's included).
+    pub fn geom_count(&self) -> usize {
+        self.model.ffi().ngeom as usize
+    }
+
+    /// Number of sites.
+    pub fn site_count(&self) -> usize {
+        self.model.ffi().nsite as usize
+    }
+
     /// Runs `mj_kinematics` and `mj_comPos` at `q` (our joint order; other joints stay at their
     /// reference position) and reads the named bodies and site.
     ///

@@ -128,6 +128,7 @@ impl Loaded {
             include_actuators: gains.is_some(),
             world_colliders,
             floor_height: scenario.and_then(|s| s.floor).map(|f| f.height),
+            world_sites: Vec::new(),
             excluded_body_pairs,
             explicit_geom_pairs,
             gravity_m_s2: opts.gravity_m_s2,

@@ -55,6 +55,9 @@ pub struct MjcfOptions {
     pub world_colliders: Vec<Collider>,
     /// Height (m) of a floor plane geom `floor` covering everything below it; default `None`.
     pub floor_height: Option<f64>,
+    /// Sites in the world body, `(name, world_from_site)` (a scenario's goal frames, for a
+    /// viewer: sites take no part in contacts); default none.
+    pub world_sites: Vec<(String, Isometry3<f64>)>,
     /// Body pairs (body names) whose contacts MuJoCo ignores, beyond the pairs one joint
     /// connects (always excluded); default none. A pair given twice is written once.
     pub excluded_body_pairs: Vec<(String, String)>,
@@ -83,6 +86,7 @@ impl Default for MjcfOptions {
             include_actuators: true,
             world_colliders: Vec::new(),
             floor_height: None,
+            world_sites: Vec::new(),
             excluded_body_pairs: Vec::new(),
             explicit_geom_pairs: Vec::new(),
             gravity_m_s2: 9.81,
@@ -146,6 +150,12 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         .flat_map(|(k, c)| piece_names(&c.label, pieces.world(k)))
         .collect();
     let floor = opts.floor_height.map(|_| FLOOR_GEOM);
+    check_unique(
+        model,
+        "MJCF",
+        "site",
+        std::iter::once("tool").chain(opts.world_sites.iter().map(|(name, _)| name.as_str())),
+    )?;
     check_unique(
         model,
         "MJCF",
@@ -350,6 +360,10 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
         for text in geom_texts(&collider.label, &mesh, collider, pieces.world(k)) {
             line(out, 2, &text);
         }
+    }
+    for (name, world_from_site) in &opts.world_sites {
+        let text = format!(r#"<site name="{}" {} size="0.01"/>"#, escape(name), pose(world_from_site));
+        line(out, 2, &text);
     }
     let mut depth = 2;
     let mut closing = Vec::with_capacity(model.links.len());

@@ -1,0 +1,247 @@
+//! The clearance-along-the-trajectory plot: per replayed segment (the planned edges and each
+//! blocked goal's attempt, in order, segment `k` spanning `[k, k + 1)` of the replay clock) the
+//! certified lower bound on its clearance, the closest approach measured on it, where it is
+//! blocked, and the run's closest pair.
+
+use super::svg::{self, px};
+use crate::plan::ReplaySegment;
+
+/// Picture size (px).
+pub(super) const WIDTH: u32 = 1280;
+/// Picture size (px).
+pub(super) const HEIGHT: u32 = 440;
+/// Plot area, px: left, right, top, bottom.
+pub(super) const AREA: [f64; 4] = [90.0, 1250.0, 64.0, 380.0];
+
+/// The plot as SVG. The root element carries `data-left`, `data-right` (px) and
+/// `data-segments`, so a page can put a cursor at a replay clock.
+pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margin_m: f64, title: &str) -> String {
+    let [left, right, top, bottom] = AREA;
+    let count = segments.len().max(1) as f64;
+    let mut values: Vec<f64> = vec![0.0, margin_m];
+    for segment in segments {
+        values.push(segment.certified.certified_clearance_m);
+        values.extend(segment.certified.closest.as_ref().map(|c| c.distance_m));
+        values.extend(segment.certified.touch.as_ref().map(|c| c.distance_m));
+    }
+    values.retain(|v| v.is_finite());
+    let low = values.iter().copied().fold(0.0, f64::min);
+    let high = (values.iter().copied().fold(0.0, f64::max) * 1.05).max(low + 1e-3);
+    let (low, high, step) = nice_range(low, high);
+    let x = |clock: f64| left + (right - left) * clock / count;
+    let y = |metres: f64| bottom - (bottom - top) * (metres.clamp(low, high) - low) / (high - low);
+
+    let mut out = String::new();
+    out.push_str(&format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox=\"0 0 {WIDTH} {HEIGHT}\" font-family=\"{}\" data-left=\"{left}\" data-right=\"{right}\" data-segments=\"{}\">\n<rect width=\"{WIDTH}\" height=\"{HEIGHT}\" fill=\"#ffffff\"/>\n",
+        svg::FONT,
+        segments.len()
+    ));
+    svg::text(&mut out, left, 24.0, 18, "start", "#000000", title);
+    svg::text(
+        &mut out,
+        left,
+        46.0,
+        12,
+        "start",
+        "#333333",
+        "per segment: certified lower bound (blue line), closest approach measured (orange dot), blocked at (red x); shaded: a blocked goal's attempt",
+    );
+    // Attempts (not on the trajectory) behind everything.
+    out.push_str("<g id=\"attempts\">\n");
+    for (k, _) in segments.iter().enumerate().filter(|(_, s)| !s.planned) {
+        out.push_str(&format!(
+            "<rect x=\"{}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"#fbe3e3\"/>\n",
+            px(x(k as f64)),
+            px(x(1.0) - x(0.0)),
+            bottom - top
+        ));
+    }
+    out.push_str("</g>\n<g id=\"grid\" stroke=\"#e2e2e2\" stroke-width=\"1\">\n");
+    let mut tick = low;
+    let mut labels = Vec::new();
+    while tick <= high + step * 1e-6 {
+        out.push_str(&format!(
+            "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\"/>\n",
+            px(y(tick)),
+            px(y(tick))
+        ));
+        labels.push(tick);
+        tick += step;
+    }
+    out.push_str("</g>\n");
+    for tick in labels {
+        svg::text(
+            &mut out,
+            left - 8.0,
+            y(tick) + 4.0,
+            11,
+            "end",
+            "#555555",
+            &format!("{:.0} mm", tick * 1000.0),
+        );
+    }
+    // Goal arrivals: where the next segment heads for another goal.
+    out.push_str("<g id=\"goals\" stroke=\"#bbbbbb\" stroke-dasharray=\"2 3\">\n");
+    let label_every = (segments.len() / 40).max(1);
+    let mut arrivals = Vec::new();
+    for (k, segment) in segments.iter().enumerate() {
+        if segments.get(k + 1).is_none_or(|next| next.goal != segment.goal) {
+            arrivals.push((k + 1, segment.goal));
+            out.push_str(&format!(
+                "<line x1=\"{}\" y1=\"{top}\" x2=\"{}\" y2=\"{bottom}\"/>\n",
+                px(x((k + 1) as f64)),
+                px(x((k + 1) as f64))
+            ));
+        }
+    }
+    out.push_str("</g>\n");
+    for (n, (end, goal)) in arrivals.iter().enumerate() {
+        if n % label_every == 0 {
+            svg::text(&mut out, x(*end as f64), bottom + 16.0, 10, "end", "#555555", &goal.to_string());
+        }
+    }
+    svg::text(
+        &mut out,
+        (left + right) / 2.0,
+        bottom + 36.0,
+        12,
+        "middle",
+        "#333333",
+        "replayed segment (goal index at each arrival)",
+    );
+    // Zero and the margin.
+    out.push_str(&format!(
+        "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\" stroke=\"#000000\" stroke-width=\"1\"/>\n",
+        px(y(0.0)),
+        px(y(0.0))
+    ));
+    if margin_m > 0.0 {
+        out.push_str(&format!(
+            "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\" stroke=\"#d62728\" stroke-dasharray=\"6 4\"/>\n",
+            px(y(margin_m)),
+            px(y(margin_m))
+        ));
+        svg::text(
+            &mut out,
+            right,
+            y(margin_m) - 4.0,
+            11,
+            "end",
+            "#d62728",
+            &format!("margin {}", svg::mm(margin_m)),
+        );
+    }
+    out.push_str("<g id=\"certified\" stroke=\"#1f5fb4\" stroke-width=\"2\">\n");
+    for (k, segment) in segments.iter().enumerate() {
+        let bound = segment.certified.certified_clearance_m;
+        if !bound.is_finite() {
+            continue;
+        }
+        let extent = segment.certified.touch.as_ref().map_or(1.0, |t| t.s);
+        out.push_str(&format!(
+            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>\n",
+            px(x(k as f64)),
+            px(y(bound)),
+            px(x(k as f64 + extent).max(x(k as f64) + 1.0)),
+            px(y(bound))
+        ));
+    }
+    out.push_str("</g>\n<g id=\"measured\" fill=\"#ff7f0e\">\n");
+    for (k, segment) in segments.iter().enumerate() {
+        if let Some(closest) = segment.certified.closest.as_ref().filter(|c| c.distance_m.is_finite()) {
+            out.push_str(&format!(
+                "<circle cx=\"{}\" cy=\"{}\" r=\"2.5\"/>\n",
+                px(x(k as f64 + closest.s)),
+                px(y(closest.distance_m))
+            ));
+        }
+    }
+    out.push_str("</g>\n<g id=\"blocked\" stroke=\"#d62728\" stroke-width=\"2.5\">\n");
+    for (k, segment) in segments.iter().enumerate() {
+        if let Some(touch) = &segment.certified.touch {
+            let (cx, cy) = (x(k as f64 + touch.s), y(touch.distance_m));
+            out.push_str(&format!(
+                "<path d=\"M{} {}L{} {}M{} {}L{} {}\"/>\n",
+                px(cx - 5.0),
+                px(cy - 5.0),
+                px(cx + 5.0),
+                px(cy + 5.0),
+                px(cx - 5.0),
+                px(cy + 5.0),
+                px(cx + 5.0),
+                px(cy - 5.0)
+            ));
+        }
+    }
+    out.push_str("</g>\n");
+    // The closest pair of the trajectory itself (planned segments), ties to the first.
+    let closest = segments
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.planned)
+        .filter_map(|(k, s)| s.certified.closest.as_ref().map(|c| (k, c)))
+        .filter(|(_, c)| c.distance_m.is_finite())
+        .min_by(|a, b| a.1.distance_m.total_cmp(&b.1.distance_m).then(a.0.cmp(&b.0)));
+    if let Some((k, point)) = closest {
+        let (cx, cy) = (x(k as f64 + point.s), y(point.distance_m));
+        out.push_str(&format!(
+            "<circle id=\"closest-pair\" cx=\"{}\" cy=\"{}\" r=\"7\" fill=\"none\" stroke=\"#000000\" stroke-width=\"1.5\"/>\n",
+            px(cx),
+            px(cy)
+        ));
+        let goal = goal_names.get(segments[k].goal).map_or("", String::as_str);
+        let label = format!(
+            "closest: {} and {}, {} (segment {k}, to {goal})",
+            point.a,
+            point.b,
+            svg::mm(point.distance_m)
+        );
+        let anchor = if cx > (left + right) / 2.0 { "end" } else { "start" };
+        let dx = if anchor == "end" { -10.0 } else { 10.0 };
+        svg::text(&mut out, cx + dx, (cy - 10.0).max(top + 12.0), 12, anchor, "#000000", &label);
+    }
+    if segments.is_empty() {
+        svg::text(
+            &mut out,
+            (left + right) / 2.0,
+            (top + bottom) / 2.0,
+            14,
+            "middle",
+            "#555555",
+            "no segment: no goal has a path or an attempt",
+        );
+    }
+    out.push_str(&format!(
+        "<rect x=\"{left}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888888\"/>\n",
+        right - left,
+        bottom - top
+    ));
+    out.push_str("</svg>\n");
+    out
+}
+
+/// A range holding `[low, high]` whose ends are multiples of a 1, 2 or 5 step, about 6 steps.
+fn nice_range(low: f64, high: f64) -> (f64, f64, f64) {
+    let raw = (high - low) / 6.0;
+    let magnitude = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * magnitude)
+        .find(|&s| s >= raw)
+        .unwrap_or(10.0 * magnitude);
+    ((low / step).floor() * step, (high / step).ceil() * step, step)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_range_holds_the_values_on_round_steps() {
+        let (low, high, step) = nice_range(-0.0012, 0.387);
+        assert!(low <= -0.0012 && high >= 0.387, "{low} {high}");
+        assert!((step - 0.1).abs() < 1e-12, "{step}");
+        assert!(((high - low) / step).round() <= 7.0);
+    }
+}
