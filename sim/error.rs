@@ -27,6 +27,9 @@ pub enum Error {
     /// MuJoCo refused a model.
     #[error(transparent)]
     Engine(#[from] crate::engine::EngineError),
+    /// A fine-tuning could not run.
+    #[error(transparent)]
+    Optimize(#[from] crate::optimize::OptimizeError),
     /// A sweep, merge or design-space experiment could not run.
     #[error(transparent)]
     Sweep(#[from] crate::sweep::SweepError),
