@@ -97,7 +97,11 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
     };
     let after = report::build(&pipeline::validate(after_loaded, scenario, &validate_options)?);
     print!("{}", side_by_side(&before, &after));
-    Ok(if after.verdict.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    Ok(if after.verdict.passed {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }
 
 /// The two verdicts as a small table.
@@ -108,8 +112,16 @@ fn side_by_side(before: &Report, after: &Report) -> String {
     let rows = [
         ("", before.design.name.clone(), after.design.name.clone()),
         ("goals reached", reached(before), reached(after)),
-        ("paper loss (min over IK)", loss(before.paper_loss.total), loss(after.paper_loss.total)),
-        ("paper loss (chosen)", loss(before.paper_loss.at_chosen), loss(after.paper_loss.at_chosen)),
+        (
+            "paper loss (min over IK)",
+            loss(before.paper_loss.total),
+            loss(after.paper_loss.total),
+        ),
+        (
+            "paper loss (chosen)",
+            loss(before.paper_loss.at_chosen),
+            loss(after.paper_loss.at_chosen),
+        ),
         (
             "hardware cost (m)",
             format!("{:.4}", before.paper_loss.hardware / proving_ground::ik::HARDWARE_WEIGHT),

@@ -16,6 +16,10 @@ const LOSS_AGREEMENT: f64 = 1e-9;
 const KINEMATICS_AGREEMENT: f64 = 1e-12;
 /// Gradient against central differences, relative to the larger of its size and 1.
 const GRADIENT_AGREEMENT: f64 = 1e-6;
+/// The same where a box or cylinder is near: parry's GJK distance (the CPU path's and the
+/// witness plane's) is exact to about 1e-11 m, which central differences over 2e-6 turn into
+/// about 1e-5 of noise.
+const GRADIENT_AGREEMENT_PARRY: f64 = 1e-4;
 /// Central difference step (rad or m).
 const STEP: f64 = 1e-6;
 
@@ -36,7 +40,12 @@ fn random_batch(design: &Design, scenario: &Scenario, count: usize, seed: u64) -
     for goal in 0..scenario.goals.len() {
         for _ in 0..count {
             // Half the range: random arms fold into themselves and the obstacles often enough.
-            q.extend(model.random_configuration(&mut rng).iter().map(|v| v * 0.5 + rng.random_range(-0.1..0.1)));
+            q.extend(
+                model
+                    .random_configuration(&mut rng)
+                    .iter()
+                    .map(|v| v * 0.5 + rng.random_range(-0.1..0.1)),
+            );
             samples.push(Sample { design: 0, goal });
         }
     }
@@ -82,7 +91,10 @@ fn batched_loss_equals_the_cpu_paper_loss() {
                 );
             }
         }
-        assert!(colliding > 0, "{design_file} {scenario_file}: no sample near a collision, the test checks nothing there");
+        assert!(
+            colliding > 0,
+            "{design_file} {scenario_file}: no sample near a collision, the test checks nothing there"
+        );
     }
 }
 
@@ -104,16 +116,31 @@ fn tensor_kinematics_equal_the_hand_written_chain() {
     };
     let linear: Vec<Vec<Vec<f64>>> = (0..3).map(|i| row_grad(&graph.tool.1.narrow(1, i, 1).expect("narrow"))).collect();
     let entries: Vec<Vec<Vec<f64>>> = (0..9)
-        .map(|e| row_grad(&graph.tool.0.narrow(1, e / 3, 1).and_then(|t| t.narrow(2, e % 3, 1)).expect("narrow")))
+        .map(|e| {
+            row_grad(
+                &graph
+                    .tool
+                    .0
+                    .narrow(1, e / 3, 1)
+                    .and_then(|t| t.narrow(2, e % 3, 1))
+                    .expect("narrow"),
+            )
+        })
         .collect();
     for b in 0..batch.samples.len() {
         let q = batch.q(&params, b);
         model.jacobian(q, &mut ws);
         let tool = ws.tool_in_world.to_homogeneous();
         for i in 0..3 {
-            assert!((position[b][i] - tool[(i, 3)]).abs() < KINEMATICS_AGREEMENT, "sample {b} position {i}");
+            assert!(
+                (position[b][i] - tool[(i, 3)]).abs() < KINEMATICS_AGREEMENT,
+                "sample {b} position {i}"
+            );
             for j in 0..3 {
-                assert!((rotation[b][i][j] - tool[(i, j)]).abs() < KINEMATICS_AGREEMENT, "sample {b} rotation {i}{j}");
+                assert!(
+                    (rotation[b][i][j] - tool[(i, j)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} rotation {i}{j}"
+                );
             }
         }
         for joint in 0..batch.dof {
@@ -122,8 +149,14 @@ fn tensor_kinematics_equal_the_hand_written_chain() {
             let omega = dr * r.transpose();
             let omega = nalgebra::Vector3::new(omega[(2, 1)], omega[(0, 2)], omega[(1, 0)]);
             for i in 0..3 {
-                assert!((linear[i][b][joint] - ws.jacobian[(i, joint)]).abs() < KINEMATICS_AGREEMENT, "sample {b} J_v {i} {joint}");
-                assert!((omega[i] - ws.jacobian[(i + 3, joint)]).abs() < KINEMATICS_AGREEMENT, "sample {b} J_w {i} {joint}");
+                assert!(
+                    (linear[i][b][joint] - ws.jacobian[(i, joint)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} J_v {i} {joint}"
+                );
+                assert!(
+                    (omega[i] - ws.jacobian[(i + 3, joint)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} J_w {i} {joint}"
+                );
             }
         }
     }
@@ -145,22 +178,50 @@ fn gradients_match_central_differences_and_each_other() {
         let tensors = Tensors::default().evaluate(&batch, &params).expect("tensors");
         let analytic = Analytic.evaluate(&batch, &params).expect("analytic");
         let n = batch.dof;
+        let closed_form = scenario
+            .obstacles
+            .iter()
+            .all(|o| matches!(o.shape, proving_ground::model::Shape::Sphere { .. }));
+        let agreement = if closed_form {
+            GRADIENT_AGREEMENT
+        } else {
+            GRADIENT_AGREEMENT_PARRY
+        };
         for b in 0..batch.samples.len() {
             for j in 0..n {
                 let i = b * n + j;
-                let fd_q = (loss_with(&batch, &params, b, |p| p.q[i] += STEP) - loss_with(&batch, &params, b, |p| p.q[i] -= STEP)) / (2.0 * STEP);
-                let fd_d = (loss_with(&batch, &params, b, |p| p.d[j] += STEP) - loss_with(&batch, &params, b, |p| p.d[j] -= STEP)) / (2.0 * STEP);
-                let fd_a = (loss_with(&batch, &params, b, |p| p.a[j] += STEP) - loss_with(&batch, &params, b, |p| p.a[j] -= STEP)) / (2.0 * STEP);
+                let fd_q =
+                    (loss_with(&batch, &params, b, |p| p.q[i] += STEP) - loss_with(&batch, &params, b, |p| p.q[i] -= STEP)) / (2.0 * STEP);
+                let fd_d =
+                    (loss_with(&batch, &params, b, |p| p.d[j] += STEP) - loss_with(&batch, &params, b, |p| p.d[j] -= STEP)) / (2.0 * STEP);
+                let fd_a =
+                    (loss_with(&batch, &params, b, |p| p.a[j] += STEP) - loss_with(&batch, &params, b, |p| p.a[j] -= STEP)) / (2.0 * STEP);
                 for (name, evaluation) in [("tensors", &tensors), ("analytic", &analytic)] {
-                    for (what, gradient, fd) in [("q", evaluation.grad_q[i], fd_q), ("d", evaluation.grad_d[i], fd_d), ("a", evaluation.grad_a[i], fd_a)] {
+                    // A zero d or a is no variable (it fixes the capsule structure and never
+                    // moves); there the geometry can be degenerate (segments meeting at a joint).
+                    let checked = [
+                        ("q", evaluation.grad_q[i], fd_q, true),
+                        ("d", evaluation.grad_d[i], fd_d, params.d[j] != 0.0),
+                        ("a", evaluation.grad_a[i], fd_a, params.a[j] != 0.0),
+                    ];
+                    for (what, gradient, fd, _) in checked.into_iter().filter(|c| c.3) {
                         assert!(
-                            (gradient - fd).abs() <= GRADIENT_AGREEMENT * gradient.abs().max(1.0),
+                            (gradient - fd).abs() <= agreement * gradient.abs().max(1.0),
                             "{name} {design_file} {scenario_file} sample {b} d/d{what}[{j}]: {gradient} vs central {fd}"
                         );
                     }
                 }
-                for (what, t, a) in [("q", &tensors.grad_q, &analytic.grad_q), ("d", &tensors.grad_d, &analytic.grad_d), ("a", &tensors.grad_a, &analytic.grad_a)] {
-                    assert!((t[i] - a[i]).abs() <= 1e-9 * t[i].abs().max(1.0), "{design_file} sample {b} d/d{what}[{j}]: tensors {} analytic {}", t[i], a[i]);
+                for (what, t, a) in [
+                    ("q", &tensors.grad_q, &analytic.grad_q),
+                    ("d", &tensors.grad_d, &analytic.grad_d),
+                    ("a", &tensors.grad_a, &analytic.grad_a),
+                ] {
+                    assert!(
+                        (t[i] - a[i]).abs() <= 1e-9 * t[i].abs().max(1.0),
+                        "{design_file} sample {b} d/d{what}[{j}]: tensors {} analytic {}",
+                        t[i],
+                        a[i]
+                    );
                 }
             }
         }
@@ -168,7 +229,10 @@ fn gradients_match_central_differences_and_each_other() {
 }
 
 fn tune(design: &Design, scenario: &Scenario, steps: usize) -> (optimize::Optimized, Batch) {
-    let opts = OptimizeOptions { steps, ..Default::default() };
+    let opts = OptimizeOptions {
+        steps,
+        ..Default::default()
+    };
     let (batch, params) = optimize::starts(design, scenario, &opts).expect("starts");
     let optimized = optimize::optimize(&mut Tensors::default(), &batch, std::slice::from_ref(design), params, &opts).expect("optimize");
     (optimized, batch)
@@ -224,7 +288,11 @@ fn an_economic_design_stays_economic_and_a_modular_one_keeps_its_modules() {
             assert_eq!(back.joints, design.joints, "{name}: modular designs only move q");
         }
         for (joint, original) in back.joints.iter().zip(&design.joints) {
-            assert_eq!((joint.d == 0.0, joint.a == 0.0, joint.alpha), (original.d == 0.0, original.a == 0.0, original.alpha), "{name}");
+            assert_eq!(
+                (joint.d == 0.0, joint.a == 0.0, joint.alpha),
+                (original.d == 0.0, original.a == 0.0, original.alpha),
+                "{name}"
+            );
         }
     }
 }

@@ -230,7 +230,13 @@ pub(crate) fn capsule_shape_distance(
     );
     let geometry = super::world::Geometry::convex(parry3d_f64::shape::SharedShape::new(capsule));
     let obstacle = &world.obstacles[obstacle];
-    let measured = measure_shapes(&parry_pose(link_in_world), &geometry, &obstacle.world_from_shape, &obstacle.geometry, true);
+    let measured = measure_shapes(
+        &parry_pose(link_in_world),
+        &geometry,
+        &obstacle.world_from_shape,
+        &obstacle.geometry,
+        true,
+    );
     Closest {
         distance: measured.distance,
         point_a: vector_from_parry(measured.point_a),

@@ -57,7 +57,15 @@ impl Gradient<'_> {
     /// Adds `weight . v` for every variable, `v` the velocity of the world point `point` fixed
     /// on link `link` after rows `1..rows` (each moves it rigidly), plus `own`: its own row
     /// stretching it (a capsule's segment kind and the point's parameter along it).
-    fn add_point(&mut self, frames: &Frames, link: usize, rows: usize, point: &Vector3<f64>, own: Option<(CapsuleKind, f64)>, weight: &Vector3<f64>) {
+    fn add_point(
+        &mut self,
+        frames: &Frames,
+        link: usize,
+        rows: usize,
+        point: &Vector3<f64>,
+        own: Option<(CapsuleKind, f64)>,
+        weight: &Vector3<f64>,
+    ) {
         for j in 1..=link {
             let (rotation, origin) = &frames.links[j];
             self.q[j - 1] += weight.dot(&rotation.column(2).cross(&(point - origin)));
@@ -122,7 +130,11 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
             let angle = (v.norm() / 2.0).atan2((m.trace() - 1.0) / 2.0);
             let length = v.norm();
             // d angle = axis . omega, the axis of R R_g^T in the world.
-            let axis = if length > 0.0 { target.rotation * v / length } else { Vector3::zeros() };
+            let axis = if length > 0.0 {
+                target.rotation * v / length
+            } else {
+                Vector3::zeros()
+            };
             (angle, axis)
         }
         Tolerance::ZSymmetric => {
@@ -152,7 +164,11 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
                 let (other_start, other_end) = world_ends(j);
                 segment_contact(capsules(start, end, radius, other_start, other_end, radius), radius, radius)
             }
-            CapsuleOther::Rounded { start: s, end: e, radius: r } => segment_contact(capsules(start, end, radius, s, e, r), radius, r),
+            CapsuleOther::Rounded {
+                start: s,
+                end: e,
+                radius: r,
+            } => segment_contact(capsules(start, end, radius, s, e, r), radius, r),
             CapsuleOther::Floor(height) => {
                 let closest = capsule_floor(start, end, radius, height);
                 Contact {
@@ -202,12 +218,22 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
     (position + ROTATION_WEIGHT * rotation, collision)
 }
 
-/// The closest axis points of two capsules from their surface witnesses.
+/// The closest axis points of two capsules from their surface witnesses. Where the axes meet
+/// (segments joined through a link with `d = a = 0` do, whatever the joints) the normal is
+/// arbitrary and the distance has no gradient: closer than [`super::tensor::MEET_M`] the normal
+/// is zero, as in the tensors.
 fn segment_contact(closest: crate::collide::Closest, radius_a: f64, radius_b: f64) -> Contact {
+    let centre_a = closest.point_a - closest.normal * radius_a;
+    let centre_b = closest.point_b + closest.normal * radius_b;
+    let length = (centre_b - centre_a).norm();
     Contact {
         distance: closest.distance,
-        centre_a: closest.point_a - closest.normal * radius_a,
-        centre_b: closest.point_b + closest.normal * radius_b,
-        normal: closest.normal,
+        centre_a,
+        centre_b,
+        normal: if length < super::tensor::MEET_M {
+            Vector3::zeros()
+        } else {
+            closest.normal
+        },
     }
 }

@@ -157,7 +157,13 @@ pub fn design_objective(batch: &Batch, params: &Params, evaluation: &Evaluation)
 ///
 /// # Errors
 /// The objective's errors.
-pub fn optimize(objective: &mut dyn Objective, batch: &Batch, designs: &[Design], start: Params, opts: &OptimizeOptions) -> Result<Optimized, OptimizeError> {
+pub fn optimize(
+    objective: &mut dyn Objective,
+    batch: &Batch,
+    designs: &[Design],
+    start: Params,
+    opts: &OptimizeOptions,
+) -> Result<Optimized, OptimizeError> {
     let n = batch.dof;
     let movable = |design: &Design, value: f64| matches!(design.mode, DesignMode::Free | DesignMode::Economic) && value != 0.0;
     let free_d: Vec<bool> = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.d[i])).collect();

@@ -244,7 +244,10 @@ pub(super) fn rot_x(alpha: f64) -> Matrix3<f64> {
 /// Rot_z(q_{k+1})`, link 1 = base * `Rot_z(q_1)`.
 pub fn forward(frame: &DesignFrame, d: &[f64], a: &[f64], q: &[f64]) -> Frames {
     let mut links = Vec::with_capacity(q.len() + 1);
-    let base = (frame.world_from_base.rotation.to_rotation_matrix().into_inner(), frame.world_from_base.translation.vector);
+    let base = (
+        frame.world_from_base.rotation.to_rotation_matrix().into_inner(),
+        frame.world_from_base.translation.vector,
+    );
     links.push(base);
     let (mut rotation, mut origin) = base;
     for (k, &qk) in q.iter().enumerate() {

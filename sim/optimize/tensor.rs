@@ -18,11 +18,13 @@ use crate::scenario::Tolerance;
 use candle_core::{CpuStorage, CustomOp2, DType, Device, Layout, Shape, Tensor, Var};
 use nalgebra::{Matrix3, Vector3};
 
-/// Added under every square root so that its gradient at an exact zero is 0, not NaN; it moves
+/// Added under every square root so that a zero gradient through it stays 0, not NaN; it moves
 /// a value by at most 1e-15 m.
 const SQRT_FLOOR: f64 = 1e-30;
-/// Distance (m) of the padding a pair with fewer candidates than the most is filled with: far
-/// beyond the collision threshold.
+/// Axes closer than this (m) meet: segments joined through a link with `d = a = 0` do, whatever
+/// the joints, up to rounding. Their normal is arbitrary, so their distance gets no gradient.
+pub(super) const MEET_M: f64 = 1e-9;
+/// Distance (m) of a pair without candidates: far beyond the collision threshold.
 const FAR_M: f64 = 1e3;
 
 /// The candle backend, on a device (CPU by default; a CUDA GPU with the `cuda` feature).
@@ -244,8 +246,17 @@ impl Graph {
         let ones = Tensor::ones((count, 1), DType::F64, device)?;
 
         // Forward kinematics, link frames 1..=n.
-        let mut rotation = matrices(device, &frames.iter().map(|f| f.world_from_base.rotation.to_rotation_matrix().into_inner()).collect::<Vec<_>>())?;
-        let mut origin = vectors(device, &frames.iter().map(|f| f.world_from_base.translation.vector).collect::<Vec<_>>())?;
+        let mut rotation = matrices(
+            device,
+            &frames
+                .iter()
+                .map(|f| f.world_from_base.rotation.to_rotation_matrix().into_inner())
+                .collect::<Vec<_>>(),
+        )?;
+        let mut origin = vectors(
+            device,
+            &frames.iter().map(|f| f.world_from_base.translation.vector).collect::<Vec<_>>(),
+        )?;
         let mut links = vec![(rotation.clone(), origin.clone())];
         let row = |t: &Var, k: usize| t.as_tensor().narrow(1, k, 1);
         for k in 0..n {
@@ -277,7 +288,10 @@ impl Graph {
         }
         let last = (origin + column(&rotation, 0)?.broadcast_mul(&row(&a, n - 1)?)?)?;
         let last = (last + column(&rotation, 2)?.broadcast_mul(&row(&d, n - 1)?)?)?;
-        let last_from_tool: Vec<_> = frames.iter().map(|f| rot_x(f.alpha[n - 1]) * f.tool.rotation.to_rotation_matrix().into_inner()).collect();
+        let last_from_tool: Vec<_> = frames
+            .iter()
+            .map(|f| rot_x(f.alpha[n - 1]) * f.tool.rotation.to_rotation_matrix().into_inner())
+            .collect();
         let tool_offset: Vec<_> = frames.iter().map(|f| rot_x(f.alpha[n - 1]) * f.tool.translation.vector).collect();
         let tool_rotation = mat_mul(&rotation, &matrices(device, &last_from_tool)?)?;
         let tool_position = (last + mat_vec(&rotation, &vectors(device, &tool_offset)?)?)?;
@@ -296,7 +310,10 @@ impl Graph {
         let z_symmetric = ((dot(&column(&goal_rotation, 2)?, &column(&tool_rotation, 2)?)?.neg()? + 1.0)? * 0.5)?;
         let mask = |mode: Tolerance| {
             Tensor::from_vec(
-                targets.iter().map(|t| if t.tolerance == mode { 1.0 } else { 0.0 }).collect::<Vec<f64>>(),
+                targets
+                    .iter()
+                    .map(|t| if t.tolerance == mode { 1.0 } else { 0.0 })
+                    .collect::<Vec<f64>>(),
                 count,
                 device,
             )
@@ -319,7 +336,14 @@ impl Graph {
 }
 
 /// The collision cost per sample, `[B]`.
-fn collision(batch: &Batch, params: &Params, device: &Device, links: &[(Tensor, Tensor)], d: &Var, a: &Var) -> Result<Tensor, OptimizeError> {
+fn collision(
+    batch: &Batch,
+    params: &Params,
+    device: &Device,
+    links: &[(Tensor, Tensor)],
+    d: &Var,
+    a: &Var,
+) -> Result<Tensor, OptimizeError> {
     let count = batch.samples.len();
     let groups = Groups::of(batch);
     if batch.model.candidates.is_empty() || batch.model.pair_count == 0 {
@@ -357,7 +381,10 @@ fn collision(batch: &Batch, params: &Params, device: &Device, links: &[(Tensor, 
         let (other_starts, other_ends) = if groups.rounded.is_empty() {
             (starts.clone(), ends.clone())
         } else {
-            (Tensor::cat(&[&starts, &rounded(|r| r.0)?], 1)?, Tensor::cat(&[&ends, &rounded(|r| r.1)?], 1)?)
+            (
+                Tensor::cat(&[&starts, &rounded(|r| r.0)?], 1)?,
+                Tensor::cat(&[&ends, &rounded(|r| r.1)?], 1)?,
+            )
         };
         let ia = indices(groups.segments.iter().map(|s| s.0 as u32).collect())?;
         let ib = indices(groups.segments.iter().map(|s| s.1 as u32).collect())?;
@@ -365,14 +392,24 @@ fn collision(batch: &Batch, params: &Params, device: &Device, links: &[(Tensor, 
         let q1 = ends.index_select(&ia, 1)?;
         let p2 = other_starts.index_select(&ib, 1)?;
         let q2 = other_ends.index_select(&ib, 1)?;
-        let radius_b = Tensor::from_vec(groups.segments.iter().map(|s| s.2).collect::<Vec<_>>(), (1, groups.segments.len()), device)?;
+        let radius_b = Tensor::from_vec(
+            groups.segments.iter().map(|s| s.2).collect::<Vec<_>>(),
+            (1, groups.segments.len()),
+            device,
+        )?;
         let (centre_a, centre_b) = closest_points(&p1, &q1, &p2, &q2)?;
         let between = norm(&(centre_b - centre_a)?)?;
+        let meet = between.detach().lt(MEET_M)?;
+        let between = meet.where_cond(&between.detach(), &between)?;
         columns.push(((between - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&radius_b))?);
     }
     if !groups.floor.is_empty() {
         let ia = indices(groups.floor.iter().map(|f| f.0 as u32).collect())?;
-        let heights = Tensor::from_vec(groups.floor.iter().map(|f| f.1).collect::<Vec<_>>(), (1, groups.floor.len()), device)?;
+        let heights = Tensor::from_vec(
+            groups.floor.iter().map(|f| f.1).collect::<Vec<_>>(),
+            (1, groups.floor.len()),
+            device,
+        )?;
         let low_start = starts.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
         let low_end = ends.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
         columns.push(((low_start.minimum(&low_end)? - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&heights))?);
@@ -410,20 +447,23 @@ fn collision(batch: &Batch, params: &Params, device: &Device, links: &[(Tensor, 
     let row = Tensor::cat(&columns, 1)?;
     let pad = row.dim(1)? - 1;
 
-    // The closest candidate of each checked pair: a [pairs, widest] table padded with FAR_M.
-    let mut members: Vec<Vec<u32>> = vec![Vec::new(); batch.model.pair_count];
-    for (index, &(pair, _, _)) in batch.model.candidates.iter().enumerate() {
-        members[pair].push(groups.column[index] as u32);
+    // The closest candidate of each checked pair, chosen as the CPU path chooses (the first
+    // strictly smallest): a tensor minimum would pass the whole gradient to every tied
+    // candidate, and the two segments of a link tie wherever their shared corner is closest.
+    let values: Vec<Vec<f64>> = row.detach().to_vec2()?;
+    let mut choice = Vec::with_capacity(count * batch.model.pair_count);
+    for sample in &values {
+        let mut best: Vec<Option<usize>> = vec![None; batch.model.pair_count];
+        for (index, &(pair, _, _)) in batch.model.candidates.iter().enumerate() {
+            let column = groups.column[index];
+            if best[pair].is_none_or(|kept| sample[column] < sample[kept]) {
+                best[pair] = Some(column);
+            }
+        }
+        choice.extend(best.into_iter().map(|c| c.unwrap_or(pad) as u32));
     }
-    let widest = members.iter().map(Vec::len).max().unwrap_or(0).max(1);
-    let table: Vec<u32> = members
-        .iter()
-        .flat_map(|m| m.iter().copied().chain(std::iter::repeat(pad as u32)).take(widest))
-        .collect();
-    let per_pair = row
-        .index_select(&indices(table)?, 1)?
-        .reshape((count, batch.model.pair_count, widest))?
-        .min(2)?;
+    let choice = Tensor::from_vec(choice, (count, batch.model.pair_count), device)?;
+    let per_pair = row.gather(&choice, 1)?;
     let e = (-1.0f64).exp();
     let scale = 1.0 / (1.0 - e);
     let loss = ((per_pair * (-1.0 / COLLISION_THRESHOLD_M))?.exp()? - e)?.relu()?;

@@ -62,7 +62,12 @@ mod tests {
             let text = design_json(&design, "round trip");
             let back = crate::design::parse(&text, &path).unwrap_or_else(|e| panic!("{}: {e}\n{text}", path.display()));
             assert_eq!(back.joints, design.joints, "{}", path.display());
-            assert_eq!((back.name.as_str(), back.mode), (design.name.as_str(), design.mode), "{}", path.display());
+            assert_eq!(
+                (back.name.as_str(), back.mode),
+                (design.name.as_str(), design.mode),
+                "{}",
+                path.display()
+            );
             assert_eq!((back.base, back.tool), (design.base, design.tool), "{}", path.display());
         }
     }

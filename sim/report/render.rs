@@ -150,7 +150,10 @@ pub fn render(report: &Report) -> String {
         );
     }
     if let Some(total) = report.paper_loss.total {
-        let chosen = report.paper_loss.at_chosen.map_or_else(String::new, |c| format!(" ({c:.4} at the chosen configurations)"));
+        let chosen = report
+            .paper_loss
+            .at_chosen
+            .map_or_else(String::new, |c| format!(" ({c:.4} at the chosen configurations)"));
         let _ = writeln!(out, "paper loss {total:.4}{chosen}");
     }
 
