@@ -35,13 +35,14 @@ pub(crate) struct OptimizeArgs {
 
 pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
     if pipeline::input_kind(&args.design)? != pipeline::InputKind::Design {
-        return Err(Error::from(OptimizeError::Batch(format!(
+        return Err(Error::from(OptimizeError::Input(format!(
             "{}: optimize needs a design JSON (DH rows); a URDF or MJCF robot has no design parameters",
             args.design.display()
         ))));
     }
-    let engines = Engines::from_names(args.engines.split(',').map(str::trim).filter(|s| !s.is_empty()))
-        .map_err(|name| OptimizeError::Batch(format!("--engines: `{name}` is not an engine; expected rapier, mujoco")))?;
+    let names = args.engines.split(',').map(str::trim).filter(|s| !s.is_empty() && *s != "none");
+    let engines = Engines::from_names(names)
+        .map_err(|name| OptimizeError::Input(format!("--engines: `{name}` is not an engine; expected rapier, mujoco or none")))?;
     let loaded = pipeline::load(&args.design, &LoadOptions::default())?;
     let design = loaded.design.clone().expect("a design file gives a design");
     let scenario = pipeline::load_scenario(&args.scenario)?;
@@ -68,7 +69,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
     // The file must read back to exactly the design optimized.
     let back = proving_ground::design::parse(&text, &args.out)?;
     if back.joints != tuned.joints {
-        return Err(OptimizeError::Batch(format!("{}: the tuned design does not read back to itself", args.out.display())).into());
+        return Err(OptimizeError::Input(format!("{}: the tuned design does not read back to itself", args.out.display())).into());
     }
     pipeline::write_output(&args.out, &text)?;
     println!(

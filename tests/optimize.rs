@@ -296,3 +296,40 @@ fn an_economic_design_stays_economic_and_a_modular_one_keeps_its_modules() {
         }
     }
 }
+
+#[test]
+fn the_optimize_command_writes_a_tuned_design_and_never_over_an_input() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("tuned.json");
+    let design_path = common::repo().join("designs/free-offset-6dof.json");
+    let run = |out: &std::path::Path| {
+        assert_cmd::Command::cargo_bin("validate-design")
+            .expect("binary")
+            .args(["optimize", design_path.to_str().expect("utf-8"), "--scenario"])
+            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+            .args(["--steps", "5", "--engines", "none", "--out"])
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let output = run(&out);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        matches!(output.status.code(), Some(0 | 1)),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("goals reached") && stdout.contains("free-offset-6dof-tuned"),
+        "{stdout}"
+    );
+    let tuned = design::load(&out).expect("the tuned design loads");
+    assert_eq!(tuned.mode, DesignMode::Free);
+    let refused = run(&design_path);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("refusing to write"));
+    assert_eq!(
+        design::load(&design_path).expect("intact").joints,
+        design("free-offset-6dof.json").joints
+    );
+}

@@ -41,6 +41,9 @@ pub enum OptimizeError {
     /// The designs do not form one batch.
     #[error("cannot batch the designs: {0}")]
     Batch(String),
+    /// An input the command cannot use (which file or argument, and why).
+    #[error("{0}")]
+    Input(String),
     /// A tensor operation failed (candle's message).
     #[error("tensor backend: {0}")]
     Tensor(#[from] candle_core::Error),
