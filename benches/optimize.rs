@@ -1,6 +1,8 @@
 //! The optimize stage: loss + gradient per sample on a batch of 4096 (candle tensors against
 //! the hand-written f64 gradient), and the whole fine-tuning of 8 goals x 4 starts x 200 steps.
 
+#![allow(missing_docs)] // criterion_group! generates undocumented items
+
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use proving_ground::optimize::{self, Analytic, Batch, Objective, OptimizeOptions, Params, Sample, Tensors};
 use rand::SeedableRng;
@@ -18,7 +20,12 @@ fn batch_of(size: usize) -> (Batch, Params) {
     let model = proving_ground::model::from_design(&design);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let goals = scenario.goals.len();
-    let samples: Vec<Sample> = (0..size).map(|b| Sample { design: 0, goal: b % goals }).collect();
+    let samples: Vec<Sample> = (0..size)
+        .map(|b| Sample {
+            design: 0,
+            goal: b % goals,
+        })
+        .collect();
     let q: Vec<f64> = (0..size)
         .flat_map(|_| model.random_configuration(&mut rng).into_iter().map(|v| v * 0.5))
         .collect();
@@ -41,7 +48,9 @@ fn per_sample(c: &mut Criterion) {
         let mut objective = Tensors::default();
         b.iter(|| objective.evaluate(&batch, &params).expect("tensors"))
     });
-    group.bench_function("hand-written f64", |b| b.iter(|| Analytic.evaluate(&batch, &params).expect("analytic")));
+    group.bench_function("hand-written f64", |b| {
+        b.iter(|| Analytic.evaluate(&batch, &params).expect("analytic"))
+    });
     group.finish();
 }
 
@@ -52,7 +61,9 @@ fn whole(c: &mut Criterion) {
     let mut group = c.benchmark_group("optimize/8 goals x 4 starts x 200 steps");
     group.sample_size(10);
     group.bench_function("candle tensors (cpu)", |b| {
-        b.iter(|| optimize::optimize(&mut Tensors::default(), &batch, std::slice::from_ref(&design), start.clone(), &opts).expect("optimize"))
+        b.iter(|| {
+            optimize::optimize(&mut Tensors::default(), &batch, std::slice::from_ref(&design), start.clone(), &opts).expect("optimize")
+        })
     });
     group.bench_function("hand-written f64", |b| {
         b.iter(|| optimize::optimize(&mut Analytic, &batch, std::slice::from_ref(&design), start.clone(), &opts).expect("optimize"))

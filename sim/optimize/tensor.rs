@@ -374,17 +374,19 @@ fn collision(
     let mut columns = Vec::new();
 
     if !groups.segments.is_empty() {
-        let rounded = |pick: fn(&(Vector3<f64>, Vector3<f64>)) -> Vector3<f64>| -> candle_core::Result<Tensor> {
-            let flat: Vec<f64> = groups.rounded.iter().map(pick).flat_map(|v| [v.x, v.y, v.z]).collect();
+        let rounded = |end: usize| -> candle_core::Result<Tensor> {
+            let flat: Vec<f64> = groups
+                .rounded
+                .iter()
+                .map(|r| if end == 0 { r.0 } else { r.1 })
+                .flat_map(|v| [v.x, v.y, v.z])
+                .collect();
             Tensor::from_vec(flat, (1, groups.rounded.len(), 3), device)?.broadcast_as((count, groups.rounded.len(), 3))
         };
         let (other_starts, other_ends) = if groups.rounded.is_empty() {
             (starts.clone(), ends.clone())
         } else {
-            (
-                Tensor::cat(&[&starts, &rounded(|r| r.0)?], 1)?,
-                Tensor::cat(&[&ends, &rounded(|r| r.1)?], 1)?,
-            )
+            (Tensor::cat(&[&starts, &rounded(0)?], 1)?, Tensor::cat(&[&ends, &rounded(1)?], 1)?)
         };
         let ia = indices(groups.segments.iter().map(|s| s.0 as u32).collect())?;
         let ib = indices(groups.segments.iter().map(|s| s.1 as u32).collect())?;
