@@ -30,6 +30,9 @@ pub enum Error {
     /// A picture could not be made.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
+    /// A fine-tuning could not run.
+    #[error(transparent)]
+    Optimize(#[from] crate::optimize::OptimizeError),
     /// A sweep, merge or design-space experiment could not run.
     #[error(transparent)]
     Sweep(#[from] crate::sweep::SweepError),

@@ -103,7 +103,7 @@ pub fn vector_from_parry(v: parry3d_f64::math::Vector) -> Vector3<f64> {
 }
 
 /// A segment whose squared length is at most this (m^2) is a point.
-const POINT_SEGMENT_M2: f64 = 1e-24;
+pub(crate) const POINT_SEGMENT_M2: f64 = 1e-24;
 
 /// The closest points of segments `[p1, q1]` and `[p2, q2]`, one on each (Ericson, Real-Time
 /// Collision Detection, 5.1.9, with point segments and parallel segments handled).

@@ -57,6 +57,7 @@ pub mod frames;
 pub mod ik;
 pub mod limits;
 pub mod model;
+pub mod optimize;
 pub mod pipeline;
 pub mod plan;
 pub mod progress;

@@ -3,6 +3,7 @@
 //! report and exits 0 (passes), 1 (fails) or 2 (bad input); `validate-design generate` writes
 //! generated scenarios.
 
+mod optimize_cli;
 mod sweep_cli;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -231,6 +232,10 @@ enum Command {
     /// The paper's genetic-algorithm baseline over the 6-slot modular catalog on one scenario
     /// (population 128, 100 generations, single-point crossover, tournament 4, mutation 0.05).
     Ga(sweep_cli::GaArgs),
+    /// Fine-tune a design on a scenario with the paper's Adam refinement of its differentiable
+    /// objective (200 steps, rates 0.1 for joints and 0.01 for d and a), write the tuned design,
+    /// validate both and print their verdicts side by side.
+    Optimize(optimize_cli::OptimizeArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -348,6 +353,7 @@ fn main() -> ExitCode {
         Some(Command::Merge(args)) => sweep_cli::merge_command(args),
         Some(Command::Table1(args)) => sweep_cli::table1_command(args),
         Some(Command::Ga(args)) => sweep_cli::ga_command(args),
+        Some(Command::Optimize(args)) => optimize_cli::optimize_command(args),
         None => run(&cli),
     };
     match result {

@@ -312,9 +312,6 @@ pub struct ValidateOptions {
     /// The paper's static metric alone: per goal a collision-free IK solution, no trajectory,
     /// no engines (default false).
     pub reach_only: bool,
-    /// Also fill [`Validation::task_loss_terms`] (the sweeps' task loss; default false: a single
-    /// run's report does not use it).
-    pub task_loss: bool,
 }
 
 /// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
@@ -388,11 +385,8 @@ pub fn validate_with_progress(
         seed: opts.ik.seed,
         reach_only: opts.reach_only,
     };
-    let task_loss_terms = if opts.task_loss {
-        task_loss_terms(&model, &world, &scenario, &solutions)
-    } else {
-        Vec::new()
-    };
+    // The report's paper loss (and the sweeps' task loss): each goal at its best IK solution.
+    let task_loss_terms = task_loss_terms(&model, &world, &scenario, &solutions);
     if opts.reach_only {
         let loss_terms = scenario
             .goals

@@ -109,16 +109,16 @@ pub fn approximate_distances(world: &CollisionWorld, link_in_world: &[Isometry3<
 
 /// A signed distance with witness points and the unit normal from `a` to `b` (world frame, m).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Closest {
-    pub(super) distance: f64,
-    pub(super) point_a: Vector3<f64>,
-    pub(super) point_b: Vector3<f64>,
-    pub(super) normal: Vector3<f64>,
+pub(crate) struct Closest {
+    pub(crate) distance: f64,
+    pub(crate) point_a: Vector3<f64>,
+    pub(crate) point_b: Vector3<f64>,
+    pub(crate) normal: Vector3<f64>,
 }
 
 /// Signed distance between capsules (segment ends in the world, radii in m); a zero-length
 /// segment is a sphere.
-pub(super) fn capsules(
+pub(crate) fn capsules(
     start_a: Vector3<f64>,
     end_a: Vector3<f64>,
     radius_a: f64,
@@ -146,13 +146,102 @@ pub(super) fn capsules(
 }
 
 /// Signed distance between a capsule and the floor, the half-space below `z = height` (m).
-pub(super) fn capsule_floor(start: Vector3<f64>, end: Vector3<f64>, radius: f64, height: f64) -> Closest {
+pub(crate) fn capsule_floor(start: Vector3<f64>, end: Vector3<f64>, radius: f64, height: f64) -> Closest {
     let lowest = if end.z < start.z { end } else { start };
     Closest {
         distance: lowest.z - radius - height,
         point_a: lowest - Vector3::z() * radius,
         point_b: Vector3::new(lowest.x, lowest.y, height),
         normal: -Vector3::z(),
+    }
+}
+
+/// The capsule model's structure as plain data, for a solver that evaluates the same distances
+/// its own way (the optimize stage's tensors): every capsule, and every measured capsule pair in
+/// the order [`approximate_distances`] measures them.
+#[derive(Debug, Clone)]
+pub(crate) struct CapsuleModel {
+    /// `(link, start, end)` per capsule, segment ends in the link frame (m).
+    pub(crate) capsules: Vec<(usize, Vector3<f64>, Vector3<f64>)>,
+    /// `(checked pair, capsule, other)` per measured capsule pair.
+    pub(crate) candidates: Vec<(usize, usize, CapsuleOther)>,
+    /// Number of checked pairs.
+    pub(crate) pair_count: usize,
+}
+
+/// What a capsule is measured against.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum CapsuleOther {
+    /// Another capsule of the robot, by index.
+    Capsule(usize),
+    /// A sphere or capsule obstacle: segment ends in the world and radius (m).
+    Rounded {
+        start: Vector3<f64>,
+        end: Vector3<f64>,
+        radius: f64,
+    },
+    /// A box, cylinder or mesh obstacle (no closed form), by index: see [`capsule_shape_distance`].
+    Shape(usize),
+    /// The floor at this height (m).
+    Floor(f64),
+}
+
+/// The structure of `world`'s capsule model.
+pub(crate) fn capsule_model(world: &CollisionWorld) -> CapsuleModel {
+    CapsuleModel {
+        capsules: world.capsules.iter().map(|c| (c.link, c.start, c.end)).collect(),
+        candidates: world
+            .capsule_candidates
+            .iter()
+            .map(|candidate| {
+                let other = match candidate.b {
+                    Other::Link(j) => CapsuleOther::Capsule(j),
+                    Other::Obstacle(k) => match world.obstacles[k].rounded {
+                        Some(r) => CapsuleOther::Rounded {
+                            start: r.start,
+                            end: r.end,
+                            radius: r.radius,
+                        },
+                        None => CapsuleOther::Shape(k),
+                    },
+                    Other::Floor => CapsuleOther::Floor(world.floor.expect("floor pairs exist only with a floor")),
+                };
+                (candidate.pair, candidate.a, other)
+            })
+            .collect(),
+        pair_count: world.pairs.len(),
+    }
+}
+
+/// The signed distance between the capsule of segment `start`..`end` (link frame, m) on a link
+/// at `link_in_world` and obstacle `obstacle` without a closed form, measured exactly as
+/// [`approximate_distances`] measures it (parry's narrow phase on a `Capsule` shape).
+pub(crate) fn capsule_shape_distance(
+    world: &CollisionWorld,
+    obstacle: usize,
+    link_in_world: &Isometry3<f64>,
+    start: Vector3<f64>,
+    end: Vector3<f64>,
+) -> Closest {
+    let capsule = parry3d_f64::shape::Capsule::new(
+        crate::frames::parry_vector(&start),
+        crate::frames::parry_vector(&end),
+        PAPER_CAPSULE_RADIUS_M,
+    );
+    let geometry = super::world::Geometry::convex(parry3d_f64::shape::SharedShape::new(capsule));
+    let obstacle = &world.obstacles[obstacle];
+    let measured = measure_shapes(
+        &parry_pose(link_in_world),
+        &geometry,
+        &obstacle.world_from_shape,
+        &obstacle.geometry,
+        true,
+    );
+    Closest {
+        distance: measured.distance,
+        point_a: vector_from_parry(measured.point_a),
+        point_b: vector_from_parry(measured.point_b),
+        normal: vector_from_parry(measured.normal),
     }
 }
 

@@ -101,6 +101,7 @@ mod triangles;
 mod world;
 
 pub use approx::approximate_distances;
+pub(crate) use approx::{capsule_floor, capsule_model, capsule_shape_distance, capsules, CapsuleModel, CapsuleOther, Closest};
 pub use compare::compare;
 pub use exact::{clear, distances};
 pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};

@@ -123,7 +123,7 @@ impl Geometry {
         self.hull.is_some()
     }
 
-    fn convex(shape: SharedShape) -> Self {
+    pub(super) fn convex(shape: SharedShape) -> Self {
         let bounding = BoundingCapsule::of(&shape);
         Self {
             // The middle of a convex shape's own axis is inside it.

@@ -57,8 +57,7 @@ pub struct Validation {
     pub loss_terms: Vec<Option<crate::ik::LossTerms>>,
     /// The paper's loss terms per goal minimised over the goal's IK solutions (the task loss of
     /// design-space sweeps: what the best configuration IK found costs, whatever the trajectory
-    /// chose); `None` for a goal with no configuration at all. Empty unless
-    /// `ValidateOptions::task_loss` asked for it.
+    /// chose; the report's paper loss); `None` for a goal with no configuration at all.
     pub task_loss_terms: Vec<Option<crate::ik::LossTerms>>,
     /// The settings the run used that the report states as its criteria.
     pub settings: Settings,

@@ -150,7 +150,11 @@ pub fn render(report: &Report) -> String {
         );
     }
     if let Some(total) = report.paper_loss.total {
-        let _ = writeln!(out, "paper loss {total:.4}");
+        let chosen = report
+            .paper_loss
+            .at_chosen
+            .map_or_else(String::new, |c| format!(" ({c:.4} at the chosen configurations)"));
+        let _ = writeln!(out, "paper loss {total:.4}{chosen}");
     }
 
     if !report.findings.is_empty() {

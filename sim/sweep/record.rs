@@ -70,7 +70,6 @@ pub fn evaluate(
         SweepMode::ReachOnly { ik } => pipeline::ValidateOptions {
             ik: ik.clone(),
             reach_only: true,
-            task_loss: true,
             ..Default::default()
         },
         SweepMode::Full { ik, engines } => pipeline::ValidateOptions {
@@ -80,7 +79,6 @@ pub fn evaluate(
                 seed: ik.seed,
                 ..Default::default()
             },
-            task_loss: true,
             ..Default::default()
         },
     };

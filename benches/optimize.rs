@@ -1,0 +1,75 @@
+//! The optimize stage: loss + gradient per sample on a batch of 4096 (candle tensors against
+//! the hand-written f64 gradient), and the whole fine-tuning of 8 goals x 4 starts x 200 steps.
+
+#![allow(missing_docs)] // criterion_group! generates undocumented items
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use proving_ground::optimize::{self, Analytic, Batch, Objective, OptimizeOptions, Params, Sample, Tensors};
+use rand::SeedableRng;
+use std::path::Path;
+
+fn inputs() -> (proving_ground::design::Design, proving_ground::scenario::Scenario) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let design = proving_ground::design::load(&root.join("designs/free-offset-6dof.json")).expect("design");
+    let scenario = proving_ground::scenario::load(&root.join("scenarios/cluttered/task-03.json")).expect("scenario");
+    (design, scenario)
+}
+
+fn batch_of(size: usize) -> (Batch, Params) {
+    let (design, scenario) = inputs();
+    let model = proving_ground::model::from_design(&design);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let goals = scenario.goals.len();
+    let samples: Vec<Sample> = (0..size)
+        .map(|b| Sample {
+            design: 0,
+            goal: b % goals,
+        })
+        .collect();
+    let q: Vec<f64> = (0..size)
+        .flat_map(|_| model.random_configuration(&mut rng).into_iter().map(|v| v * 0.5))
+        .collect();
+    let batch = Batch::new(std::slice::from_ref(&design), &scenario, samples).expect("batch");
+    let params = Params {
+        q,
+        d: design.joints.iter().map(|j| j.d).collect(),
+        a: design.joints.iter().map(|j| j.a).collect(),
+    };
+    (batch, params)
+}
+
+fn per_sample(c: &mut Criterion) {
+    let size = 4096;
+    let (batch, params) = batch_of(size);
+    let mut group = c.benchmark_group("optimize/loss+gradient, batch 4096");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(size as u64));
+    group.bench_function("candle tensors (cpu)", |b| {
+        let mut objective = Tensors::default();
+        b.iter(|| objective.evaluate(&batch, &params).expect("tensors"))
+    });
+    group.bench_function("hand-written f64", |b| {
+        b.iter(|| Analytic.evaluate(&batch, &params).expect("analytic"))
+    });
+    group.finish();
+}
+
+fn whole(c: &mut Criterion) {
+    let (design, scenario) = inputs();
+    let opts = OptimizeOptions::default();
+    let (batch, start) = optimize::starts(&design, &scenario, &opts).expect("starts");
+    let mut group = c.benchmark_group("optimize/8 goals x 4 starts x 200 steps");
+    group.sample_size(10);
+    group.bench_function("candle tensors (cpu)", |b| {
+        b.iter(|| {
+            optimize::optimize(&mut Tensors::default(), &batch, std::slice::from_ref(&design), start.clone(), &opts).expect("optimize")
+        })
+    });
+    group.bench_function("hand-written f64", |b| {
+        b.iter(|| optimize::optimize(&mut Analytic, &batch, std::slice::from_ref(&design), start.clone(), &opts).expect("optimize"))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, per_sample, whole);
+criterion_main!(benches);

@@ -1,0 +1,293 @@
+//! Consumes a design, a scenario and starting configurations (IK's solutions plus seeded random
+//! starts). Produces the design and configurations after the paper's Adam fine-tuning of its
+//! differentiable objective. Fails with [`OptimizeError`] when the batch cannot be built or a
+//! tensor operation fails.
+//!
+//! The objective per sample (one design, one goal, one start) is the paper's
+//! `w_d d(g, q) + w_col c_col(q)` in the capsule model (`ik::paper_loss_terms`), plus
+//! `w_c c_h` per design. Each start descends its own sample's loss (learning rate 0.1); the
+//! design's `d` and `a` (learning rate 0.01) descend `sum over goals of min over starts + w_c c_h`,
+//! the loss the design is scored by. `alpha` stays (discrete); a zero `d` or `a` stays zero
+//! (it decides the capsule structure); economic values are projected back into their sets after
+//! each step; modular and preset designs only move `q`. The best iterate is kept, so the result
+//! never scores worse than the start.
+
+pub mod analytic;
+pub mod problem;
+pub mod tensor;
+pub mod write;
+
+pub use analytic::Analytic;
+pub use problem::{Batch, Evaluation, Params, Sample};
+pub use tensor::Tensors;
+
+use crate::design::{Design, DesignMode};
+use crate::ik::HARDWARE_WEIGHT;
+use crate::scenario::Scenario;
+use rand::SeedableRng;
+
+/// One way to evaluate the objective and its gradients over a batch.
+pub trait Objective {
+    /// The paper's terms and the gradients of each sample's loss at `params`.
+    ///
+    /// # Errors
+    /// [`OptimizeError::Tensor`] when a backend's operation fails.
+    fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError>;
+}
+
+/// Why an optimization could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum OptimizeError {
+    /// The designs do not form one batch.
+    #[error("cannot batch the designs: {0}")]
+    Batch(String),
+    /// An input the command cannot use (which file or argument, and why).
+    #[error("{0}")]
+    Input(String),
+    /// A tensor operation failed (candle's message).
+    #[error("tensor backend: {0}")]
+    Tensor(#[from] candle_core::Error),
+    /// Building the collision world failed.
+    #[error(transparent)]
+    Pipeline(#[from] Box<crate::error::Error>),
+}
+
+/// The paper's refinement settings (Table A); every default is the paper's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OptimizeOptions {
+    /// Adam steps (default 200).
+    pub steps: usize,
+    /// Learning rate of the joint positions (default 0.1).
+    pub joint_rate: f64,
+    /// Learning rate of the design parameters `d` and `a` (default 0.01).
+    pub design_rate: f64,
+    /// Starts per goal (default 4, the paper's IK guesses).
+    pub seeds: usize,
+    /// Seed of the random starts (default 0).
+    pub seed: u64,
+}
+
+impl Default for OptimizeOptions {
+    fn default() -> Self {
+        Self {
+            steps: 200,
+            joint_rate: 0.1,
+            design_rate: 0.01,
+            seeds: 4,
+            seed: 0,
+        }
+    }
+}
+
+/// Adam's moment decay rates and denominator floor (Kingma and Ba's defaults, as the paper's
+/// PyTorch optimizer).
+const BETA1: f64 = 0.9;
+const BETA2: f64 = 0.999;
+const EPSILON: f64 = 1e-8;
+
+/// Adam's state for one flat parameter vector.
+#[derive(Debug, Clone)]
+struct Adam {
+    rate: f64,
+    first: Vec<f64>,
+    second: Vec<f64>,
+}
+
+impl Adam {
+    fn new(rate: f64, len: usize) -> Self {
+        Self {
+            rate,
+            first: vec![0.0; len],
+            second: vec![0.0; len],
+        }
+    }
+
+    /// One step (`step` counts from 1) on the entries `free` allows.
+    fn step(&mut self, step: usize, values: &mut [f64], gradient: &[f64], free: &[bool]) {
+        let (bias1, bias2) = (1.0 - BETA1.powi(step as i32), 1.0 - BETA2.powi(step as i32));
+        for i in 0..values.len() {
+            if !free[i] {
+                continue;
+            }
+            self.first[i] = BETA1 * self.first[i] + (1.0 - BETA1) * gradient[i];
+            self.second[i] = BETA2 * self.second[i] + (1.0 - BETA2) * gradient[i] * gradient[i];
+            let (m, v) = (self.first[i] / bias1, self.second[i] / bias2);
+            values[i] -= self.rate * m / (v.sqrt() + EPSILON);
+        }
+    }
+}
+
+/// The result of [`optimize`].
+#[derive(Debug, Clone)]
+pub struct Optimized {
+    /// The best parameters seen.
+    pub params: Params,
+    /// The objective at the start and at [`Optimized::params`], per design.
+    pub objective: (Vec<f64>, Vec<f64>),
+    /// The objective's evaluation at [`Optimized::params`].
+    pub evaluation: Evaluation,
+    /// The step the best parameters come from (0: the start).
+    pub best_step: usize,
+}
+
+/// Per design, `sum over goals of min over its starts (w_d d + w_col c_col) + w_c c_h`, and per
+/// sample whether it is its goal's best start (the lowest index among equals).
+pub fn design_objective(batch: &Batch, params: &Params, evaluation: &Evaluation) -> (Vec<f64>, Vec<bool>) {
+    let designs = batch.designs.len();
+    let mut best: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    for (b, sample) in batch.samples.iter().enumerate() {
+        let slot = best.entry((sample.design, sample.goal)).or_insert(b);
+        if evaluation.loss(b) < evaluation.loss(*slot) {
+            *slot = b;
+        }
+    }
+    let mut objective: Vec<f64> = (0..designs)
+        .map(|design| {
+            let (d, a) = batch.rows(params, design);
+            HARDWARE_WEIGHT * d.iter().chain(a).map(|v| v.abs()).sum::<f64>()
+        })
+        .collect();
+    let mut chosen = vec![false; batch.samples.len()];
+    for (&(design, _), &b) in &best {
+        objective[design] += evaluation.loss(b);
+        chosen[b] = true;
+    }
+    (objective, chosen)
+}
+
+/// Fine-tunes `start` for `batch` with Adam (see the module docs); `designs` gives each design's
+/// mode (what may move and the economic sets) and joint limits.
+///
+/// # Errors
+/// The objective's errors.
+pub fn optimize(
+    objective: &mut dyn Objective,
+    batch: &Batch,
+    designs: &[Design],
+    start: Params,
+    opts: &OptimizeOptions,
+) -> Result<Optimized, OptimizeError> {
+    let n = batch.dof;
+    let movable = |design: &Design, value: f64| matches!(design.mode, DesignMode::Free | DesignMode::Economic) && value != 0.0;
+    let free_d: Vec<bool> = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.d[i])).collect();
+    let free_a: Vec<bool> = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.a[i])).collect();
+    let free_q = vec![true; start.q.len()];
+    let mut adam_q = Adam::new(opts.joint_rate, start.q.len());
+    let mut adam_d = Adam::new(opts.design_rate, start.d.len());
+    let mut adam_a = Adam::new(opts.design_rate, start.a.len());
+
+    let mut params = start;
+    let mut evaluation = objective.evaluate(batch, &params)?;
+    let (initial, mut chosen) = design_objective(batch, &params, &evaluation);
+    let mut best = (params.clone(), initial.iter().sum::<f64>(), evaluation.clone(), 0);
+    for step in 1..=opts.steps {
+        // The design's gradient: its goals' best starts, and the hardware cost.
+        let mut grad_d = vec![0.0; params.d.len()];
+        let mut grad_a = vec![0.0; params.a.len()];
+        for (b, sample) in batch.samples.iter().enumerate() {
+            if !chosen[b] {
+                continue;
+            }
+            for j in 0..n {
+                grad_d[sample.design * n + j] += evaluation.grad_d[b * n + j];
+                grad_a[sample.design * n + j] += evaluation.grad_a[b * n + j];
+            }
+        }
+        for (gradient, values) in [(&mut grad_d, &params.d), (&mut grad_a, &params.a)] {
+            for (g, v) in gradient.iter_mut().zip(values) {
+                *g += HARDWARE_WEIGHT * v.signum();
+            }
+        }
+        adam_q.step(step, &mut params.q, &evaluation.grad_q, &free_q);
+        adam_d.step(step, &mut params.d, &grad_d, &free_d);
+        adam_a.step(step, &mut params.a, &grad_a, &free_a);
+        project(batch, designs, &mut params);
+
+        evaluation = objective.evaluate(batch, &params)?;
+        let (value, now_chosen) = design_objective(batch, &params, &evaluation);
+        chosen = now_chosen;
+        let total: f64 = value.iter().sum();
+        if total < best.1 {
+            best = (params.clone(), total, evaluation.clone(), step);
+        }
+    }
+    let (params, _, evaluation, best_step) = best;
+    let (last, _) = design_objective(batch, &params, &evaluation);
+    Ok(Optimized {
+        params,
+        objective: (initial, last),
+        evaluation,
+        best_step,
+    })
+}
+
+/// Joint positions into their limits; economic `d` into [0.1, 0.4] m and `|a|` into
+/// [0.1, 0.4] m with its sign (zeros never move); free values within the length limit.
+fn project(batch: &Batch, designs: &[Design], params: &mut Params) {
+    let n = batch.dof;
+    for (b, sample) in batch.samples.iter().enumerate() {
+        for (j, joint) in designs[sample.design].joints.iter().enumerate() {
+            let q = &mut params.q[b * n + j];
+            *q = q.clamp(joint.limits[0], joint.limits[1]);
+        }
+    }
+    let (lower, upper) = (0.1, 0.4);
+    for (design_index, design) in designs.iter().enumerate() {
+        for j in 0..n {
+            for value in [&mut params.d[design_index * n + j], &mut params.a[design_index * n + j]] {
+                *value = match design.mode {
+                    DesignMode::Economic if *value != 0.0 => value.signum() * value.abs().clamp(lower, upper),
+                    _ => value.clamp(-crate::limits::MAX_LENGTH_M, crate::limits::MAX_LENGTH_M),
+                };
+            }
+        }
+    }
+}
+
+/// The starting batch of one design on a scenario: per goal up to `opts.seeds` of IK's
+/// solutions (the paper starts from its IK network's guesses), the rest random configurations
+/// within the joint limits from a ChaCha8 stream seeded by `opts.seed` and the goal's index.
+///
+/// # Errors
+/// [`OptimizeError::Pipeline`] when the collision world cannot be built.
+pub fn starts(design: &Design, scenario: &Scenario, opts: &OptimizeOptions) -> Result<(Batch, Params), OptimizeError> {
+    let model = crate::model::from_design(design).placed(&scenario.world_from_base);
+    let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
+    let ik = crate::ik::IkOptions {
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
+    let mut q = Vec::new();
+    let mut samples = Vec::new();
+    for (goal, found) in solutions.iter().enumerate() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);
+        for k in 0..opts.seeds {
+            match found.solutions.get(k) {
+                Some(solution) => q.extend_from_slice(&solution.q),
+                None => q.extend(model.random_configuration(&mut rng)),
+            }
+            samples.push(Sample { design: 0, goal });
+        }
+    }
+    let batch = Batch::new(std::slice::from_ref(design), scenario, samples)?;
+    let params = Params {
+        q,
+        d: design.joints.iter().map(|j| j.d).collect(),
+        a: design.joints.iter().map(|j| j.a).collect(),
+    };
+    Ok((batch, params))
+}
+
+/// `design` with the DH rows of design `index` of `params`; `name` names it.
+pub fn tuned_design(design: &Design, batch: &Batch, params: &Params, index: usize, name: &str) -> Design {
+    let (d, a) = batch.rows(params, index);
+    let mut tuned = design.clone();
+    tuned.name = name.to_string();
+    tuned.snapped.clear();
+    for (joint, (&d, &a)) in tuned.joints.iter_mut().zip(d.iter().zip(a)) {
+        joint.d = d;
+        joint.a = a;
+    }
+    tuned
+}

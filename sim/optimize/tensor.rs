@@ -1,0 +1,505 @@
+//! The paper's objective as candle-core tensors, batched over samples (designs x goals x
+//! starts), differentiated by candle's backward pass: DH forward kinematics, the pose distance
+//! per tolerance mode, the capsule model's collision cost, in f64.
+//!
+//! Every closed form mirrors the CPU path's (`collide::approximate_distances` and
+//! `frames::closest_points_of_segments`, branch by branch, as masks); boxes, cylinders and meshes
+//! enter as the plane through parry's witness (see [`super::problem::Witness`]). No matrix
+//! product or parallel reduction is used (products are broadcast multiplies summed over a
+//! dimension of 3, in order), so the numbers do not depend on the thread count.
+
+use super::problem::{forward, rot_x, shape_witnesses, Batch, CapsuleKind, Evaluation, Params};
+use super::{Objective, OptimizeError};
+use crate::collide::CapsuleOther;
+use crate::frames::POINT_SEGMENT_M2;
+use crate::ik::{COLLISION_THRESHOLD_M, COLLISION_WEIGHT, DISTANCE_WEIGHT, ROTATION_WEIGHT};
+use crate::model::PAPER_CAPSULE_RADIUS_M;
+use crate::scenario::Tolerance;
+use candle_core::{CpuStorage, CustomOp2, DType, Device, Layout, Shape, Tensor, Var};
+use nalgebra::{Matrix3, Vector3};
+
+/// Added under every square root so that a zero gradient through it stays 0, not NaN; it moves
+/// a value by at most 1e-15 m.
+const SQRT_FLOOR: f64 = 1e-30;
+/// Axes closer than this (m) meet: segments joined through a link with `d = a = 0` do, whatever
+/// the joints, up to rounding. Their normal is arbitrary, so their distance gets no gradient.
+pub(super) const MEET_M: f64 = 1e-9;
+/// Distance (m) of a pair without candidates: far beyond the collision threshold.
+const FAR_M: f64 = 1e3;
+
+/// The candle backend, on a device (CPU by default; a CUDA GPU with the `cuda` feature).
+#[derive(Debug, Clone)]
+pub struct Tensors {
+    device: Device,
+}
+
+impl Default for Tensors {
+    fn default() -> Self {
+        Self { device: Device::Cpu }
+    }
+}
+
+impl Tensors {
+    /// The backend on `device`.
+    pub fn on(device: Device) -> Self {
+        Self { device }
+    }
+
+    /// The backend on CUDA GPU `ordinal`.
+    ///
+    /// # Errors
+    /// [`OptimizeError::Tensor`] when there is no such GPU or the crate was built without the
+    /// `cuda` feature.
+    pub fn cuda(ordinal: usize) -> Result<Self, OptimizeError> {
+        Ok(Self::on(Device::new_cuda(ordinal)?))
+    }
+}
+
+impl Objective for Tensors {
+    fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError> {
+        let graph = Graph::build(batch, params, &self.device)?;
+        let total = graph.loss.sum_all()?;
+        let grads = total.backward()?;
+        let count = batch.samples.len();
+        let n = batch.dof;
+        let flat = |var: &Var| -> Result<Vec<f64>, OptimizeError> {
+            Ok(match grads.get(var.as_tensor()) {
+                Some(g) => g.flatten_all()?.to_vec1()?,
+                None => vec![0.0; count * n],
+            })
+        };
+        Ok(Evaluation {
+            distance: graph.distance.to_vec1()?,
+            collision: graph.collision.to_vec1()?,
+            grad_q: flat(&graph.q)?,
+            grad_d: flat(&graph.d)?,
+            grad_a: flat(&graph.a)?,
+        })
+    }
+}
+
+/// The evaluated graph of one batch.
+pub struct Graph {
+    /// Joint positions, `[samples, dof]`.
+    pub q: Var,
+    /// DH `d` of each sample's design, `[samples, dof]`.
+    pub d: Var,
+    /// DH `a` of each sample's design, `[samples, dof]`.
+    pub a: Var,
+    /// Tool rotation `[samples, 3, 3]` and position `[samples, 3]` in the world.
+    pub tool: (Tensor, Tensor),
+    /// `d` per sample.
+    pub distance: Tensor,
+    /// `c_col` per sample.
+    pub collision: Tensor,
+    /// `w_d d + w_col c_col` per sample.
+    pub loss: Tensor,
+}
+
+/// `a b` for `[B, 3, 3]` stacks: a broadcast product summed over the inner index.
+fn mat_mul(a: &Tensor, b: &Tensor) -> candle_core::Result<Tensor> {
+    a.unsqueeze(3)?.broadcast_mul(&b.unsqueeze(1)?)?.sum(2)
+}
+
+/// `m v` for `[B, 3, 3]` and `[B, 3]`.
+fn mat_vec(m: &Tensor, v: &Tensor) -> candle_core::Result<Tensor> {
+    m.broadcast_mul(&v.unsqueeze(1)?)?.sum(2)
+}
+
+/// Column `c` of `[B, 3, 3]`, `[B, 3]`.
+fn column(m: &Tensor, c: usize) -> candle_core::Result<Tensor> {
+    m.narrow(2, c, 1)?.squeeze(2)
+}
+
+/// `sqrt(sum(v^2) + SQRT_FLOOR)` over the last dimension.
+fn norm(v: &Tensor) -> candle_core::Result<Tensor> {
+    (v.sqr()?.sum(v.rank() - 1)? + SQRT_FLOOR)?.sqrt()
+}
+
+/// Dot product over the last dimension.
+fn dot(a: &Tensor, b: &Tensor) -> candle_core::Result<Tensor> {
+    (a * b)?.sum(a.rank() - 1)
+}
+
+/// `[B, 3, 3]` from per-sample matrices.
+fn matrices(device: &Device, m: &[Matrix3<f64>]) -> candle_core::Result<Tensor> {
+    let flat: Vec<f64> = m.iter().flat_map(|m| (0..9).map(move |i| m[(i / 3, i % 3)])).collect();
+    Tensor::from_vec(flat, (m.len(), 3, 3), device)
+}
+
+/// `[B, 3]` from per-sample vectors.
+fn vectors(device: &Device, v: &[Vector3<f64>]) -> candle_core::Result<Tensor> {
+    let flat: Vec<f64> = v.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+    Tensor::from_vec(flat, (v.len(), 3), device)
+}
+
+/// `atan2(y, x)` elementwise with its gradient (candle has no inverse trigonometry).
+struct Atan2;
+
+impl CustomOp2 for Atan2 {
+    fn name(&self) -> &'static str {
+        "atan2"
+    }
+
+    fn cpu_fwd(&self, s1: &CpuStorage, l1: &Layout, s2: &CpuStorage, l2: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
+        let (CpuStorage::F64(y), CpuStorage::F64(x)) = (s1, s2) else {
+            candle_core::bail!("atan2: f64 tensors only")
+        };
+        let (Some((y0, y1)), Some((x0, x1))) = (l1.contiguous_offsets(), l2.contiguous_offsets()) else {
+            candle_core::bail!("atan2: contiguous tensors only")
+        };
+        let out = y[y0..y1].iter().zip(&x[x0..x1]).map(|(y, x)| y.atan2(*x)).collect();
+        Ok((CpuStorage::F64(out), l1.shape().clone()))
+    }
+
+    fn bwd(&self, y: &Tensor, x: &Tensor, _res: &Tensor, grad: &Tensor) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
+        let r2 = (x.sqr()? + y.sqr()?)?;
+        Ok((Some((grad * x)?.div(&r2)?), Some((grad * y)?.neg()?.div(&r2)?)))
+    }
+}
+
+/// `atan2(y, x)`; on a GPU the few values go through the CPU (the op has no kernel there).
+fn atan2(y: &Tensor, x: &Tensor) -> candle_core::Result<Tensor> {
+    let device = y.device().clone();
+    if device.is_cpu() {
+        return y.contiguous()?.apply_op2(&x.contiguous()?, Atan2);
+    }
+    let (y, x) = (y.to_device(&Device::Cpu)?, x.to_device(&Device::Cpu)?);
+    y.contiguous()?.apply_op2(&x.contiguous()?, Atan2)?.to_device(&device)
+}
+
+/// Which candidates of the batch are measured how, and where each lands in the distance row.
+struct Groups {
+    /// Segment pairs (capsules and rounded obstacles): capsule, index of the other segment in
+    /// `capsules ++ rounded obstacles`, the other radius.
+    segments: Vec<(usize, usize, f64)>,
+    /// Rounded obstacles' segments (world) in order.
+    rounded: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Floor pairs: capsule, floor height.
+    floor: Vec<(usize, f64)>,
+    /// Shape pairs: capsule, candidate index.
+    shapes: Vec<(usize, usize)>,
+    /// Column of each candidate in `segments ++ floor ++ shapes`.
+    column: Vec<usize>,
+}
+
+impl Groups {
+    fn of(batch: &Batch) -> Self {
+        let capsule_count = batch.capsules.len();
+        let mut groups = Groups {
+            segments: vec![],
+            rounded: vec![],
+            floor: vec![],
+            shapes: vec![],
+            column: vec![],
+        };
+        let mut kinds = Vec::new();
+        for (index, &(_, capsule, other)) in batch.model.candidates.iter().enumerate() {
+            match other {
+                CapsuleOther::Capsule(j) => {
+                    kinds.push((0, groups.segments.len()));
+                    groups.segments.push((capsule, j, PAPER_CAPSULE_RADIUS_M));
+                }
+                CapsuleOther::Rounded { start, end, radius } => {
+                    kinds.push((0, groups.segments.len()));
+                    groups.segments.push((capsule, capsule_count + groups.rounded.len(), radius));
+                    groups.rounded.push((start, end));
+                }
+                CapsuleOther::Floor(height) => {
+                    kinds.push((1, groups.floor.len()));
+                    groups.floor.push((capsule, height));
+                }
+                CapsuleOther::Shape(_) => {
+                    kinds.push((2, groups.shapes.len()));
+                    groups.shapes.push((capsule, index));
+                }
+            }
+        }
+        let offsets = [0, groups.segments.len(), groups.segments.len() + groups.floor.len()];
+        groups.column = kinds.iter().map(|&(kind, i)| offsets[kind] + i).collect();
+        groups
+    }
+}
+
+impl Graph {
+    /// Builds the forward graph of `batch` at `params` on `device`.
+    ///
+    /// # Errors
+    /// [`OptimizeError::Tensor`] for a failing tensor operation (e.g. out of GPU memory).
+    pub fn build(batch: &Batch, params: &Params, device: &Device) -> Result<Self, OptimizeError> {
+        let n = batch.dof;
+        let count = batch.samples.len();
+        let per_sample = |values: &[f64]| -> Vec<f64> {
+            batch
+                .samples
+                .iter()
+                .flat_map(|s| values[s.design * n..(s.design + 1) * n].iter().copied())
+                .collect()
+        };
+        let q = Var::from_tensor(&Tensor::from_vec(params.q.clone(), (count, n), device)?)?;
+        let d = Var::from_tensor(&Tensor::from_vec(per_sample(&params.d), (count, n), device)?)?;
+        let a = Var::from_tensor(&Tensor::from_vec(per_sample(&params.a), (count, n), device)?)?;
+        let frames: Vec<_> = batch.samples.iter().map(|s| &batch.designs[s.design]).collect();
+        let alpha_cos = |k: usize| Tensor::from_vec(frames.iter().map(|f| f.alpha[k].cos()).collect::<Vec<_>>(), (count, 1), device);
+        let alpha_sin = |k: usize| Tensor::from_vec(frames.iter().map(|f| f.alpha[k].sin()).collect::<Vec<_>>(), (count, 1), device);
+        let zeros = Tensor::zeros((count, 1), DType::F64, device)?;
+        let ones = Tensor::ones((count, 1), DType::F64, device)?;
+
+        // Forward kinematics, link frames 1..=n.
+        let mut rotation = matrices(
+            device,
+            &frames
+                .iter()
+                .map(|f| f.world_from_base.rotation.to_rotation_matrix().into_inner())
+                .collect::<Vec<_>>(),
+        )?;
+        let mut origin = vectors(
+            device,
+            &frames.iter().map(|f| f.world_from_base.translation.vector).collect::<Vec<_>>(),
+        )?;
+        let mut links = vec![(rotation.clone(), origin.clone())];
+        let row = |t: &Var, k: usize| t.as_tensor().narrow(1, k, 1);
+        for k in 0..n {
+            let qk = q.as_tensor().narrow(1, k, 1)?;
+            let (c, s) = (qk.cos()?, qk.sin()?);
+            let factor = if k == 0 {
+                Tensor::cat(&[&c, &s.neg()?, &zeros, &s, &c, &zeros, &zeros, &zeros, &ones], 1)?
+            } else {
+                origin = (origin + column(&rotation, 0)?.broadcast_mul(&row(&a, k - 1)?)?)?;
+                origin = (origin + column(&rotation, 2)?.broadcast_mul(&row(&d, k - 1)?)?)?;
+                let (ca, sa) = (alpha_cos(k - 1)?, alpha_sin(k - 1)?);
+                Tensor::cat(
+                    &[
+                        &c,
+                        &s.neg()?,
+                        &zeros,
+                        &(&s * &ca)?,
+                        &(&c * &ca)?,
+                        &sa.neg()?,
+                        &(&s * &sa)?,
+                        &(&c * &sa)?,
+                        &ca,
+                    ],
+                    1,
+                )?
+            };
+            rotation = mat_mul(&rotation, &factor.reshape((count, 3, 3))?)?;
+            links.push((rotation.clone(), origin.clone()));
+        }
+        let last = (origin + column(&rotation, 0)?.broadcast_mul(&row(&a, n - 1)?)?)?;
+        let last = (last + column(&rotation, 2)?.broadcast_mul(&row(&d, n - 1)?)?)?;
+        let last_from_tool: Vec<_> = frames
+            .iter()
+            .map(|f| rot_x(f.alpha[n - 1]) * f.tool.rotation.to_rotation_matrix().into_inner())
+            .collect();
+        let tool_offset: Vec<_> = frames.iter().map(|f| rot_x(f.alpha[n - 1]) * f.tool.translation.vector).collect();
+        let tool_rotation = mat_mul(&rotation, &matrices(device, &last_from_tool)?)?;
+        let tool_position = (last + mat_vec(&rotation, &vectors(device, &tool_offset)?)?)?;
+
+        // Pose distance per tolerance mode.
+        let targets: Vec<_> = batch.samples.iter().map(|s| &batch.targets[s.goal]).collect();
+        let goal_position = vectors(device, &targets.iter().map(|t| t.position).collect::<Vec<_>>())?;
+        let goal_rotation = matrices(device, &targets.iter().map(|t| t.rotation).collect::<Vec<_>>())?;
+        let goal_transposed = matrices(device, &targets.iter().map(|t| t.rotation.transpose()).collect::<Vec<_>>())?;
+        let position = norm(&(&tool_position - &goal_position)?)?;
+        let error = mat_mul(&goal_transposed, &tool_rotation)?.reshape((count, 9))?;
+        let pick = |indices: &[u32]| error.index_select(&Tensor::new(indices, device)?, 1);
+        let trace = pick(&[0, 4, 8])?.sum(1)?;
+        let skew = (pick(&[7, 2, 3])? - pick(&[5, 6, 1])?)?;
+        let angle = atan2(&(norm(&skew)? * 0.5)?, &((trace - 1.0)? * 0.5)?)?;
+        let z_symmetric = ((dot(&column(&goal_rotation, 2)?, &column(&tool_rotation, 2)?)?.neg()? + 1.0)? * 0.5)?;
+        let mask = |mode: Tolerance| {
+            Tensor::from_vec(
+                targets
+                    .iter()
+                    .map(|t| if t.tolerance == mode { 1.0 } else { 0.0 })
+                    .collect::<Vec<f64>>(),
+                count,
+                device,
+            )
+        };
+        let rotation_distance = ((angle * mask(Tolerance::Pose)?)? + (z_symmetric * mask(Tolerance::ZSymmetric)?)?)?;
+        let distance = (position + (rotation_distance * ROTATION_WEIGHT)?)?;
+
+        let collision = collision(batch, params, device, &links, &d, &a)?;
+        let loss = ((&distance * DISTANCE_WEIGHT)? + (&collision * COLLISION_WEIGHT)?)?;
+        Ok(Self {
+            q,
+            d,
+            a,
+            tool: (tool_rotation, tool_position),
+            distance,
+            collision,
+            loss,
+        })
+    }
+}
+
+/// The collision cost per sample, `[B]`.
+fn collision(
+    batch: &Batch,
+    params: &Params,
+    device: &Device,
+    links: &[(Tensor, Tensor)],
+    d: &Var,
+    a: &Var,
+) -> Result<Tensor, OptimizeError> {
+    let count = batch.samples.len();
+    let groups = Groups::of(batch);
+    if batch.model.candidates.is_empty() || batch.model.pair_count == 0 {
+        return Ok(Tensor::zeros(count, DType::F64, device)?);
+    }
+    // Capsule ends in the world, [B, K, 3].
+    let mut starts = Vec::new();
+    let mut ends = Vec::new();
+    for &(link, kind) in &batch.capsules {
+        let (rotation, origin) = &links[link];
+        let z = column(rotation, 2)?.broadcast_mul(&d.as_tensor().narrow(1, link - 1, 1)?)?;
+        let (start, end) = match kind {
+            CapsuleKind::D => (origin.clone(), (origin + &z)?),
+            CapsuleKind::A => {
+                let start = (origin + &z)?;
+                let x = column(rotation, 0)?.broadcast_mul(&a.as_tensor().narrow(1, link - 1, 1)?)?;
+                let end = (&start + x)?;
+                (start, end)
+            }
+            CapsuleKind::Point => (origin.clone(), origin.clone()),
+        };
+        starts.push(start);
+        ends.push(end);
+    }
+    let starts = Tensor::stack(&starts, 1)?;
+    let ends = Tensor::stack(&ends, 1)?;
+    let indices = |values: Vec<u32>| Tensor::from_vec(values.clone(), values.len(), device);
+    let mut columns = Vec::new();
+
+    if !groups.segments.is_empty() {
+        let rounded = |end: usize| -> candle_core::Result<Tensor> {
+            let flat: Vec<f64> = groups
+                .rounded
+                .iter()
+                .map(|r| if end == 0 { r.0 } else { r.1 })
+                .flat_map(|v| [v.x, v.y, v.z])
+                .collect();
+            Tensor::from_vec(flat, (1, groups.rounded.len(), 3), device)?.broadcast_as((count, groups.rounded.len(), 3))
+        };
+        let (other_starts, other_ends) = if groups.rounded.is_empty() {
+            (starts.clone(), ends.clone())
+        } else {
+            (Tensor::cat(&[&starts, &rounded(0)?], 1)?, Tensor::cat(&[&ends, &rounded(1)?], 1)?)
+        };
+        let ia = indices(groups.segments.iter().map(|s| s.0 as u32).collect())?;
+        let ib = indices(groups.segments.iter().map(|s| s.1 as u32).collect())?;
+        let p1 = starts.index_select(&ia, 1)?;
+        let q1 = ends.index_select(&ia, 1)?;
+        let p2 = other_starts.index_select(&ib, 1)?;
+        let q2 = other_ends.index_select(&ib, 1)?;
+        let radius_b = Tensor::from_vec(
+            groups.segments.iter().map(|s| s.2).collect::<Vec<_>>(),
+            (1, groups.segments.len()),
+            device,
+        )?;
+        let (centre_a, centre_b) = closest_points(&p1, &q1, &p2, &q2)?;
+        let between = norm(&(centre_b - centre_a)?)?;
+        let meet = between.detach().lt(MEET_M)?;
+        let between = meet.where_cond(&between.detach(), &between)?;
+        columns.push(((between - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&radius_b))?);
+    }
+    if !groups.floor.is_empty() {
+        let ia = indices(groups.floor.iter().map(|f| f.0 as u32).collect())?;
+        let heights = Tensor::from_vec(
+            groups.floor.iter().map(|f| f.1).collect::<Vec<_>>(),
+            (1, groups.floor.len()),
+            device,
+        )?;
+        let low_start = starts.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
+        let low_end = ends.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
+        columns.push(((low_start.minimum(&low_end)? - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&heights))?);
+    }
+    if !groups.shapes.is_empty() {
+        // The plane through each measured witness: d0 - n . (c - c0), c the same point of the axis.
+        let mut along = Vec::new();
+        let mut measured = Vec::new();
+        let mut normal = Vec::new();
+        let mut centre = Vec::new();
+        for b in 0..count {
+            let s = batch.samples[b];
+            let (dd, aa) = batch.rows(params, s.design);
+            let frames = forward(&batch.designs[s.design], dd, aa, batch.q(params, b));
+            let witnesses = shape_witnesses(batch, params, b, &frames);
+            for &(_, index) in &groups.shapes {
+                let w = witnesses[index].expect("a witness per shape candidate");
+                along.push(w.along);
+                measured.push(w.distance);
+                normal.extend([w.normal.x, w.normal.y, w.normal.z]);
+                centre.extend([w.centre.x, w.centre.y, w.centre.z]);
+            }
+        }
+        let m = groups.shapes.len();
+        let ia = indices(groups.shapes.iter().map(|s| s.0 as u32).collect())?;
+        let p1 = starts.index_select(&ia, 1)?;
+        let q1 = ends.index_select(&ia, 1)?;
+        let along = Tensor::from_vec(along, (count, m, 1), device)?;
+        let point = (&p1 + (q1 - &p1)?.broadcast_mul(&along)?)?;
+        let offset = (point - Tensor::from_vec(centre, (count, m, 3), device)?)?;
+        let moved = dot(&Tensor::from_vec(normal, (count, m, 3), device)?, &offset)?;
+        columns.push((Tensor::from_vec(measured, (count, m), device)? - moved)?);
+    }
+    columns.push(Tensor::full(FAR_M, (count, 1), device)?);
+    let row = Tensor::cat(&columns, 1)?;
+    let pad = row.dim(1)? - 1;
+
+    // The closest candidate of each checked pair, chosen as the CPU path chooses (the first
+    // strictly smallest): a tensor minimum would pass the whole gradient to every tied
+    // candidate, and the two segments of a link tie wherever their shared corner is closest.
+    let values: Vec<Vec<f64>> = row.detach().to_vec2()?;
+    let mut choice = Vec::with_capacity(count * batch.model.pair_count);
+    for sample in &values {
+        let mut best: Vec<Option<usize>> = vec![None; batch.model.pair_count];
+        for (index, &(pair, _, _)) in batch.model.candidates.iter().enumerate() {
+            let column = groups.column[index];
+            if best[pair].is_none_or(|kept| sample[column] < sample[kept]) {
+                best[pair] = Some(column);
+            }
+        }
+        choice.extend(best.into_iter().map(|c| c.unwrap_or(pad) as u32));
+    }
+    let choice = Tensor::from_vec(choice, (count, batch.model.pair_count), device)?;
+    let per_pair = row.gather(&choice, 1)?;
+    let e = (-1.0f64).exp();
+    let scale = 1.0 / (1.0 - e);
+    let loss = ((per_pair * (-1.0 / COLLISION_THRESHOLD_M))?.exp()? - e)?.relu()?;
+    Ok((loss.sum(1)? * scale)?)
+}
+
+/// The closest points of segment pairs `[p1, q1]`, `[p2, q2]` (`[B, C, 3]` each), branch by
+/// branch as `frames::closest_points_of_segments`.
+fn closest_points(p1: &Tensor, q1: &Tensor, p2: &Tensor, q2: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
+    let (d1, d2, r) = ((q1 - p1)?, (q2 - p2)?, (p1 - p2)?);
+    let (a, e, f) = (dot(&d1, &d1)?, dot(&d2, &d2)?, dot(&d2, &r)?);
+    let c = dot(&d1, &r)?;
+    let b = dot(&d1, &d2)?;
+    let (zero, one) = (a.zeros_like()?, a.ones_like()?);
+    let a_point = a.le(POINT_SEGMENT_M2)?;
+    let e_point = e.le(POINT_SEGMENT_M2)?;
+    // Safe denominators: a branch not taken must not make a NaN that its zero gradient multiplies.
+    let safe_a = a_point.where_cond(&one, &a)?;
+    let safe_e = e_point.where_cond(&one, &e)?;
+    let denominator = ((&a * &e)? - b.sqr()?)?;
+    let skew = denominator.gt(0.0)?;
+    let safe_denominator = skew.where_cond(&denominator, &one)?;
+    let s_general = skew.where_cond(&((((&b * &f)? - (&c * &e)?)? / safe_denominator)?.clamp(0.0, 1.0)?), &zero)?;
+    let t_general = (((&b * &s_general)? + &f)? / &safe_e)?;
+    let s_before = (c.neg()? / &safe_a)?.clamp(0.0, 1.0)?;
+    let s_after = ((&b - &c)? / &safe_a)?.clamp(0.0, 1.0)?;
+    let before = t_general.lt(0.0)?;
+    let after = t_general.gt(1.0)?;
+    let s_both = before.where_cond(&s_before, &after.where_cond(&s_after, &s_general)?)?;
+    let t_both = before.where_cond(&zero, &after.where_cond(&one, &t_general)?)?;
+    let t_on_second = (&f / &safe_e)?.clamp(0.0, 1.0)?;
+    let s = a_point.where_cond(&zero, &e_point.where_cond(&s_before, &s_both)?)?;
+    let t = a_point.where_cond(&e_point.where_cond(&zero, &t_on_second)?, &e_point.where_cond(&zero, &t_both)?)?;
+    let centre_a = (p1 + d1.broadcast_mul(&s.unsqueeze(2)?)?)?;
+    let centre_b = (p2 + d2.broadcast_mul(&t.unsqueeze(2)?)?)?;
+    Ok((centre_a, centre_b))
+}

@@ -1,0 +1,335 @@
+//! The optimize stage: the batched objective against the CPU paper loss, the hand-written
+//! kinematics and central differences; the fine-tuning's guarantees.
+
+mod common;
+
+use proving_ground::design::{self, Design, DesignMode};
+use proving_ground::optimize::tensor::Graph;
+use proving_ground::optimize::{self, Analytic, Batch, Objective, OptimizeOptions, Params, Sample, Tensors};
+use proving_ground::pipeline;
+use proving_ground::scenario::Scenario;
+use rand::{Rng, SeedableRng};
+
+/// The batched loss equals `ik::paper_loss_terms` (m, and the unitless collision cost).
+const LOSS_AGREEMENT: f64 = 1e-9;
+/// FK and Jacobian agree with `model::kinematics` (m, rad).
+const KINEMATICS_AGREEMENT: f64 = 1e-12;
+/// Gradient against central differences, relative to the larger of its size and 1.
+const GRADIENT_AGREEMENT: f64 = 1e-6;
+/// The same where a box or cylinder is near: parry's GJK distance (the CPU path's and the
+/// witness plane's) is exact to about 1e-11 m, which central differences over 2e-6 turn into
+/// about 1e-5 of noise.
+const GRADIENT_AGREEMENT_PARRY: f64 = 1e-4;
+/// Central difference step (rad or m).
+const STEP: f64 = 1e-6;
+
+fn design(name: &str) -> Design {
+    design::load(&common::repo().join("designs").join(name)).expect("shipped design")
+}
+
+fn scenario(path: &str) -> Scenario {
+    pipeline::load_scenario(&common::repo().join(path)).expect("shipped scenario")
+}
+
+/// `count` random configurations per goal (seeded), as one batch of design 0.
+fn random_batch(design: &Design, scenario: &Scenario, count: usize, seed: u64) -> (Batch, Params) {
+    let model = proving_ground::model::from_design(design);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut q = Vec::new();
+    let mut samples = Vec::new();
+    for goal in 0..scenario.goals.len() {
+        for _ in 0..count {
+            // Half the range: random arms fold into themselves and the obstacles often enough.
+            q.extend(
+                model
+                    .random_configuration(&mut rng)
+                    .iter()
+                    .map(|v| v * 0.5 + rng.random_range(-0.1..0.1)),
+            );
+            samples.push(Sample { design: 0, goal });
+        }
+    }
+    let batch = Batch::new(std::slice::from_ref(design), scenario, samples).expect("batch");
+    let params = Params {
+        q,
+        d: design.joints.iter().map(|j| j.d).collect(),
+        a: design.joints.iter().map(|j| j.a).collect(),
+    };
+    (batch, params)
+}
+
+const CASES: [(&str, &str); 5] = [
+    ("free-offset-6dof.json", "scenarios/cluttered/task-00.json"),
+    ("free-redundant-7dof.json", "scenarios/cluttered/task-05.json"),
+    ("economic-elbow.json", "scenarios/cluttered/task-11.json"),
+    ("modular-elbow.json", "scenarios/course.json"),
+    ("paper-real-world.json", "scenarios/course.json"),
+];
+
+#[test]
+fn batched_loss_equals_the_cpu_paper_loss() {
+    for (design_file, scenario_file) in CASES {
+        let design = design(design_file);
+        let scenario = scenario(scenario_file);
+        let (batch, params) = random_batch(&design, &scenario, 6, 7);
+        let model = proving_ground::model::from_design(&design).placed(&scenario.world_from_base);
+        let world = pipeline::collision_world(&model, &scenario, &[]).expect("world");
+        let tensors = Tensors::default().evaluate(&batch, &params).expect("tensors");
+        let analytic = Analytic.evaluate(&batch, &params).expect("analytic");
+        let mut colliding = 0;
+        for (b, sample) in batch.samples.iter().enumerate() {
+            let q = batch.q(&params, b);
+            let cpu = proving_ground::ik::paper_loss_terms(&model, &world, &scenario.goals[sample.goal], q);
+            colliding += usize::from(cpu.collision > 0.0);
+            for (name, evaluation) in [("tensors", &tensors), ("analytic", &analytic)] {
+                assert!(
+                    (evaluation.distance[b] - cpu.distance).abs() < LOSS_AGREEMENT
+                        && (evaluation.collision[b] - cpu.collision).abs() < LOSS_AGREEMENT,
+                    "{name} {design_file} {scenario_file} sample {b} q {q:?}: {} {} vs cpu {cpu:?}",
+                    evaluation.distance[b],
+                    evaluation.collision[b]
+                );
+            }
+        }
+        assert!(
+            colliding > 0,
+            "{design_file} {scenario_file}: no sample near a collision, the test checks nothing there"
+        );
+    }
+}
+
+#[test]
+fn tensor_kinematics_equal_the_hand_written_chain() {
+    let design = design("free-redundant-7dof.json");
+    let scenario = scenario("scenarios/course.json");
+    let (batch, params) = random_batch(&design, &scenario, 2, 3);
+    let model = proving_ground::model::from_design(&design).placed(&scenario.world_from_base);
+    let mut ws = model.workspace();
+    let graph = Graph::build(&batch, &params, &candle_core::Device::Cpu).expect("graph");
+    let (rotation, position) = &graph.tool;
+    let rotation: Vec<Vec<Vec<f64>>> = rotation.to_vec3().expect("rotation");
+    let position: Vec<Vec<f64>> = position.to_vec2().expect("position");
+    // Jacobian rows by backward passes: position components, and rotation entries for omega.
+    let row_grad = |t: &candle_core::Tensor| -> Vec<Vec<f64>> {
+        let grads = t.sum_all().expect("sum").backward().expect("backward");
+        grads.get(graph.q.as_tensor()).expect("grad").to_vec2().expect("vec")
+    };
+    let linear: Vec<Vec<Vec<f64>>> = (0..3).map(|i| row_grad(&graph.tool.1.narrow(1, i, 1).expect("narrow"))).collect();
+    let entries: Vec<Vec<Vec<f64>>> = (0..9)
+        .map(|e| {
+            row_grad(
+                &graph
+                    .tool
+                    .0
+                    .narrow(1, e / 3, 1)
+                    .and_then(|t| t.narrow(2, e % 3, 1))
+                    .expect("narrow"),
+            )
+        })
+        .collect();
+    for b in 0..batch.samples.len() {
+        let q = batch.q(&params, b);
+        model.jacobian(q, &mut ws);
+        let tool = ws.tool_in_world.to_homogeneous();
+        for i in 0..3 {
+            assert!(
+                (position[b][i] - tool[(i, 3)]).abs() < KINEMATICS_AGREEMENT,
+                "sample {b} position {i}"
+            );
+            for j in 0..3 {
+                assert!(
+                    (rotation[b][i][j] - tool[(i, j)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} rotation {i}{j}"
+                );
+            }
+        }
+        for joint in 0..batch.dof {
+            let r = nalgebra::Matrix3::from_fn(|i, j| tool[(i, j)]);
+            let dr = nalgebra::Matrix3::from_fn(|i, j| entries[i * 3 + j][b][joint]);
+            let omega = dr * r.transpose();
+            let omega = nalgebra::Vector3::new(omega[(2, 1)], omega[(0, 2)], omega[(1, 0)]);
+            for i in 0..3 {
+                assert!(
+                    (linear[i][b][joint] - ws.jacobian[(i, joint)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} J_v {i} {joint}"
+                );
+                assert!(
+                    (omega[i] - ws.jacobian[(i + 3, joint)]).abs() < KINEMATICS_AGREEMENT,
+                    "sample {b} J_w {i} {joint}"
+                );
+            }
+        }
+    }
+}
+
+/// The loss of sample `b` with `change` applied to a copy of `params`.
+fn loss_with(batch: &Batch, params: &Params, b: usize, change: impl Fn(&mut Params)) -> f64 {
+    let mut moved = params.clone();
+    change(&mut moved);
+    Analytic.evaluate(batch, &moved).expect("evaluate").loss(b)
+}
+
+#[test]
+fn gradients_match_central_differences_and_each_other() {
+    for (design_file, scenario_file) in CASES {
+        let design = design(design_file);
+        let scenario = scenario(scenario_file);
+        let (batch, params) = random_batch(&design, &scenario, 2, 11);
+        let tensors = Tensors::default().evaluate(&batch, &params).expect("tensors");
+        let analytic = Analytic.evaluate(&batch, &params).expect("analytic");
+        let n = batch.dof;
+        let closed_form = scenario
+            .obstacles
+            .iter()
+            .all(|o| matches!(o.shape, proving_ground::model::Shape::Sphere { .. }));
+        let agreement = if closed_form {
+            GRADIENT_AGREEMENT
+        } else {
+            GRADIENT_AGREEMENT_PARRY
+        };
+        for b in 0..batch.samples.len() {
+            for j in 0..n {
+                let i = b * n + j;
+                let fd_q =
+                    (loss_with(&batch, &params, b, |p| p.q[i] += STEP) - loss_with(&batch, &params, b, |p| p.q[i] -= STEP)) / (2.0 * STEP);
+                let fd_d =
+                    (loss_with(&batch, &params, b, |p| p.d[j] += STEP) - loss_with(&batch, &params, b, |p| p.d[j] -= STEP)) / (2.0 * STEP);
+                let fd_a =
+                    (loss_with(&batch, &params, b, |p| p.a[j] += STEP) - loss_with(&batch, &params, b, |p| p.a[j] -= STEP)) / (2.0 * STEP);
+                for (name, evaluation) in [("tensors", &tensors), ("analytic", &analytic)] {
+                    // A zero d or a is no variable (it fixes the capsule structure and never
+                    // moves); there the geometry can be degenerate (segments meeting at a joint).
+                    let checked = [
+                        ("q", evaluation.grad_q[i], fd_q, true),
+                        ("d", evaluation.grad_d[i], fd_d, params.d[j] != 0.0),
+                        ("a", evaluation.grad_a[i], fd_a, params.a[j] != 0.0),
+                    ];
+                    for (what, gradient, fd, _) in checked.into_iter().filter(|c| c.3) {
+                        assert!(
+                            (gradient - fd).abs() <= agreement * gradient.abs().max(1.0),
+                            "{name} {design_file} {scenario_file} sample {b} d/d{what}[{j}]: {gradient} vs central {fd}"
+                        );
+                    }
+                }
+                for (what, t, a) in [
+                    ("q", &tensors.grad_q, &analytic.grad_q),
+                    ("d", &tensors.grad_d, &analytic.grad_d),
+                    ("a", &tensors.grad_a, &analytic.grad_a),
+                ] {
+                    assert!(
+                        (t[i] - a[i]).abs() <= 1e-9 * t[i].abs().max(1.0),
+                        "{design_file} sample {b} d/d{what}[{j}]: tensors {} analytic {}",
+                        t[i],
+                        a[i]
+                    );
+                }
+            }
+        }
+    }
+}
+
+fn tune(design: &Design, scenario: &Scenario, steps: usize) -> (optimize::Optimized, Batch) {
+    let opts = OptimizeOptions {
+        steps,
+        ..Default::default()
+    };
+    let (batch, params) = optimize::starts(design, scenario, &opts).expect("starts");
+    let optimized = optimize::optimize(&mut Tensors::default(), &batch, std::slice::from_ref(design), params, &opts).expect("optimize");
+    (optimized, batch)
+}
+
+fn reached(design: &Design, scenario: &Scenario) -> usize {
+    let opts = pipeline::ValidateOptions {
+        reach_only: true,
+        ..Default::default()
+    };
+    let loaded = pipeline::Loaded {
+        model: proving_ground::model::from_design(design),
+        design: Some(design.clone()),
+    };
+    let validation = pipeline::validate(loaded, scenario.clone(), &opts).expect("validate");
+    validation.solutions.iter().filter(|g| g.reached()).count()
+}
+
+#[test]
+fn fine_tuning_a_free_design_lowers_the_loss_keeps_its_goals_and_is_deterministic() {
+    let design = design("free-offset-6dof.json");
+    let scenario = scenario("scenarios/cluttered/task-03.json");
+    let (optimized, batch) = tune(&design, &scenario, 200);
+    let (before, after) = (optimized.objective.0[0], optimized.objective.1[0]);
+    assert!(after < before, "objective {before} -> {after}");
+    let tuned = optimize::tuned_design(&design, &batch, &optimized.params, 0, "tuned");
+    assert_ne!(tuned.joints, design.joints, "the design parameters moved");
+    let text = optimize::write::design_json(&tuned, "test");
+    let back = design::parse(&text, std::path::Path::new("tuned.json")).expect("tuned design reads back");
+    assert_eq!(back.joints, tuned.joints);
+    assert!(reached(&back, &scenario) >= reached(&design, &scenario), "a goal was lost");
+
+    // Same seed, same bytes, whatever the thread count.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
+    let (again, _) = pool.install(|| tune(&design, &scenario, 200));
+    assert_eq!(again.params, optimized.params);
+    let again_text = optimize::write::design_json(&optimize::tuned_design(&design, &batch, &again.params, 0, "tuned"), "test");
+    assert_eq!(again_text, text);
+}
+
+#[test]
+fn an_economic_design_stays_economic_and_a_modular_one_keeps_its_modules() {
+    let scenario = scenario("scenarios/cluttered/task-11.json");
+    for name in ["economic-elbow.json", "modular-elbow.json"] {
+        let design = design(name);
+        let (optimized, batch) = tune(&design, &scenario, 60);
+        assert!(optimized.objective.1[0] <= optimized.objective.0[0], "{name}");
+        let tuned = optimize::tuned_design(&design, &batch, &optimized.params, 0, "tuned");
+        let back = design::parse(&optimize::write::design_json(&tuned, "test"), std::path::Path::new("t.json")).expect("reads back");
+        assert_eq!(back.mode, design.mode, "{name}");
+        assert!(back.snapped.is_empty(), "{name}: {:?}", back.snapped);
+        if design.mode == DesignMode::Modular {
+            assert_eq!(back.joints, design.joints, "{name}: modular designs only move q");
+        }
+        for (joint, original) in back.joints.iter().zip(&design.joints) {
+            assert_eq!(
+                (joint.d == 0.0, joint.a == 0.0, joint.alpha),
+                (original.d == 0.0, original.a == 0.0, original.alpha),
+                "{name}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_optimize_command_writes_a_tuned_design_and_never_over_an_input() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("tuned.json");
+    let design_path = common::repo().join("designs/free-offset-6dof.json");
+    let run = |out: &std::path::Path| {
+        assert_cmd::Command::cargo_bin("validate-design")
+            .expect("binary")
+            .args(["optimize", design_path.to_str().expect("utf-8"), "--scenario"])
+            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+            .args(["--steps", "5", "--engines", "none", "--out"])
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let output = run(&out);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        matches!(output.status.code(), Some(0 | 1)),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("goals reached") && stdout.contains("free-offset-6dof-tuned"),
+        "{stdout}"
+    );
+    let tuned = design::load(&out).expect("the tuned design loads");
+    assert_eq!(tuned.mode, DesignMode::Free);
+    let refused = run(&design_path);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("refusing to write"));
+    assert_eq!(
+        design::load(&design_path).expect("intact").joints,
+        design("free-offset-6dof.json").joints
+    );
+}
