@@ -29,12 +29,12 @@ impl Cholesky6 {
                 let (left, right) = a.split_at_mut(j);
                 let (column_k, column_j) = (&left[k], &mut right[0]);
                 for i in j..6 {
-                    column_j[i] = factor * column_k[i] + column_j[i];
+                    column_j[i] += factor * column_k[i];
                 }
             }
             let diag = a[j][j];
             // nalgebra's `try_sqrt`: defined for `diag >= 0`; a zero pivot fails too.
-            if diag == 0.0 || !(diag >= 0.0) {
+            if diag <= 0.0 || diag.is_nan() {
                 return None;
             }
             let denom = diag.sqrt();
@@ -55,7 +55,7 @@ impl Cholesky6 {
             let coeff = x[i] / l[i][i];
             x[i] = coeff;
             for r in i + 1..6 {
-                x[r] = -coeff * l[i][r] + x[r];
+                x[r] += -coeff * l[i][r];
             }
         }
         // L^T x = y, backward; the dot product summed from zero in row order, as nalgebra's.
