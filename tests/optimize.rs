@@ -333,3 +333,27 @@ fn the_optimize_command_writes_a_tuned_design_and_never_over_an_input() {
         design("free-offset-6dof.json").joints
     );
 }
+
+#[test]
+fn chunked_evaluation_equals_one_graph_bit_for_bit() {
+    // Each sample's terms and gradients depend on that sample alone: evaluating the batch in
+    // chunks (the CPU default) must give exactly what one graph gives.
+    let design = design("free-offset-6dof.json");
+    let scenario = scenario("scenarios/cluttered/task-03.json");
+    let (batch, params) = random_batch(&design, &scenario, 40, 11);
+    assert!(batch.samples.len() > 200, "{} samples: several chunks", batch.samples.len());
+    let whole = Tensors::default()
+        .with_chunk(usize::MAX)
+        .evaluate(&batch, &params)
+        .expect("one graph");
+    for chunk in [64, 100] {
+        let chunked = Tensors::default().with_chunk(chunk).evaluate(&batch, &params).expect("chunks");
+        let bits = |e: &proving_ground::optimize::Evaluation| -> Vec<u64> {
+            [&e.distance, &e.collision, &e.grad_q, &e.grad_d, &e.grad_a]
+                .iter()
+                .flat_map(|v| v.iter().map(|x| x.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&chunked), bits(&whole), "chunk {chunk}");
+    }
+}

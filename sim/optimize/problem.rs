@@ -101,6 +101,7 @@ pub struct Sample {
 }
 
 /// Everything constant over an optimization.
+#[derive(Clone)]
 pub struct Batch {
     /// Joints per design.
     pub dof: usize,
@@ -115,7 +116,7 @@ pub struct Batch {
     /// The capsule model's pairs, in the order the CPU path measures them.
     pub(crate) model: CapsuleModel,
     /// The first design's collision world: the pair lists and the obstacles without a closed form.
-    pub world: CollisionWorld,
+    pub world: std::sync::Arc<CollisionWorld>,
 }
 
 impl Batch {
@@ -176,7 +177,7 @@ impl Batch {
             samples,
             capsules,
             model: capsule_model,
-            world,
+            world: std::sync::Arc::new(world),
         })
     }
 
