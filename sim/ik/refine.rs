@@ -44,8 +44,10 @@ pub(crate) struct Checker<'a> {
     exact: Distances,
     approximate: Distances,
     gradient: DVector<f64>,
-    /// The last configuration [`Self::keeps_margin`] measured, the margin's bits, and the answer.
-    kept: (Vec<f64>, u64, bool),
+    /// The last configuration [`Self::keeps_margin`] measured, at which margin, and its answer.
+    kept_q: Vec<f64>,
+    kept_margin: f64,
+    kept_clear: bool,
     /// Clearance a configuration must keep to count as free (m).
     pub(crate) margin: f64,
 }
@@ -59,7 +61,9 @@ impl<'a> Checker<'a> {
             exact: Distances::new(),
             approximate: Distances::new(),
             gradient: DVector::zeros(model.dof()),
-            kept: (Vec::new(), 0, false),
+            kept_q: Vec::new(),
+            kept_margin: f64::NAN,
+            kept_clear: false,
             margin: 0.0,
         }
     }
@@ -84,15 +88,15 @@ impl<'a> Checker<'a> {
 
     /// Whether `q` keeps the margin in exact geometry (the sign of the clearance against it).
     fn keeps_margin(&mut self, q: &[f64]) -> bool {
-        let same = self.kept.0.len() == q.len() && self.kept.0.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits());
-        if !same || self.kept.1 != self.margin.to_bits() {
+        let same = self.kept_q.len() == q.len() && self.kept_q.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same || self.kept_margin.to_bits() != self.margin.to_bits() {
             self.model.forward(q, &mut self.ws);
-            let clear = collide::clear(self.world, &self.ws.link_in_world, self.margin, &mut self.exact);
-            self.kept.0.clear();
-            self.kept.0.extend_from_slice(q);
-            self.kept = (std::mem::take(&mut self.kept.0), self.margin.to_bits(), clear);
+            self.kept_clear = collide::clear(self.world, &self.ws.link_in_world, self.margin, &mut self.exact);
+            self.kept_q.clear();
+            self.kept_q.extend_from_slice(q);
+            self.kept_margin = self.margin;
         }
-        self.kept.2
+        self.kept_clear
     }
 
     /// Exact clearance at `q`, and the gradient of the weighted collision loss in `self.gradient`.
