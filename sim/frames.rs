@@ -108,9 +108,16 @@ pub(crate) const POINT_SEGMENT_M2: f64 = 1e-24;
 /// The closest points of segments `[p1, q1]` and `[p2, q2]`, one on each (Ericson, Real-Time
 /// Collision Detection, 5.1.9, with point segments and parallel segments handled).
 pub fn closest_points_of_segments(p1: Vector3<f64>, q1: Vector3<f64>, p2: Vector3<f64>, q2: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let (s, t) = closest_parameters_of_segments(p1, q1, p2, q2);
+    (p1 + (q1 - p1) * s, p2 + (q2 - p2) * t)
+}
+
+/// The parameters `(s, t)` in `[0, 1]` of [`closest_points_of_segments`]' points along
+/// `p1 -> q1` and `p2 -> q2`.
+pub fn closest_parameters_of_segments(p1: Vector3<f64>, q1: Vector3<f64>, p2: Vector3<f64>, q2: Vector3<f64>) -> (f64, f64) {
     let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
     let (a, e, f) = (d1.norm_squared(), d2.norm_squared(), d2.dot(&r));
-    let (s, t) = if a <= POINT_SEGMENT_M2 && e <= POINT_SEGMENT_M2 {
+    if a <= POINT_SEGMENT_M2 && e <= POINT_SEGMENT_M2 {
         (0.0, 0.0)
     } else if a <= POINT_SEGMENT_M2 {
         (0.0, (f / e).clamp(0.0, 1.0))
@@ -136,8 +143,7 @@ pub fn closest_points_of_segments(p1: Vector3<f64>, q1: Vector3<f64>, p2: Vector
                 (s, t)
             }
         }
-    };
-    (p1 + d1 * s, p2 + d2 * t)
+    }
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@
 
 pub mod analytic;
 pub mod problem;
+mod segments;
 pub mod tensor;
 pub mod write;
 

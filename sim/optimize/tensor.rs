@@ -9,9 +9,9 @@
 //! dimension of 3, in order), so the numbers do not depend on the thread count.
 
 use super::problem::{forward, rot_x, shape_witnesses, Batch, CapsuleKind, Evaluation, Params};
+use super::segments::{Other, SegmentGaps};
 use super::{Objective, OptimizeError};
 use crate::collide::CapsuleOther;
-use crate::frames::POINT_SEGMENT_M2;
 use crate::ik::{COLLISION_THRESHOLD_M, COLLISION_WEIGHT, DISTANCE_WEIGHT, ROTATION_WEIGHT};
 use crate::model::PAPER_CAPSULE_RADIUS_M;
 use crate::scenario::Tolerance;
@@ -223,11 +223,8 @@ fn atan2(y: &Tensor, x: &Tensor) -> candle_core::Result<Tensor> {
 
 /// Which candidates of the batch are measured how, and where each lands in the distance row.
 struct Groups {
-    /// Segment pairs (capsules and rounded obstacles): capsule, index of the other segment in
-    /// `capsules ++ rounded obstacles`, the other radius.
-    segments: Vec<(usize, usize, f64)>,
-    /// Rounded obstacles' segments (world) in order.
-    rounded: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Segment pairs (capsules and rounded obstacles): capsule, the other segment, its radius.
+    segments: Vec<(usize, Other, f64)>,
     /// Floor pairs: capsule, floor height.
     floor: Vec<(usize, f64)>,
     /// Shape pairs: capsule, candidate index.
@@ -238,10 +235,8 @@ struct Groups {
 
 impl Groups {
     fn of(batch: &Batch) -> Self {
-        let capsule_count = batch.capsules.len();
         let mut groups = Groups {
             segments: vec![],
-            rounded: vec![],
             floor: vec![],
             shapes: vec![],
             column: vec![],
@@ -251,12 +246,11 @@ impl Groups {
             match other {
                 CapsuleOther::Capsule(j) => {
                     kinds.push((0, groups.segments.len()));
-                    groups.segments.push((capsule, j, PAPER_CAPSULE_RADIUS_M));
+                    groups.segments.push((capsule, Other::Capsule(j), PAPER_CAPSULE_RADIUS_M));
                 }
                 CapsuleOther::Rounded { start, end, radius } => {
                     kinds.push((0, groups.segments.len()));
-                    groups.segments.push((capsule, capsule_count + groups.rounded.len(), radius));
-                    groups.rounded.push((start, end));
+                    groups.segments.push((capsule, Other::Fixed(start, end), radius));
                 }
                 CapsuleOther::Floor(height) => {
                     kinds.push((1, groups.floor.len()));
@@ -427,35 +421,13 @@ fn collision(
     let mut columns = Vec::new();
 
     if !groups.segments.is_empty() {
-        let rounded = |end: usize| -> candle_core::Result<Tensor> {
-            let flat: Vec<f64> = groups
-                .rounded
-                .iter()
-                .map(|r| if end == 0 { r.0 } else { r.1 })
-                .flat_map(|v| [v.x, v.y, v.z])
-                .collect();
-            Tensor::from_vec(flat, (1, groups.rounded.len(), 3), device)?.broadcast_as((count, groups.rounded.len(), 3))
-        };
-        let (other_starts, other_ends) = if groups.rounded.is_empty() {
-            (starts.clone(), ends.clone())
-        } else {
-            (Tensor::cat(&[&starts, &rounded(0)?], 1)?, Tensor::cat(&[&ends, &rounded(1)?], 1)?)
-        };
-        let ia = indices(groups.segments.iter().map(|s| s.0 as u32).collect())?;
-        let ib = indices(groups.segments.iter().map(|s| s.1 as u32).collect())?;
-        let p1 = starts.index_select(&ia, 1)?;
-        let q1 = ends.index_select(&ia, 1)?;
-        let p2 = other_starts.index_select(&ib, 1)?;
-        let q2 = other_ends.index_select(&ib, 1)?;
+        let gaps = SegmentGaps::new(groups.segments.iter().map(|&(capsule, other, _)| (capsule, other)).collect());
+        let between = gaps.apply(&Tensor::cat(&[&starts, &ends], 2)?)?;
         let radius_b = Tensor::from_vec(
             groups.segments.iter().map(|s| s.2).collect::<Vec<_>>(),
             (1, groups.segments.len()),
             device,
         )?;
-        let (centre_a, centre_b) = closest_points(&p1, &q1, &p2, &q2)?;
-        let between = norm(&(centre_b - centre_a)?)?;
-        let meet = between.detach().lt(MEET_M)?;
-        let between = meet.where_cond(&between.detach(), &between)?;
         columns.push(((between - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&radius_b))?);
     }
     if !groups.floor.is_empty() {
@@ -523,36 +495,4 @@ fn collision(
     let scale = 1.0 / (1.0 - e);
     let loss = ((per_pair * (-1.0 / COLLISION_THRESHOLD_M))?.exp()? - e)?.relu()?;
     Ok((loss.sum(1)? * scale)?)
-}
-
-/// The closest points of segment pairs `[p1, q1]`, `[p2, q2]` (`[B, C, 3]` each), branch by
-/// branch as `frames::closest_points_of_segments`.
-fn closest_points(p1: &Tensor, q1: &Tensor, p2: &Tensor, q2: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
-    let (d1, d2, r) = ((q1 - p1)?, (q2 - p2)?, (p1 - p2)?);
-    let (a, e, f) = (dot(&d1, &d1)?, dot(&d2, &d2)?, dot(&d2, &r)?);
-    let c = dot(&d1, &r)?;
-    let b = dot(&d1, &d2)?;
-    let (zero, one) = (a.zeros_like()?, a.ones_like()?);
-    let a_point = a.le(POINT_SEGMENT_M2)?;
-    let e_point = e.le(POINT_SEGMENT_M2)?;
-    // Safe denominators: a branch not taken must not make a NaN that its zero gradient multiplies.
-    let safe_a = a_point.where_cond(&one, &a)?;
-    let safe_e = e_point.where_cond(&one, &e)?;
-    let denominator = ((&a * &e)? - b.sqr()?)?;
-    let skew = denominator.gt(0.0)?;
-    let safe_denominator = skew.where_cond(&denominator, &one)?;
-    let s_general = skew.where_cond(&((((&b * &f)? - (&c * &e)?)? / safe_denominator)?.clamp(0.0, 1.0)?), &zero)?;
-    let t_general = (((&b * &s_general)? + &f)? / &safe_e)?;
-    let s_before = (c.neg()? / &safe_a)?.clamp(0.0, 1.0)?;
-    let s_after = ((&b - &c)? / &safe_a)?.clamp(0.0, 1.0)?;
-    let before = t_general.lt(0.0)?;
-    let after = t_general.gt(1.0)?;
-    let s_both = before.where_cond(&s_before, &after.where_cond(&s_after, &s_general)?)?;
-    let t_both = before.where_cond(&zero, &after.where_cond(&one, &t_general)?)?;
-    let t_on_second = (&f / &safe_e)?.clamp(0.0, 1.0)?;
-    let s = a_point.where_cond(&zero, &e_point.where_cond(&s_before, &s_both)?)?;
-    let t = a_point.where_cond(&e_point.where_cond(&zero, &t_on_second)?, &e_point.where_cond(&zero, &t_both)?)?;
-    let centre_a = (p1 + d1.broadcast_mul(&s.unsqueeze(2)?)?)?;
-    let centre_b = (p2 + d2.broadcast_mul(&t.unsqueeze(2)?)?)?;
-    Ok((centre_a, centre_b))
 }
