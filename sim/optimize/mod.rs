@@ -13,8 +13,8 @@
 //! never scores worse than the start.
 
 pub mod analytic;
+mod gaps;
 pub mod problem;
-mod segments;
 pub mod tensor;
 pub mod write;
 

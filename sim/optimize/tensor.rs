@@ -8,8 +8,8 @@
 //! product or parallel reduction is used (products are broadcast multiplies summed over a
 //! dimension of 3, in order), so the numbers do not depend on the thread count.
 
+use super::gaps::{CapsuleGaps, Other};
 use super::problem::{forward, rot_x, shape_witnesses, Batch, CapsuleKind, Evaluation, Params};
-use super::segments::{Other, SegmentGaps};
 use super::{Objective, OptimizeError};
 use crate::collide::CapsuleOther;
 use crate::ik::{COLLISION_THRESHOLD_M, COLLISION_WEIGHT, DISTANCE_WEIGHT, ROTATION_WEIGHT};
@@ -29,7 +29,7 @@ const FAR_M: f64 = 1e3;
 
 /// Samples per graph on the CPU (see [`Tensors::with_chunk`]): batch 4096 took 568 ms in one graph,
 /// 389 ms in chunks of 1024, 400 ms of 256, 422 ms of 64 (`cargo bench --bench optimize`).
-const CPU_CHUNK: usize = 1024;
+const CPU_CHUNK: usize = 256;
 
 /// The candle backend, on a device (CPU by default; a CUDA GPU with the `cuda` feature).
 #[derive(Debug, Clone)]
@@ -223,48 +223,38 @@ fn atan2(y: &Tensor, x: &Tensor) -> candle_core::Result<Tensor> {
 
 /// Which candidates of the batch are measured how, and where each lands in the distance row.
 struct Groups {
-    /// Segment pairs (capsules and rounded obstacles): capsule, the other segment, its radius.
-    segments: Vec<(usize, Other, f64)>,
-    /// Floor pairs: capsule, floor height.
-    floor: Vec<(usize, f64)>,
+    /// Closed-form candidates (capsules, rounded obstacles, the floor): capsule, the other, the
+    /// radii to take off the axis distance.
+    closed: Vec<(usize, Other, f64)>,
     /// Shape pairs: capsule, candidate index.
     shapes: Vec<(usize, usize)>,
-    /// Column of each candidate in `segments ++ floor ++ shapes`.
+    /// Column of each candidate in `closed ++ shapes`.
     column: Vec<usize>,
 }
 
 impl Groups {
     fn of(batch: &Batch) -> Self {
-        let mut groups = Groups {
-            segments: vec![],
-            floor: vec![],
-            shapes: vec![],
-            column: vec![],
-        };
+        let r = PAPER_CAPSULE_RADIUS_M;
+        let mut closed = vec![];
+        let mut shapes = vec![];
         let mut kinds = Vec::new();
         for (index, &(_, capsule, other)) in batch.model.candidates.iter().enumerate() {
-            match other {
-                CapsuleOther::Capsule(j) => {
-                    kinds.push((0, groups.segments.len()));
-                    groups.segments.push((capsule, Other::Capsule(j), PAPER_CAPSULE_RADIUS_M));
-                }
-                CapsuleOther::Rounded { start, end, radius } => {
-                    kinds.push((0, groups.segments.len()));
-                    groups.segments.push((capsule, Other::Fixed(start, end), radius));
-                }
-                CapsuleOther::Floor(height) => {
-                    kinds.push((1, groups.floor.len()));
-                    groups.floor.push((capsule, height));
-                }
+            let other = match other {
+                CapsuleOther::Capsule(j) => (Other::Capsule(j), r + r),
+                CapsuleOther::Rounded { start, end, radius } => (Other::Fixed(start, end), r + radius),
+                CapsuleOther::Floor(height) => (Other::Floor(height), r),
                 CapsuleOther::Shape(_) => {
-                    kinds.push((2, groups.shapes.len()));
-                    groups.shapes.push((capsule, index));
+                    kinds.push((1, shapes.len()));
+                    shapes.push((capsule, index));
+                    continue;
                 }
-            }
+            };
+            kinds.push((0, closed.len()));
+            closed.push((capsule, other.0, other.1));
         }
-        let offsets = [0, groups.segments.len(), groups.segments.len() + groups.floor.len()];
-        groups.column = kinds.iter().map(|&(kind, i)| offsets[kind] + i).collect();
-        groups
+        let offsets = [0, closed.len()];
+        let column = kinds.iter().map(|&(kind, i)| offsets[kind] + i).collect();
+        Groups { closed, shapes, column }
     }
 }
 
@@ -420,26 +410,9 @@ fn collision(
     let indices = |values: Vec<u32>| Tensor::from_vec(values.clone(), values.len(), device);
     let mut columns = Vec::new();
 
-    if !groups.segments.is_empty() {
-        let gaps = SegmentGaps::new(groups.segments.iter().map(|&(capsule, other, _)| (capsule, other)).collect());
-        let between = gaps.apply(&Tensor::cat(&[&starts, &ends], 2)?)?;
-        let radius_b = Tensor::from_vec(
-            groups.segments.iter().map(|s| s.2).collect::<Vec<_>>(),
-            (1, groups.segments.len()),
-            device,
-        )?;
-        columns.push(((between - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&radius_b))?);
-    }
-    if !groups.floor.is_empty() {
-        let ia = indices(groups.floor.iter().map(|f| f.0 as u32).collect())?;
-        let heights = Tensor::from_vec(
-            groups.floor.iter().map(|f| f.1).collect::<Vec<_>>(),
-            (1, groups.floor.len()),
-            device,
-        )?;
-        let low_start = starts.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
-        let low_end = ends.index_select(&ia, 1)?.narrow(2, 2, 1)?.squeeze(2)?;
-        columns.push(((low_start.minimum(&low_end)? - PAPER_CAPSULE_RADIUS_M)?.broadcast_sub(&heights))?);
+    if !groups.closed.is_empty() {
+        let gaps = CapsuleGaps::new(groups.closed.clone());
+        columns.push(gaps.apply(&Tensor::cat(&[&starts, &ends], 2)?)?);
     }
     if !groups.shapes.is_empty() {
         // The plane through each measured witness: d0 - n . (c - c0), c the same point of the axis.

@@ -1,19 +1,22 @@
-//! The capsule model's segment-pair distances as one fused candle operation: per sample and
-//! pair, the distance between the closest points of two axes, with its gradient with respect to
-//! the capsule ends.
+//! The capsule model's closed-form gaps as one fused candle operation: per sample and candidate,
+//! the surface distance of a capsule to another capsule, a rounded obstacle or the floor, with
+//! its gradient with respect to the capsule ends.
 //!
-//! Written as candle ops, each pair costs some fifty elementwise tensors of `[samples, pairs]`
-//! forward and as many backward; on the CPU the batch's time went to allocating, faulting in and
-//! synchronising those, not to arithmetic. Fused, the pairs cost one pass each way over the
-//! capsule ends, and the rest of the objective (kinematics, pose error, collision cost) stays
-//! differentiated by candle. The closest points are `frames::closest_points_of_segments`, the
-//! CPU path's own; the composed-op version this replaces is kept in the tests as the oracle.
+//! Written as candle ops, each segment pair cost some fifty elementwise tensors of
+//! `[samples, pairs]` forward and as many backward; on the CPU the batch's time went to
+//! allocating, faulting in and synchronising those, not to arithmetic (batch 4096: 353 ms, 72 ms
+//! fused). Fused, the candidates cost one pass each way over the capsule ends, and the rest of
+//! the objective (kinematics, pose error, the choice of each pair's closest candidate, the
+//! collision cost) stays differentiated by candle. The closest points are
+//! `frames::closest_points_of_segments` and the floor's is `collide::capsule_floor`'s, the CPU
+//! path's own; the composed-op version this replaces is kept in the tests as the oracle.
 //!
 //! The gradient holds the closest points fixed on their segments (at the minimum over
 //! `(s, t)` the distance is stationary in `s` and `t`, or they sit on a bound): with `n` the unit
 //! vector from the first axis's point to the second's, the ends move the distance by
 //! `-(1 - s) n`, `-s n` (first) and `(1 - t) n`, `t n` (second). Axes that meet (closer than
-//! [`super::tensor::MEET_M`]) have no normal and pass no gradient, as on the CPU path.
+//! [`super::tensor::MEET_M`]) have no normal and pass no gradient, as on the CPU path. A floor
+//! gap moves with the height of the capsule's lower end.
 
 use super::tensor::MEET_M;
 use crate::frames::closest_parameters_of_segments;
@@ -28,42 +31,58 @@ pub(super) enum Other {
     Capsule(usize),
     /// A fixed segment in the world (a rounded obstacle's axis).
     Fixed(Vector3<f64>, Vector3<f64>),
+    /// The floor at this height (m).
+    Floor(f64),
 }
 
-/// The pairs measured, in output column order: a capsule and its other segment.
+/// How one gap moves with the capsule ends.
+enum Slope {
+    /// Segment pair: the closest points' parameters and the unit normal from the first to the
+    /// second (`None` where the axes meet).
+    Segments(f64, f64, Option<Vector3<f64>>),
+    /// Floor: the index (0 start, 1 end) of the capsule's lower end.
+    Floor(usize),
+}
+
+/// The candidates measured, in output column order: a capsule, what it is measured against and
+/// the radii to take off the axis distance.
 #[derive(Debug, Clone)]
-pub(super) struct SegmentGaps {
-    pairs: Arc<[(usize, Other)]>,
+pub(super) struct CapsuleGaps {
+    pairs: Arc<[(usize, Other, f64)]>,
 }
 
-impl SegmentGaps {
-    pub(super) fn new(pairs: Vec<(usize, Other)>) -> Self {
+impl CapsuleGaps {
+    pub(super) fn new(pairs: Vec<(usize, Other, f64)>) -> Self {
         Self { pairs: pairs.into() }
     }
 
-    /// `[B, pairs]` axis distances from the capsule ends `[B, capsules, 6]` (start, end).
+    /// `[B, candidates]` surface gaps from the capsule ends `[B, capsules, 6]` (start, end).
     pub(super) fn apply(&self, ends: &Tensor) -> candle_core::Result<Tensor> {
         on_cpu(&[ends], |t| t[0].apply_op1(self.clone()))
     }
 
-    /// The closest points' parameters and the unit normal of pair `p` of one sample's ends,
-    /// or `None` where the axes meet; with the distance.
-    fn measure(&self, ends: &[f64], p: usize) -> (f64, f64, Option<Vector3<f64>>, f64) {
+    /// Candidate `p`'s gap in one sample's ends, and how it moves with them.
+    fn measure(&self, ends: &[f64], p: usize) -> (f64, Slope) {
         let end = |capsule: usize, k: usize| {
             let at = capsule * 6 + 3 * k;
             Vector3::new(ends[at], ends[at + 1], ends[at + 2])
         };
-        let (capsule, other) = self.pairs[p];
+        let (capsule, other, radii) = self.pairs[p];
         let (p1, q1) = (end(capsule, 0), end(capsule, 1));
         let (p2, q2) = match other {
             Other::Capsule(j) => (end(j, 0), end(j, 1)),
             Other::Fixed(start, stop) => (start, stop),
+            Other::Floor(height) => {
+                // As `collide::capsule_floor` picks it.
+                let lower = usize::from(q1.z < p1.z);
+                return (p1.z.min(q1.z) - radii - height, Slope::Floor(lower));
+            }
         };
         let (s, t) = closest_parameters_of_segments(p1, q1, p2, q2);
         let between = (p2 + (q2 - p2) * t) - (p1 + (q1 - p1) * s);
         let distance = between.norm();
         let normal = (distance >= MEET_M).then(|| between / distance);
-        (s, t, normal, distance)
+        (distance - radii, Slope::Segments(s, t, normal))
     }
 }
 
@@ -93,13 +112,13 @@ fn values<'a>(storage: &'a CpuStorage, layout: &Layout, what: &str) -> candle_co
 fn ends_dims(layout: &Layout) -> candle_core::Result<(usize, usize)> {
     match layout.shape().dims() {
         &[samples, capsules, 6] => Ok((samples, capsules)),
-        dims => candle_core::bail!("segment gaps: capsule ends must be [samples, capsules, 6], got {dims:?}"),
+        dims => candle_core::bail!("capsule gaps: capsule ends must be [samples, capsules, 6], got {dims:?}"),
     }
 }
 
-impl CustomOp1 for SegmentGaps {
+impl CustomOp1 for CapsuleGaps {
     fn name(&self) -> &'static str {
-        "segment-gaps"
+        "capsule-gaps"
     }
 
     fn cpu_fwd(&self, storage: &CpuStorage, layout: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
@@ -108,23 +127,23 @@ impl CustomOp1 for SegmentGaps {
         let count = self.pairs.len();
         let mut out = Vec::with_capacity(samples * count);
         for sample in ends.chunks_exact(capsules * 6) {
-            out.extend((0..count).map(|p| self.measure(sample, p).3));
+            out.extend((0..count).map(|p| self.measure(sample, p).0));
         }
         Ok((CpuStorage::F64(out), Shape::from((samples, count))))
     }
 
     fn bwd(&self, ends: &Tensor, _res: &Tensor, grad: &Tensor) -> candle_core::Result<Option<Tensor>> {
-        let op = SegmentGapsGrad(self.clone());
+        let op = CapsuleGapsGrad(self.clone());
         on_cpu(&[ends, grad], |t| t[0].apply_op2_no_bwd(&t[1], &op)).map(Some)
     }
 }
 
-/// The backward kernel of [`SegmentGaps`]: `[B, capsules, 6]` from the ends and `[B, pairs]`.
-struct SegmentGapsGrad(SegmentGaps);
+/// The backward kernel of [`CapsuleGaps`]: `[B, capsules, 6]` from the ends and `[B, pairs]`.
+struct CapsuleGapsGrad(CapsuleGaps);
 
-impl CustomOp2 for SegmentGapsGrad {
+impl CustomOp2 for CapsuleGapsGrad {
     fn name(&self) -> &'static str {
-        "segment-gaps-grad"
+        "capsule-gaps-grad"
     }
 
     fn cpu_fwd(&self, s1: &CpuStorage, l1: &Layout, s2: &CpuStorage, l2: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
@@ -133,7 +152,7 @@ impl CustomOp2 for SegmentGapsGrad {
         let (samples, capsules) = ends_dims(l1)?;
         let count = self.0.pairs.len();
         if grad.len() != samples * count {
-            candle_core::bail!("segment gaps: {} gradients for {samples} x {count} pairs", grad.len())
+            candle_core::bail!("capsule gaps: {} gradients for {samples} x {count} pairs", grad.len())
         }
         let mut out = vec![0.0; ends.len()];
         let width = capsules * 6;
@@ -146,8 +165,14 @@ impl CustomOp2 for SegmentGapsGrad {
                 if g == 0.0 {
                     continue;
                 }
-                let (s, t, Some(normal), _) = self.0.measure(sample, p) else {
-                    continue;
+                let (capsule, other, _) = self.0.pairs[p];
+                let (s, t, normal) = match self.0.measure(sample, p).1 {
+                    Slope::Floor(lower) => {
+                        into[capsule * 6 + 3 * lower + 2] += g;
+                        continue;
+                    }
+                    Slope::Segments(_, _, None) => continue,
+                    Slope::Segments(s, t, Some(normal)) => (s, t, normal),
                 };
                 let mut add = |capsule: usize, k: usize, weight: f64| {
                     let at = capsule * 6 + 3 * k;
@@ -155,7 +180,6 @@ impl CustomOp2 for SegmentGapsGrad {
                         *slot += weight * n;
                     }
                 };
-                let (capsule, other) = self.0.pairs[p];
                 add(capsule, 0, -g * (1.0 - s));
                 add(capsule, 1, -g * s);
                 if let Other::Capsule(j) = other {
@@ -245,21 +269,27 @@ mod tests {
         let samples = 500;
         let fixed = (Vector3::new(0.1, 0.2, 0.3), Vector3::new(-0.4, 0.5, 0.2));
         let pairs = vec![
-            (0, Other::Capsule(1)),
-            (1, Other::Capsule(2)),
-            (0, Other::Capsule(2)),
-            (2, Other::Fixed(fixed.0, fixed.1)),
+            (0, Other::Capsule(1), 0.1),
+            (1, Other::Capsule(2), 0.1),
+            (0, Other::Capsule(2), 0.1),
+            (2, Other::Fixed(fixed.0, fixed.1), 0.07),
+            (0, Other::Floor(-0.3), 0.05),
         ];
         let ends = Var::from_tensor(&Tensor::from_vec(ends(&mut rng, samples), (samples, 3, 6), &Device::Cpu).unwrap()).unwrap();
-        let weights = Tensor::from_vec((0..samples * 4).map(|i| 1.0 + (i % 7) as f64).collect(), (samples, 4), &Device::Cpu).unwrap();
-        let fused = SegmentGaps::new(pairs.clone()).apply(ends.as_tensor()).unwrap();
+        let weights = Tensor::from_vec((0..samples * 5).map(|i| 1.0 + (i % 7) as f64).collect(), (samples, 5), &Device::Cpu).unwrap();
+        let fused = CapsuleGaps::new(pairs.clone()).apply(ends.as_tensor()).unwrap();
         let fused_grad = (&fused * &weights).unwrap().sum_all().unwrap().backward().unwrap();
         let fused_grad: Vec<f64> = fused_grad.get(ends.as_tensor()).unwrap().flatten_all().unwrap().to_vec1().unwrap();
 
         let capsule = |c: usize, k: usize| ends.as_tensor().narrow(1, c, 1).unwrap().narrow(2, 3 * k, 3).unwrap();
         let mut columns = Vec::new();
-        for &(c, other) in &pairs {
+        for &(c, other, radii) in &pairs {
             let (p2, q2) = match other {
+                Other::Floor(height) => {
+                    let z = |k: usize| capsule(c, k).narrow(2, 2, 1).unwrap().squeeze(2).unwrap();
+                    columns.push(((z(0).minimum(&z(1)).unwrap() - radii).unwrap() - height).unwrap());
+                    continue;
+                }
                 Other::Capsule(j) => (capsule(j, 0), capsule(j, 1)),
                 Other::Fixed(a, b) => {
                     let at = |v: Vector3<f64>| {
@@ -274,7 +304,7 @@ mod tests {
             let (a, b) = closest_points(&capsule(c, 0), &capsule(c, 1), &p2, &q2).unwrap();
             let between = ((b - a).unwrap().sqr().unwrap().sum(2).unwrap() + 1e-30).unwrap().sqrt().unwrap();
             let meet = between.detach().lt(MEET_M).unwrap();
-            columns.push(meet.where_cond(&between.detach(), &between).unwrap());
+            columns.push((meet.where_cond(&between.detach(), &between).unwrap() - radii).unwrap());
         }
         let composed = Tensor::cat(&columns, 1).unwrap();
         let composed_grad = (&composed * &weights).unwrap().sum_all().unwrap().backward().unwrap();
@@ -291,6 +321,7 @@ mod tests {
         for (i, (f, c)) in fused.iter().zip(&composed).enumerate() {
             assert!((f - c).abs() <= 1e-12, "distance {i}: fused {f} composed {c}");
         }
+        // The floor's capsule 0 has random ends, never at one height: no tie for candle to split.
         for (i, (f, c)) in fused_grad.iter().zip(&composed_grad).enumerate() {
             // Parallel axes that overlap have a line of closest pairs: the distance has a kink
             // there (tilting either axis moves the minimum to an end), and each version returns
