@@ -279,52 +279,40 @@ impl Graph {
         let frames: Vec<_> = batch.samples.iter().map(|s| &batch.designs[s.design]).collect();
         let alpha_cos = |k: usize| Tensor::from_vec(frames.iter().map(|f| f.alpha[k].cos()).collect::<Vec<_>>(), (count, 1), device);
         let alpha_sin = |k: usize| Tensor::from_vec(frames.iter().map(|f| f.alpha[k].sin()).collect::<Vec<_>>(), (count, 1), device);
-        let zeros = Tensor::zeros((count, 1), DType::F64, device)?;
-        let ones = Tensor::ones((count, 1), DType::F64, device)?;
 
-        // Forward kinematics, link frames 1..=n.
-        let mut rotation = matrices(
+        // Forward kinematics, link frames 1..=n, as rotation columns: a joint turns x and y
+        // about z, a twist turns y and z about x (a few [B, 3] operations each, where a 3 x 3
+        // product per joint made and differentiated [B, 3, 3, 3] tensors).
+        let base = matrices(
             device,
             &frames
                 .iter()
                 .map(|f| f.world_from_base.rotation.to_rotation_matrix().into_inner())
                 .collect::<Vec<_>>(),
         )?;
-        let mut origin = vectors(
-            device,
-            &frames.iter().map(|f| f.world_from_base.translation.vector).collect::<Vec<_>>(),
-        )?;
-        let mut links = vec![(rotation.clone(), origin.clone())];
+        let mut frame = Frame {
+            x: column(&base, 0)?,
+            y: column(&base, 1)?,
+            z: column(&base, 2)?,
+            origin: vectors(
+                device,
+                &frames.iter().map(|f| f.world_from_base.translation.vector).collect::<Vec<_>>(),
+            )?,
+        };
+        let mut links = vec![frame.clone()];
         let row = |t: &Var, k: usize| t.as_tensor().narrow(1, k, 1);
         for k in 0..n {
+            if k > 0 {
+                frame = frame
+                    .along(&row(&d, k - 1)?, &row(&a, k - 1)?)?
+                    .twist(&alpha_cos(k - 1)?, &alpha_sin(k - 1)?)?;
+            }
             let qk = q.as_tensor().narrow(1, k, 1)?;
-            let (c, s) = (qk.cos()?, qk.sin()?);
-            let factor = if k == 0 {
-                Tensor::cat(&[&c, &s.neg()?, &zeros, &s, &c, &zeros, &zeros, &zeros, &ones], 1)?
-            } else {
-                origin = (origin + column(&rotation, 0)?.broadcast_mul(&row(&a, k - 1)?)?)?;
-                origin = (origin + column(&rotation, 2)?.broadcast_mul(&row(&d, k - 1)?)?)?;
-                let (ca, sa) = (alpha_cos(k - 1)?, alpha_sin(k - 1)?);
-                Tensor::cat(
-                    &[
-                        &c,
-                        &s.neg()?,
-                        &zeros,
-                        &(&s * &ca)?,
-                        &(&c * &ca)?,
-                        &sa.neg()?,
-                        &(&s * &sa)?,
-                        &(&c * &sa)?,
-                        &ca,
-                    ],
-                    1,
-                )?
-            };
-            rotation = mat_mul(&rotation, &factor.reshape((count, 3, 3))?)?;
-            links.push((rotation.clone(), origin.clone()));
+            frame = frame.turn(&qk.cos()?, &qk.sin()?)?;
+            links.push(frame.clone());
         }
-        let last = (origin + column(&rotation, 0)?.broadcast_mul(&row(&a, n - 1)?)?)?;
-        let last = (last + column(&rotation, 2)?.broadcast_mul(&row(&d, n - 1)?)?)?;
+        let last = frame.along(&row(&d, n - 1)?, &row(&a, n - 1)?)?.origin;
+        let rotation = Tensor::stack(&[&frame.x, &frame.y, &frame.z], 2)?;
         let last_from_tool: Vec<_> = frames
             .iter()
             .map(|f| rot_x(f.alpha[n - 1]) * f.tool.rotation.to_rotation_matrix().into_inner())
@@ -372,47 +360,78 @@ impl Graph {
     }
 }
 
+/// A link frame in the world, `[B, 3]` each: the rotation's columns and the origin.
+#[derive(Clone)]
+struct Frame {
+    x: Tensor,
+    y: Tensor,
+    z: Tensor,
+    origin: Tensor,
+}
+
+impl Frame {
+    /// The frame turned by the angle of cosine `c` and sine `s` (`[B, 1]`) about its z axis.
+    fn turn(&self, c: &Tensor, s: &Tensor) -> candle_core::Result<Self> {
+        Ok(Self {
+            x: (self.x.broadcast_mul(c)? + self.y.broadcast_mul(s)?)?,
+            y: (self.y.broadcast_mul(c)? - self.x.broadcast_mul(s)?)?,
+            z: self.z.clone(),
+            origin: self.origin.clone(),
+        })
+    }
+
+    /// The frame turned by the angle of cosine `c` and sine `s` (`[B, 1]`) about its x axis.
+    fn twist(&self, c: &Tensor, s: &Tensor) -> candle_core::Result<Self> {
+        Ok(Self {
+            x: self.x.clone(),
+            y: (self.y.broadcast_mul(c)? + self.z.broadcast_mul(s)?)?,
+            z: (self.z.broadcast_mul(c)? - self.y.broadcast_mul(s)?)?,
+            origin: self.origin.clone(),
+        })
+    }
+
+    /// The frame moved by `d` along its z axis and `a` along its x axis (`[B, 1]`).
+    fn along(&self, d: &Tensor, a: &Tensor) -> candle_core::Result<Self> {
+        Ok(Self {
+            origin: ((&self.origin + self.x.broadcast_mul(a)?)? + self.z.broadcast_mul(d)?)?,
+            ..self.clone()
+        })
+    }
+}
+
 /// The collision cost per sample, `[B]`.
-fn collision(
-    batch: &Batch,
-    params: &Params,
-    device: &Device,
-    links: &[(Tensor, Tensor)],
-    d: &Var,
-    a: &Var,
-) -> Result<Tensor, OptimizeError> {
+fn collision(batch: &Batch, params: &Params, device: &Device, links: &[Frame], d: &Var, a: &Var) -> Result<Tensor, OptimizeError> {
     let count = batch.samples.len();
     let groups = Groups::of(batch);
     if batch.model.candidates.is_empty() || batch.model.pair_count == 0 {
         return Ok(Tensor::zeros(count, DType::F64, device)?);
     }
     // Capsule ends in the world, [B, K, 3].
-    let mut starts = Vec::new();
-    let mut ends = Vec::new();
+    let mut pieces = Vec::new();
     for &(link, kind) in &batch.capsules {
-        let (rotation, origin) = &links[link];
-        let z = column(rotation, 2)?.broadcast_mul(&d.as_tensor().narrow(1, link - 1, 1)?)?;
+        let Frame { x, z, origin, .. } = &links[link];
+        let z = z.broadcast_mul(&d.as_tensor().narrow(1, link - 1, 1)?)?;
         let (start, end) = match kind {
             CapsuleKind::D => (origin.clone(), (origin + &z)?),
             CapsuleKind::A => {
                 let start = (origin + &z)?;
-                let x = column(rotation, 0)?.broadcast_mul(&a.as_tensor().narrow(1, link - 1, 1)?)?;
+                let x = x.broadcast_mul(&a.as_tensor().narrow(1, link - 1, 1)?)?;
                 let end = (&start + x)?;
                 (start, end)
             }
             CapsuleKind::Point => (origin.clone(), origin.clone()),
         };
-        starts.push(start);
-        ends.push(end);
+        pieces.push(start);
+        pieces.push(end);
     }
-    let starts = Tensor::stack(&starts, 1)?;
-    let ends = Tensor::stack(&ends, 1)?;
+    // [B, K, 6]: each capsule's start and end.
+    let capsule_ends = Tensor::stack(&pieces, 1)?.reshape((count, batch.capsules.len(), 6))?;
     let indices = |values: Vec<u32>| Tensor::from_vec(values.clone(), values.len(), device);
     let mut columns = Vec::new();
 
     if !groups.closed.is_empty() {
         let gaps = CapsuleGaps::new(groups.closed.clone());
-        columns.push(gaps.apply(&Tensor::cat(&[&starts, &ends], 2)?)?);
+        columns.push(gaps.apply(&capsule_ends)?);
     }
     if !groups.shapes.is_empty() {
         // The plane through each measured witness: d0 - n . (c - c0), c the same point of the axis.
@@ -435,8 +454,8 @@ fn collision(
         }
         let m = groups.shapes.len();
         let ia = indices(groups.shapes.iter().map(|s| s.0 as u32).collect())?;
-        let p1 = starts.index_select(&ia, 1)?;
-        let q1 = ends.index_select(&ia, 1)?;
+        let chosen = capsule_ends.index_select(&ia, 1)?;
+        let (p1, q1) = (chosen.narrow(2, 0, 3)?, chosen.narrow(2, 3, 3)?);
         let along = Tensor::from_vec(along, (count, m, 1), device)?;
         let point = (&p1 + (q1 - &p1)?.broadcast_mul(&along)?)?;
         let offset = (point - Tensor::from_vec(centre, (count, m, 3), device)?)?;
