@@ -2,11 +2,12 @@
 //! starts), differentiated by candle's backward pass: DH forward kinematics, the pose distance
 //! per tolerance mode, the capsule model's collision cost, in f64.
 //!
-//! Every closed form mirrors the CPU path's (`collide::approximate_distances` and
-//! `frames::closest_points_of_segments`, branch by branch, as masks); boxes, cylinders and meshes
-//! enter as the plane through parry's witness (see [`super::problem::Witness`]). No matrix
-//! product or parallel reduction is used (products are broadcast multiplies summed over a
-//! dimension of 3, in order), so the numbers do not depend on the thread count.
+//! The closed-form gaps (capsule to capsule, rounded obstacle or floor) are one fused operation
+//! with its own backward kernel ([`super::gaps`]), the CPU path's closest points; boxes,
+//! cylinders and meshes enter as the plane through parry's witness (see
+//! [`super::problem::Witness`]). No matrix product or parallel reduction is used (products are
+//! broadcast multiplies summed over a dimension of 3, in order), so the numbers do not depend on
+//! the thread count.
 
 use super::gaps::{CapsuleGaps, Other};
 use super::problem::{forward, rot_x, shape_witnesses, Batch, CapsuleKind, Evaluation, Params};
@@ -27,9 +28,12 @@ pub(super) const MEET_M: f64 = 1e-9;
 /// Distance (m) of a pair without candidates: far beyond the collision threshold.
 const FAR_M: f64 = 1e3;
 
-/// Samples per graph on the CPU (see [`Tensors::with_chunk`]): batch 4096 took 568 ms in one graph,
-/// 389 ms in chunks of 1024, 400 ms of 256, 422 ms of 64 (`cargo bench --bench optimize`).
-const CPU_CHUNK: usize = 256;
+/// Samples per graph on the CPU (see [`Tensors::with_chunk`]): batch 4096 of a design with 117
+/// capsule candidates took 43 ms in chunks of 1024, 44 ms of 512, 47 ms of 256, 53 ms of 128
+/// (`cargo bench --bench optimize`). At 512 a `[samples, candidates]` tensor of that size stays
+/// under candle's threshold for its thread pool (64K elements), whose spinning barriers cost more
+/// than they gave on two cores.
+const CPU_CHUNK: usize = 512;
 
 /// The candle backend, on a device (CPU by default; a CUDA GPU with the `cuda` feature).
 #[derive(Debug, Clone)]
@@ -45,7 +49,7 @@ impl Default for Tensors {
 }
 
 impl Tensors {
-    /// The backend on `device`: on the CPU a batch is evaluated 1024 samples per graph, on a GPU
+    /// The backend on `device`: on the CPU a batch is evaluated 512 samples per graph, on a GPU
     /// whole.
     pub fn on(device: Device) -> Self {
         let chunk = if device.is_cpu() { CPU_CHUNK } else { usize::MAX };
