@@ -67,3 +67,4 @@ pub mod scenario;
 pub mod srdf;
 pub mod suite;
 pub mod sweep;
+pub mod xml;

@@ -23,6 +23,7 @@ use super::{check_chain, check_unique, ExportError};
 use crate::convex::ConvexPiece;
 use crate::frames::{wxyz, xyz};
 use crate::model::{Collider, JointKind, Model, Shape};
+use crate::xml::escape;
 use nalgebra::Isometry3;
 use std::sync::Arc;
 
@@ -471,22 +472,6 @@ fn line(out: &mut String, depth: usize, text: &str) {
     out.push('\n');
 }
 
-/// Escapes text for an XML attribute value.
-fn escape(text: &str) -> String {
-    let mut escaped = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => escaped.push_str("&amp;"),
-            '<' => escaped.push_str("&lt;"),
-            '>' => escaped.push_str("&gt;"),
-            '"' => escaped.push_str("&quot;"),
-            '\'' => escaped.push_str("&apos;"),
-            _ => escaped.push(c),
-        }
-    }
-    escaped
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -778,7 +763,6 @@ mod tests {
 
     #[test]
     fn names_are_escaped() {
-        assert_eq!(escape(r#"a&b<c>"d'"#), "a&amp;b&lt;c&gt;&quot;d&apos;");
         let mut model = modular_model();
         model.name = "arm \"A\" & <B>".into();
         let text = to_mjcf(&model, &MjcfOptions::default()).expect("exports");

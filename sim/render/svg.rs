@@ -14,23 +14,7 @@ pub(super) fn px(value: f64) -> String {
     }
 }
 
-/// Text for an SVG or HTML text node or attribute.
-pub(super) fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            // Control characters are not allowed in XML 1.0.
-            c if (c as u32) < 0x20 && c != '\n' && c != '\t' => out.push(' '),
-            c => out.push(c),
-        }
-    }
-    out
-}
+pub(super) use crate::xml::escape;
 
 /// A length in metres as millimetres with one decimal (`12.3 mm`).
 pub(super) fn mm(metres: f64) -> String {
@@ -64,10 +48,5 @@ mod tests {
         assert_eq!(px(-0.04), "0.0");
         assert_eq!(px(-2.0), "-2.0");
         assert_eq!(px(f64::NAN), "0.0");
-    }
-
-    #[test]
-    fn escape_makes_markup_text() {
-        assert_eq!(escape("a<b & \"c\"\u{1}"), "a&lt;b &amp; &quot;c&quot; ");
     }
 }
