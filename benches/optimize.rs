@@ -1,5 +1,6 @@
 //! The optimize stage: loss + gradient per sample on a batch of 4096 (candle tensors against
-//! the hand-written f64 gradient), and the whole fine-tuning of 8 goals x 4 starts x 200 steps.
+//! the hand-written f64 gradient), and the whole fine-tuning of 8 goals x 4 starts x 200 steps,
+//! for one design and for a batch of 8.
 
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
@@ -71,5 +72,34 @@ fn whole(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, per_sample, whole);
+/// The paper's batch: 8 robots tuned together (9.31 s on its GPU). Here 8 variants of the free
+/// 6-dof design, its non-zero `d` and `a` scaled by 0.85 .. 1.2, one dof count and capsule structure.
+fn eight_designs(c: &mut Criterion) {
+    let (design, scenario) = inputs();
+    let designs: Vec<_> = (0..8)
+        .map(|k| {
+            let factor = 0.85 + 0.05 * k as f64;
+            let mut variant = design.clone();
+            variant.name = format!("scaled-{factor:.2}");
+            for joint in &mut variant.joints {
+                joint.d *= factor;
+                joint.a *= factor;
+            }
+            variant
+        })
+        .collect();
+    let opts = OptimizeOptions::default();
+    let (batch, start) = optimize::starts_of(&designs, &scenario, &opts).expect("starts");
+    let mut group = c.benchmark_group("optimize/8 designs x 8 goals x 4 starts x 200 steps");
+    group.sample_size(10);
+    group.bench_function("candle tensors (cpu)", |b| {
+        b.iter(|| optimize::optimize(&mut Tensors::default(), &batch, &designs, start.clone(), &opts).expect("optimize"))
+    });
+    group.bench_function("hand-written f64", |b| {
+        b.iter(|| optimize::optimize(&mut Analytic, &batch, &designs, start.clone(), &opts).expect("optimize"))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, per_sample, whole, eight_designs);
 criterion_main!(benches);

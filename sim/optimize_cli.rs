@@ -79,7 +79,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         opts.steps,
         optimized.objective.0[0],
         optimized.objective.1[0],
-        optimized.best_step,
+        optimized.best_step[0],
         args.out.display()
     );
 

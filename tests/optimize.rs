@@ -357,3 +357,60 @@ fn chunked_evaluation_equals_one_graph_bit_for_bit() {
         assert_eq!(bits(&chunked), bits(&whole), "chunk {chunk}");
     }
 }
+
+/// `design` with every non-zero `d` and `a` scaled by `factor`, named `name`.
+fn scaled(design: &Design, factor: f64, name: &str) -> Design {
+    let mut out = design.clone();
+    out.name = name.into();
+    for joint in &mut out.joints {
+        joint.d *= factor;
+        joint.a *= factor;
+    }
+    out
+}
+
+#[test]
+fn designs_tuned_in_one_batch_end_as_each_alone() {
+    let scenario = scenario("scenarios/cluttered/task-03.json");
+    let first = design("free-offset-6dof.json");
+    let designs = [first.clone(), scaled(&first, 1.15, "longer"), scaled(&first, 0.9, "shorter")];
+    let opts = OptimizeOptions {
+        steps: 40,
+        ..Default::default()
+    };
+    let (batch, start) = optimize::starts_of(&designs, &scenario, &opts).expect("one batch");
+    let together = optimize::optimize(&mut Tensors::default(), &batch, &designs, start, &opts).expect("optimize");
+    let n = batch.dof;
+    for (index, design) in designs.iter().enumerate() {
+        let (alone_batch, alone_start) = optimize::starts(design, &scenario, &opts).expect("starts");
+        let alone = optimize::optimize(
+            &mut Tensors::default(),
+            &alone_batch,
+            std::slice::from_ref(design),
+            alone_start,
+            &opts,
+        )
+        .expect("optimize");
+        let (d, a) = batch.rows(&together.params, index);
+        assert_eq!((d, a), alone_batch.rows(&alone.params, 0), "{}: DH rows", design.name);
+        let rows: Vec<f64> = batch
+            .samples
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.design == index)
+            .flat_map(|(b, _)| together.params.q[b * n..(b + 1) * n].iter().copied())
+            .collect();
+        assert_eq!(rows, alone.params.q, "{}: joint positions", design.name);
+        assert_eq!(together.objective.0[index], alone.objective.0[0], "{}", design.name);
+        assert_eq!(together.objective.1[index], alone.objective.1[0], "{}", design.name);
+        assert_eq!(together.best_step[index], alone.best_step[0], "{}", design.name);
+        assert!(alone.objective.1[0] < alone.objective.0[0], "{}: the loss went down", design.name);
+    }
+    // Designs that cannot share a batch are refused with a reason, not mixed.
+    let mut elbow = design("economic-elbow.json");
+    elbow.name = "elbow".into();
+    let error = optimize::starts_of(&[first, elbow], &scenario, &opts)
+        .err()
+        .expect("a mixed batch is refused");
+    assert!(error.to_string().contains("`elbow` has another capsule structure"), "{error}");
+}

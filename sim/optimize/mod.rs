@@ -121,14 +121,14 @@ impl Adam {
 /// The result of [`optimize`].
 #[derive(Debug, Clone)]
 pub struct Optimized {
-    /// The best parameters seen.
+    /// Per design, the best parameters seen (its rows of `d`, `a` and its samples' `q`).
     pub params: Params,
     /// The objective at the start and at [`Optimized::params`], per design.
     pub objective: (Vec<f64>, Vec<f64>),
     /// The objective's evaluation at [`Optimized::params`].
     pub evaluation: Evaluation,
-    /// The step the best parameters come from (0: the start).
-    pub best_step: usize,
+    /// Per design, the step its best parameters come from (0: the start).
+    pub best_step: Vec<usize>,
 }
 
 /// Per design, `sum over goals of min over its starts (w_d d + w_col c_col) + w_c c_h`, and per
@@ -180,7 +180,13 @@ pub fn optimize(
     let mut params = start;
     let mut evaluation = objective.evaluate(batch, &params)?;
     let (initial, mut chosen) = design_objective(batch, &params, &evaluation);
-    let mut best = (params.clone(), initial.iter().sum::<f64>(), evaluation.clone(), 0);
+    // Each design keeps its own best iterate: designs share a batch, not a fate.
+    let mut best = Best {
+        params: params.clone(),
+        evaluation: evaluation.clone(),
+        objective: initial.clone(),
+        step: vec![0; designs.len()],
+    };
     for step in 1..=opts.steps {
         // The design's gradient: its goals' best starts, and the hardware cost.
         let mut grad_d = vec![0.0; params.d.len()];
@@ -207,19 +213,55 @@ pub fn optimize(
         evaluation = objective.evaluate(batch, &params)?;
         let (value, now_chosen) = design_objective(batch, &params, &evaluation);
         chosen = now_chosen;
-        let total: f64 = value.iter().sum();
-        if total < best.1 {
-            best = (params.clone(), total, evaluation.clone(), step);
+        best.keep(batch, &params, &evaluation, &value, step);
+    }
+    Ok(Optimized {
+        params: best.params,
+        objective: (initial, best.objective),
+        evaluation: best.evaluation,
+        best_step: best.step,
+    })
+}
+
+/// Per design, the best iterate so far.
+struct Best {
+    params: Params,
+    evaluation: Evaluation,
+    objective: Vec<f64>,
+    step: Vec<usize>,
+}
+
+impl Best {
+    /// Takes the rows of every design whose objective `value` beats its best.
+    fn keep(&mut self, batch: &Batch, params: &Params, evaluation: &Evaluation, value: &[f64], step: usize) {
+        let n = batch.dof;
+        for (design, &v) in value.iter().enumerate() {
+            if v >= self.objective[design] {
+                continue;
+            }
+            self.objective[design] = v;
+            self.step[design] = step;
+            let rows = design * n..(design + 1) * n;
+            self.params.d[rows.clone()].copy_from_slice(&params.d[rows.clone()]);
+            self.params.a[rows.clone()].copy_from_slice(&params.a[rows]);
+            for (b, sample) in batch.samples.iter().enumerate() {
+                if sample.design != design {
+                    continue;
+                }
+                let rows = b * n..(b + 1) * n;
+                self.params.q[rows.clone()].copy_from_slice(&params.q[rows.clone()]);
+                for (to, from) in [
+                    (&mut self.evaluation.grad_q, &evaluation.grad_q),
+                    (&mut self.evaluation.grad_d, &evaluation.grad_d),
+                    (&mut self.evaluation.grad_a, &evaluation.grad_a),
+                ] {
+                    to[rows.clone()].copy_from_slice(&from[rows.clone()]);
+                }
+                self.evaluation.distance[b] = evaluation.distance[b];
+                self.evaluation.collision[b] = evaluation.collision[b];
+            }
         }
     }
-    let (params, _, evaluation, best_step) = best;
-    let (last, _) = design_objective(batch, &params, &evaluation);
-    Ok(Optimized {
-        params,
-        objective: (initial, last),
-        evaluation,
-        best_step,
-    })
 }
 
 /// Joint positions into their limits; economic `d` into [0.1, 0.4] m and `|a|` into
@@ -252,30 +294,43 @@ fn project(batch: &Batch, designs: &[Design], params: &mut Params) {
 /// # Errors
 /// [`OptimizeError::Pipeline`] when the collision world cannot be built.
 pub fn starts(design: &Design, scenario: &Scenario, opts: &OptimizeOptions) -> Result<(Batch, Params), OptimizeError> {
-    let model = crate::model::from_design(design).placed(&scenario.world_from_base);
-    let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
-    let ik = crate::ik::IkOptions {
-        seed: opts.seed,
-        ..Default::default()
-    };
-    let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
+    starts_of(std::slice::from_ref(design), scenario, opts)
+}
+
+/// The starting batch of several designs of one dof count and capsule structure (the paper
+/// tunes its batch of generated robots together): each design's samples as [`starts`] makes
+/// them, design after design. Each design's samples and result are the same as alone.
+///
+/// # Errors
+/// [`OptimizeError::Batch`] for designs that cannot share a batch, [`OptimizeError::Pipeline`]
+/// when a collision world cannot be built.
+pub fn starts_of(designs: &[Design], scenario: &Scenario, opts: &OptimizeOptions) -> Result<(Batch, Params), OptimizeError> {
     let mut q = Vec::new();
     let mut samples = Vec::new();
-    for (goal, found) in solutions.iter().enumerate() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);
-        for k in 0..opts.seeds {
-            match found.solutions.get(k) {
-                Some(solution) => q.extend_from_slice(&solution.q),
-                None => q.extend(model.random_configuration(&mut rng)),
+    for (index, design) in designs.iter().enumerate() {
+        let model = crate::model::from_design(design).placed(&scenario.world_from_base);
+        let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
+        let ik = crate::ik::IkOptions {
+            seed: opts.seed,
+            ..Default::default()
+        };
+        let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
+        for (goal, found) in solutions.iter().enumerate() {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);
+            for k in 0..opts.seeds {
+                match found.solutions.get(k) {
+                    Some(solution) => q.extend_from_slice(&solution.q),
+                    None => q.extend(model.random_configuration(&mut rng)),
+                }
+                samples.push(Sample { design: index, goal });
             }
-            samples.push(Sample { design: 0, goal });
         }
     }
-    let batch = Batch::new(std::slice::from_ref(design), scenario, samples)?;
+    let batch = Batch::new(designs, scenario, samples)?;
     let params = Params {
         q,
-        d: design.joints.iter().map(|j| j.d).collect(),
-        a: design.joints.iter().map(|j| j.a).collect(),
+        d: designs.iter().flat_map(|d| d.joints.iter().map(|j| j.d)).collect(),
+        a: designs.iter().flat_map(|d| d.joints.iter().map(|j| j.a)).collect(),
     };
     Ok((batch, params))
 }
