@@ -1,23 +1,26 @@
 //! `validate-design optimize`: the command-line side of [`proving_ground::optimize`].
 
+use proving_ground::design::Design;
 use proving_ground::error::Error;
 use proving_ground::optimize::{self, OptimizeError, OptimizeOptions, Tensors};
 use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
 use proving_ground::report::{self, Report};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct OptimizeArgs {
-    /// The design JSON to fine-tune (free and economic: d, a and the joints; modular and
-    /// preset: the joints only).
-    #[arg(value_name = "DESIGN")]
-    design: PathBuf,
+    /// The design JSONs to fine-tune (free and economic: d, a and the joints; modular and
+    /// preset: the joints only). Designs of one dof count and capsule structure are tuned in one
+    /// batch, as the paper tunes its generated robots; each ends as it would alone.
+    #[arg(value_name = "DESIGN", required = true, num_args = 1..)]
+    designs: Vec<PathBuf>,
     /// The scenario whose goals and obstacles the objective uses.
     #[arg(long, value_name = "FILE")]
     scenario: PathBuf,
-    /// Where to write the tuned design (never over an input).
-    #[arg(long, value_name = "FILE")]
+    /// Where to write: for one design the tuned design's file; for several a folder that gets
+    /// `<input name>-tuned.json` per design (never over an input).
+    #[arg(long, value_name = "PATH")]
     out: PathBuf,
     /// Adam steps (the paper's 200).
     #[arg(long, value_name = "N", default_value_t = 200, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
@@ -33,18 +36,54 @@ pub(crate) struct OptimizeArgs {
     device: String,
 }
 
+/// One input design and what became of it.
+struct Tuning {
+    path: PathBuf,
+    loaded: pipeline::Loaded,
+    design: Design,
+    /// Written file name (several designs) or path (one).
+    out: PathBuf,
+    tuned: Option<Design>,
+    text: String,
+    summary: String,
+}
+
 pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
-    if pipeline::input_kind(&args.design)? != pipeline::InputKind::Design {
-        return Err(Error::from(OptimizeError::Input(format!(
-            "{}: optimize needs a design JSON (DH rows); a URDF or MJCF robot has no design parameters",
-            args.design.display()
-        ))));
-    }
     let names = args.engines.split(',').map(str::trim).filter(|s| !s.is_empty() && *s != "none");
     let engines = Engines::from_names(names)
         .map_err(|name| OptimizeError::Input(format!("--engines: `{name}` is not an engine; expected rapier, mujoco or none")))?;
-    let loaded = pipeline::load(&args.design, &LoadOptions::default())?;
-    let design = loaded.design.clone().expect("a design file gives a design");
+    let mut tunings = Vec::with_capacity(args.designs.len());
+    for path in &args.designs {
+        if pipeline::input_kind(path)? != pipeline::InputKind::Design {
+            return Err(Error::from(OptimizeError::Input(format!(
+                "{}: optimize needs a design JSON (DH rows); a URDF or MJCF robot has no design parameters",
+                path.display()
+            ))));
+        }
+        let loaded = pipeline::load(path, &LoadOptions::default())?;
+        let design = loaded
+            .design
+            .clone()
+            .ok_or_else(|| OptimizeError::Input(format!("{}: not a design", path.display())))?;
+        let out = out_path(args, path)?;
+        if tunings.iter().any(|t: &Tuning| t.out == out) {
+            return Err(Error::from(OptimizeError::Input(format!(
+                "{}: another input is also called `{}`; the tuned designs would share `{}`",
+                path.display(),
+                path.file_stem().unwrap_or_default().to_string_lossy(),
+                out.display()
+            ))));
+        }
+        tunings.push(Tuning {
+            path: path.clone(),
+            loaded,
+            design,
+            out,
+            tuned: None,
+            text: String::new(),
+            summary: String::new(),
+        });
+    }
     let scenario = pipeline::load_scenario(&args.scenario)?;
     let opts = OptimizeOptions {
         steps: usize::try_from(args.steps).unwrap_or(usize::MAX),
@@ -55,33 +94,58 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         "cuda" => Tensors::cuda(0)?,
         _ => Tensors::default(),
     };
-    let started = std::time::Instant::now();
-    let (batch, params) = optimize::starts(&design, &scenario, &opts)?;
-    let optimized = optimize::optimize(&mut objective, &batch, std::slice::from_ref(&design), params, &opts)?;
-    let elapsed = started.elapsed().as_secs_f64();
-    let name = format!("{}-tuned", design.name);
-    let tuned = optimize::tuned_design(&design, &batch, &optimized.params, 0, &name);
-    let description = format!(
-        "{} fine-tuned on scenario `{}` by validate-design optimize ({} Adam steps, seed {})",
-        design.name, scenario.name, opts.steps, opts.seed
-    );
-    let text = optimize::write::design_json(&tuned, &description);
-    // The file must read back to exactly the design optimized.
-    let back = proving_ground::design::parse(&text, &args.out)?;
-    if back.joints != tuned.joints {
-        return Err(OptimizeError::Input(format!("{}: the tuned design does not read back to itself", args.out.display())).into());
+    for group in batches(&tunings, &scenario) {
+        let designs: Vec<Design> = group.iter().map(|&i| tunings[i].design.clone()).collect();
+        let started = std::time::Instant::now();
+        let (batch, params) = optimize::starts_of(&designs, &scenario, &opts)?;
+        let optimized = optimize::optimize(&mut objective, &batch, &designs, params, &opts)?;
+        let elapsed = started.elapsed().as_secs_f64();
+        let together = if group.len() > 1 {
+            format!(" (one batch of {} designs)", group.len())
+        } else {
+            String::new()
+        };
+        for (index, &i) in group.iter().enumerate() {
+            let tuning = &mut tunings[i];
+            let design = &tuning.design;
+            let name = format!("{}-tuned", design.name);
+            let tuned = optimize::tuned_design(design, &batch, &optimized.params, index, &name);
+            let description = format!(
+                "{} fine-tuned on scenario `{}` by validate-design optimize ({} Adam steps, seed {})",
+                design.name, scenario.name, opts.steps, opts.seed
+            );
+            let text = optimize::write::design_json(&tuned, &description);
+            // The file must read back to exactly the design optimized.
+            let back = proving_ground::design::parse(&text, &tuning.out)?;
+            if back.joints != tuned.joints {
+                return Err(
+                    OptimizeError::Input(format!("{}: the tuned design does not read back to itself", tuning.out.display())).into(),
+                );
+            }
+            tuning.summary = format!(
+                "optimize {}: {} starts x {} goals, {} steps in {elapsed:.2} s{together}; objective {:.4} -> {:.4} (best at step {}); wrote {}",
+                tuning.path.display(),
+                opts.seeds,
+                scenario.goals.len(),
+                opts.steps,
+                optimized.objective.0[index],
+                optimized.objective.1[index],
+                optimized.best_step[index],
+                written(args, &tuning.out).display()
+            );
+            tuning.tuned = Some(back);
+            tuning.text = text;
+        }
     }
-    pipeline::write_output(&args.out, &text)?;
-    println!(
-        "optimize: {} starts x {} goals, {} steps in {elapsed:.2} s; objective {:.4} -> {:.4} (best at step {}); wrote {}",
-        opts.seeds,
-        scenario.goals.len(),
-        opts.steps,
-        optimized.objective.0[0],
-        optimized.objective.1[0],
-        optimized.best_step[0],
-        args.out.display()
-    );
+    if let [only] = tunings.as_slice() {
+        pipeline::write_output(&only.out, &only.text)?;
+    } else {
+        let files: Vec<(String, Vec<u8>)> = tunings
+            .iter()
+            .map(|t| (t.out.to_string_lossy().into_owned(), t.text.clone().into_bytes()))
+            .collect();
+        pipeline::write_files_into(&args.out, &files)?;
+    }
 
     let validate_options = ValidateOptions {
         ik: proving_ground::ik::IkOptions {
@@ -91,18 +155,60 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         engines,
         ..Default::default()
     };
-    let before = report::build(&pipeline::validate(loaded, scenario.clone(), &validate_options)?);
-    let after_loaded = pipeline::Loaded {
-        model: proving_ground::model::from_design(&back),
-        design: Some(back),
-    };
-    let after = report::build(&pipeline::validate(after_loaded, scenario, &validate_options)?);
-    print!("{}", side_by_side(&before, &after));
-    Ok(if after.verdict.passed {
-        ExitCode::SUCCESS
+    let mut all_pass = true;
+    for tuning in tunings {
+        println!("{}", tuning.summary);
+        let Some(back) = tuning.tuned else {
+            continue;
+        };
+        let before = report::build(&pipeline::validate(tuning.loaded, scenario.clone(), &validate_options)?);
+        let after_loaded = pipeline::Loaded {
+            model: proving_ground::model::from_design(&back),
+            design: Some(back),
+        };
+        let after = report::build(&pipeline::validate(after_loaded, scenario.clone(), &validate_options)?);
+        print!("{}", side_by_side(&before, &after));
+        all_pass &= after.verdict.passed;
+    }
+    Ok(if all_pass { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// Where the tuned design of `input` goes: `--out` itself for one design, its file name in the
+/// `--out` folder for several.
+fn out_path(args: &OptimizeArgs, input: &Path) -> Result<PathBuf, Error> {
+    if args.designs.len() == 1 {
+        return Ok(args.out.clone());
+    }
+    let stem = input
+        .file_stem()
+        .ok_or_else(|| OptimizeError::Input(format!("{}: no file name", input.display())))?;
+    Ok(PathBuf::from(format!("{}-tuned.json", stem.to_string_lossy())))
+}
+
+/// The path a tuned design is written to.
+fn written(args: &OptimizeArgs, out: &Path) -> PathBuf {
+    if args.designs.len() == 1 {
+        out.to_path_buf()
     } else {
-        ExitCode::from(1)
-    })
+        args.out.join(out)
+    }
+}
+
+/// The designs grouped into batches, in input order: a design joins the first batch whose
+/// designs it can share one with (dof count and capsule structure), else starts its own.
+fn batches(tunings: &[Tuning], scenario: &proving_ground::scenario::Scenario) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, tuning) in tunings.iter().enumerate() {
+        let joins = groups.iter_mut().find(|group| {
+            let first = &tunings[group[0]].design;
+            first.dof() == tuning.design.dof() && optimize::Batch::new(&[first.clone(), tuning.design.clone()], scenario, vec![]).is_ok()
+        });
+        match joins {
+            Some(group) => group.push(i),
+            None => groups.push(vec![i]),
+        }
+    }
+    groups
 }
 
 /// The two verdicts as a small table.

@@ -414,3 +414,42 @@ fn designs_tuned_in_one_batch_end_as_each_alone() {
         .expect("a mixed batch is refused");
     assert!(error.to_string().contains("`elbow` has another capsule structure"), "{error}");
 }
+
+#[test]
+fn several_designs_are_tuned_in_batches_into_one_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("tuned");
+    let designs = ["economic-elbow.json", "ur5e.json", "free-4dof-mounted.json"];
+    let run = |inputs: &[&str]| {
+        assert_cmd::Command::cargo_bin("validate-design")
+            .expect("binary")
+            .arg("optimize")
+            .args(inputs.iter().map(|name| common::repo().join("designs").join(name)))
+            .arg("--scenario")
+            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+            .args(["--steps", "5", "--engines", "none", "--out"])
+            .arg(&out)
+            .output()
+            .expect("runs")
+    };
+    let output = run(&designs);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        matches!(output.status.code(), Some(0 | 1)),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    for name in designs {
+        let stem = name.trim_end_matches(".json");
+        let tuned = design::load(&out.join(format!("{stem}-tuned.json"))).expect("a tuned design per input");
+        assert_eq!(tuned.name, format!("{}-tuned", design(name).name));
+    }
+    // The two 6-dof designs (one economic, one preset) have one capsule structure and share a
+    // batch; the 4-dof design has its own.
+    assert_eq!(stdout.matches("(one batch of 2 designs)").count(), 2, "{stdout}");
+    assert_eq!(stdout.matches("goals reached").count(), 3, "{stdout}");
+
+    let twice = run(&["free-offset-6dof.json", "free-offset-6dof.json"]);
+    assert_eq!(twice.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&twice.stderr).contains("another input is also called"));
+}
