@@ -236,7 +236,8 @@ impl Best {
     fn keep(&mut self, batch: &Batch, params: &Params, evaluation: &Evaluation, value: &[f64], step: usize) {
         let n = batch.dof;
         for (design, &v) in value.iter().enumerate() {
-            if v >= self.objective[design] {
+            // A NaN objective (a diverged step) never replaces a number.
+            if v.partial_cmp(&self.objective[design]) != Some(std::cmp::Ordering::Less) {
                 continue;
             }
             self.objective[design] = v;

@@ -3,7 +3,7 @@
 //! per tolerance mode, the capsule model's collision cost, in f64.
 //!
 //! The closed-form gaps (capsule to capsule, rounded obstacle or floor) are one fused operation
-//! with its own backward kernel ([`super::gaps`]), the CPU path's closest points; boxes,
+//! with its own backward kernel (`sim/optimize/gaps.rs`), the CPU path's closest points; boxes,
 //! cylinders and meshes enter as the plane through parry's witness (see
 //! [`super::problem::Witness`]). No matrix product or parallel reduction is used (products are
 //! broadcast multiplies summed over a dimension of 3, in order), so the numbers do not depend on
