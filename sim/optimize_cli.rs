@@ -91,6 +91,11 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         ..Default::default()
     };
     let mut objective = match args.device.as_str() {
+        "cuda" if !cfg!(feature = "cuda") => return Err(OptimizeError::Input(
+            "--device cuda: this build has no CUDA support; build with `cargo build --release --features cuda` (needs the CUDA toolkit)"
+                .into(),
+        )
+        .into()),
         "cuda" => Tensors::cuda(0)?,
         _ => Tensors::default(),
     };

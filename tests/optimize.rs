@@ -449,6 +449,23 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
     assert_eq!(stdout.matches("(one batch of 2 designs)").count(), 2, "{stdout}");
     assert_eq!(stdout.matches("goals reached").count(), 3, "{stdout}");
 
+    // Without the `cuda` feature, asking for the GPU says how to get one.
+    if !cfg!(feature = "cuda") {
+        let gpu = assert_cmd::Command::cargo_bin("validate-design")
+            .expect("binary")
+            .arg("optimize")
+            .arg(common::repo().join("designs/ur5e.json"))
+            .arg("--scenario")
+            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+            .args(["--device", "cuda", "--out"])
+            .arg(dir.path().join("gpu.json"))
+            .output()
+            .expect("runs");
+        assert_eq!(gpu.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&gpu.stderr).contains("--features cuda"));
+        assert!(!dir.path().join("gpu.json").exists());
+    }
+
     let twice = run(&["free-offset-6dof.json", "free-offset-6dof.json"]);
     assert_eq!(twice.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&twice.stderr).contains("another input is also called"));
