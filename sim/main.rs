@@ -341,9 +341,13 @@ impl proving_ground::progress::Progress for StageBar {
 fn main() -> ExitCode {
     // A file-size limit (`ulimit -f`) then fails the write with an error, which leaves the old
     // file intact and removes the temporary, instead of killing the process mid-write.
-    // SAFETY: setting a signal to SIG_IGN has no handler to run and happens before any thread.
+    // Rust ignores SIGPIPE, so printing into a closed pipe (`| head`) would panic; the default
+    // ends the process quietly, as other Unix tools do.
+    // SAFETY: setting a signal to SIG_IGN or SIG_DFL has no handler to run and happens before
+    // any thread.
     unsafe {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
     let result = match &cli.command {

@@ -18,8 +18,9 @@ pub(crate) struct OptimizeArgs {
     /// The scenario whose goals and obstacles the objective uses.
     #[arg(long, value_name = "FILE")]
     scenario: PathBuf,
-    /// Where to write: for one design the tuned design's file; for several a folder that gets
-    /// `<input name>-tuned.json` per design (never over an input).
+    /// Where to write: a folder (several designs, an existing folder, or a path ending in `/`)
+    /// gets `<input name>-tuned.json` per design; otherwise the tuned design's file. Never over
+    /// an input.
     #[arg(long, value_name = "PATH")]
     out: PathBuf,
     /// Adam steps (the paper's 200).
@@ -41,7 +42,7 @@ struct Tuning {
     path: PathBuf,
     loaded: pipeline::Loaded,
     design: Design,
-    /// Written file name (several designs) or path (one).
+    /// Where its tuned design is written.
     out: PathBuf,
     tuned: Option<Design>,
     text: String,
@@ -66,7 +67,9 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
             .clone()
             .ok_or_else(|| OptimizeError::Input(format!("{}: not a design", path.display())))?;
         let out = out_path(args, path)?;
-        if tunings.iter().any(|t: &Tuning| t.out == out) {
+        // Compared without case: on a case-insensitive file system `A` and `a` are one file.
+        let same = |t: &Tuning| t.out.to_string_lossy().to_lowercase() == out.to_string_lossy().to_lowercase();
+        if tunings.iter().any(same) {
             return Err(Error::from(OptimizeError::Input(format!(
                 "{}: another input is also called `{}`; the tuned designs would share `{}`",
                 path.display(),
@@ -85,6 +88,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         });
     }
     let scenario = pipeline::load_scenario(&args.scenario)?;
+    check_targets(args, &tunings)?;
     let opts = OptimizeOptions {
         steps: usize::try_from(args.steps).unwrap_or(usize::MAX),
         seed: args.seed,
@@ -136,20 +140,25 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
                 optimized.objective.0[index],
                 optimized.objective.1[index],
                 optimized.best_step[index],
-                written(args, &tuning.out).display()
+                tuning.out.display()
             );
             tuning.tuned = Some(back);
             tuning.text = text;
         }
     }
-    if let [only] = tunings.as_slice() {
-        pipeline::write_output(&only.out, &only.text)?;
-    } else {
+    if into_folder(args) {
         let files: Vec<(String, Vec<u8>)> = tunings
             .iter()
-            .map(|t| (t.out.to_string_lossy().into_owned(), t.text.clone().into_bytes()))
+            .map(|t| {
+                let name = t.out.file_name().unwrap_or_default().to_string_lossy().into_owned();
+                (name, t.text.clone().into_bytes())
+            })
             .collect();
         pipeline::write_files_into(&args.out, &files)?;
+    } else {
+        for tuning in &tunings {
+            pipeline::write_output(&tuning.out, &tuning.text)?;
+        }
     }
 
     let validate_options = ValidateOptions {
@@ -178,25 +187,42 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
     Ok(if all_pass { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
-/// Where the tuned design of `input` goes: `--out` itself for one design, its file name in the
-/// `--out` folder for several.
+/// Whether `--out` names a folder: several designs, an existing folder, or a trailing `/`.
+fn into_folder(args: &OptimizeArgs) -> bool {
+    args.designs.len() > 1 || args.out.is_dir() || args.out.as_os_str().to_string_lossy().ends_with(std::path::MAIN_SEPARATOR)
+}
+
+/// Where the tuned design of `input` goes: `--out` itself, or `<input name>-tuned.json` in the
+/// `--out` folder.
 fn out_path(args: &OptimizeArgs, input: &Path) -> Result<PathBuf, Error> {
-    if args.designs.len() == 1 {
+    if !into_folder(args) {
         return Ok(args.out.clone());
     }
     let stem = input
         .file_stem()
         .ok_or_else(|| OptimizeError::Input(format!("{}: no file name", input.display())))?;
-    Ok(PathBuf::from(format!("{}-tuned.json", stem.to_string_lossy())))
+    Ok(args.out.join(format!("{}-tuned.json", stem.to_string_lossy())))
 }
 
-/// The path a tuned design is written to.
-fn written(args: &OptimizeArgs, out: &Path) -> PathBuf {
-    if args.designs.len() == 1 {
-        out.to_path_buf()
-    } else {
-        args.out.join(out)
+/// Refuses, before any work, what the writes at the end would refuse: a folder `--out` that is
+/// a file, a file `--out` that is a folder, a target that this run read.
+fn check_targets(args: &OptimizeArgs, tunings: &[Tuning]) -> Result<(), Error> {
+    if into_folder(args) && args.out.exists() && !args.out.is_dir() {
+        return Err(OptimizeError::Input(format!(
+            "--out {}: exists and is not a folder; several tuned designs need a folder",
+            args.out.display()
+        ))
+        .into());
     }
+    for tuning in tunings {
+        if tuning.out.is_dir() {
+            return Err(OptimizeError::Input(format!("--out {}: a folder is there, expected a file name", tuning.out.display())).into());
+        }
+        if proving_ground::files::is_input(&tuning.out) {
+            return Err(Error::WouldOverwriteInput { path: tuning.out.clone() });
+        }
+    }
+    Ok(())
 }
 
 /// The designs grouped into batches, in input order: a design joins the first batch whose

@@ -404,8 +404,23 @@ fn designs_tuned_in_one_batch_end_as_each_alone() {
         assert_eq!(together.objective.0[index], alone.objective.0[0], "{}", design.name);
         assert_eq!(together.objective.1[index], alone.objective.1[0], "{}", design.name);
         assert_eq!(together.best_step[index], alone.best_step[0], "{}", design.name);
+        let mine: Vec<usize> = (0..batch.samples.len()).filter(|&b| batch.samples[b].design == index).collect();
+        let pick =
+            |values: &[f64], width: usize| -> Vec<f64> { mine.iter().flat_map(|&b| values[b * width..(b + 1) * width].to_vec()).collect() };
+        let (t, a) = (&together.evaluation, &alone.evaluation);
+        assert_eq!(pick(&t.distance, 1), a.distance, "{}: distances at the best iterate", design.name);
+        assert_eq!(pick(&t.collision, 1), a.collision, "{}", design.name);
+        assert_eq!(pick(&t.grad_q, n), a.grad_q, "{}", design.name);
+        assert_eq!(pick(&t.grad_d, n), a.grad_d, "{}", design.name);
         assert!(alone.objective.1[0] < alone.objective.0[0], "{}: the loss went down", design.name);
     }
+    // The designs' best iterates come from different steps: one best for the whole batch would
+    // have taken some design's rows from a step that is not its best.
+    assert!(
+        together.best_step.iter().any(|&s| s != together.best_step[0]),
+        "{:?}",
+        together.best_step
+    );
     // Designs that cannot share a batch are refused with a reason, not mixed.
     let mut elbow = design("economic-elbow.json");
     elbow.name = "elbow".into();
@@ -469,4 +484,84 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
     let twice = run(&["free-offset-6dof.json", "free-offset-6dof.json"]);
     assert_eq!(twice.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&twice.stderr).contains("another input is also called"));
+}
+
+/// `validate-design optimize` with `inputs` (paths) and `--out out`, 3 steps, no engines.
+fn optimize_cli(inputs: &[&std::path::Path], out: &std::path::Path) -> std::process::Output {
+    assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary")
+        .arg("optimize")
+        .args(inputs)
+        .arg("--scenario")
+        .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+        .args(["--steps", "3", "--engines", "none", "--out"])
+        .arg(out)
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn optimize_output_paths_are_checked_before_any_work() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let ur5e = common::repo().join("designs/ur5e.json");
+    let ur20 = common::repo().join("designs/ur20.json");
+    let stderr = |o: &std::process::Output| String::from_utf8_lossy(&o.stderr).into_owned();
+
+    // One design into an existing folder: the folder gets `<input>-tuned.json`.
+    let folder = dir.path().join("existing");
+    std::fs::create_dir(&folder).expect("folder");
+    let one = optimize_cli(&[&ur5e], &folder);
+    assert!(matches!(one.status.code(), Some(0 | 1)), "{}", stderr(&one));
+    assert!(folder.join("ur5e-tuned.json").is_file());
+
+    // Several designs and `--out` an existing file: refused, the file untouched.
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "keep").expect("file");
+    let refused = optimize_cli(&[&ur5e, &ur20], &file);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("is not a folder"), "{}", stderr(&refused));
+    assert_eq!(std::fs::read_to_string(&file).expect("read"), "keep");
+
+    // A target that is one of the inputs: refused before anything is written.
+    let inputs = dir.path().join("inputs");
+    std::fs::create_dir(&inputs).expect("folder");
+    let x = inputs.join("x.json");
+    let x_tuned = inputs.join("x-tuned.json");
+    std::fs::copy(&ur5e, &x).expect("copy");
+    std::fs::copy(&ur20, &x_tuned).expect("copy");
+    let clash = optimize_cli(&[&x_tuned, &x], &inputs);
+    assert_eq!(clash.status.code(), Some(2));
+    assert!(stderr(&clash).contains("refusing to write"), "{}", stderr(&clash));
+    assert!(!inputs.join("x-tuned-tuned.json").exists(), "nothing written");
+    assert_eq!(std::fs::read(&x_tuned).expect("read"), std::fs::read(&ur20).expect("read"));
+
+    // Names that differ only in case would be one file on a case-insensitive file system.
+    let upper = dir.path().join("UR5E.json");
+    std::fs::copy(&ur5e, &upper).expect("copy");
+    let cased = optimize_cli(&[&ur5e, &upper], &dir.path().join("cased"));
+    assert_eq!(cased.status.code(), Some(2));
+    assert!(stderr(&cased).contains("another input is also called"), "{}", stderr(&cased));
+}
+
+#[test]
+fn a_closed_output_pipe_ends_the_run_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("validate-design"))
+        .arg("optimize")
+        .arg(common::repo().join("designs/ur5e.json"))
+        .arg("--scenario")
+        .arg(common::repo().join("scenarios/cluttered/task-03.json"))
+        .args(["--steps", "3", "--engines", "none", "--out"])
+        .arg(dir.path().join("t.json"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("starts");
+    // The reader goes away before the first line is printed (IK and tuning come first).
+    drop(child.stdout.take());
+    let output = child.wait_with_output().expect("ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(output.status.signal(), Some(libc::SIGPIPE), "{:?} {stderr}", output.status);
 }

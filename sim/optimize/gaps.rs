@@ -203,10 +203,8 @@ mod tests {
         (a * b)?.sum(a.rank() - 1)
     }
 
-    /// The closest points written as candle ops, branch by branch as masks (the version the
-    /// fused operation replaced), differentiated by candle.
-    /// The closest points of segment pairs `[p1, q1]`, `[p2, q2]` (`[B, C, 3]` each), branch by
-    /// branch as `frames::closest_points_of_segments`.
+    /// The closest points of segment pairs `[p1, q1]`, `[p2, q2]` (`[B, C, 3]` each) written as
+    /// candle ops, branch by branch as masks (the version the fused operation replaced).
     fn closest_points(p1: &Tensor, q1: &Tensor, p2: &Tensor, q2: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
         let (d1, d2, r) = ((q1 - p1)?, (q2 - p2)?, (p1 - p2)?);
         let (a, e, f) = (dot(&d1, &d1)?, dot(&d2, &d2)?, dot(&d2, &r)?);

@@ -236,8 +236,10 @@ impl Best {
     fn keep(&mut self, batch: &Batch, params: &Params, evaluation: &Evaluation, value: &[f64], step: usize) {
         let n = batch.dof;
         for (design, &v) in value.iter().enumerate() {
-            // A NaN objective (a diverged step) never replaces a number.
-            if v.partial_cmp(&self.objective[design]) != Some(std::cmp::Ordering::Less) {
+            // A NaN objective (a diverged step) never replaces a number; a number replaces a NaN.
+            let kept = self.objective[design];
+            let better = v < kept || (kept.is_nan() && !v.is_nan());
+            if !better {
                 continue;
             }
             self.objective[design] = v;

@@ -14,7 +14,7 @@ pub(super) fn px(value: f64) -> String {
     }
 }
 
-pub(super) use crate::xml::escape;
+pub(super) use crate::xml::escape_text as escape;
 
 /// A length in metres as millimetres with one decimal (`12.3 mm`).
 pub(super) fn mm(metres: f64) -> String {
