@@ -302,16 +302,7 @@ fn the_optimize_command_writes_a_tuned_design_and_never_over_an_input() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("tuned.json");
     let design_path = common::repo().join("designs/free-offset-6dof.json");
-    let run = |out: &std::path::Path| {
-        assert_cmd::Command::cargo_bin("validate-design")
-            .expect("binary")
-            .args(["optimize", design_path.to_str().expect("utf-8"), "--scenario"])
-            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
-            .args(["--steps", "5", "--engines", "none", "--out"])
-            .arg(out)
-            .output()
-            .expect("runs")
-    };
+    let run = |out: &std::path::Path| optimize_cli(&[&design_path], &["--steps", "5", "--engines", "none"], out);
     let output = run(&out);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(
@@ -436,16 +427,9 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
     let out = dir.path().join("tuned");
     let designs = ["economic-elbow.json", "ur5e.json", "free-4dof-mounted.json"];
     let run = |inputs: &[&str]| {
-        assert_cmd::Command::cargo_bin("validate-design")
-            .expect("binary")
-            .arg("optimize")
-            .args(inputs.iter().map(|name| common::repo().join("designs").join(name)))
-            .arg("--scenario")
-            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
-            .args(["--steps", "5", "--engines", "none", "--out"])
-            .arg(&out)
-            .output()
-            .expect("runs")
+        let paths: Vec<_> = inputs.iter().map(|name| common::repo().join("designs").join(name)).collect();
+        let paths: Vec<&std::path::Path> = paths.iter().map(|p| p.as_path()).collect();
+        optimize_cli(&paths, &["--steps", "5", "--engines", "none"], &out)
     };
     let output = run(&designs);
     let stdout = String::from_utf8_lossy(&output.stdout);
@@ -466,16 +450,11 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
 
     // Without the `cuda` feature, asking for the GPU says how to get one.
     if !cfg!(feature = "cuda") {
-        let gpu = assert_cmd::Command::cargo_bin("validate-design")
-            .expect("binary")
-            .arg("optimize")
-            .arg(common::repo().join("designs/ur5e.json"))
-            .arg("--scenario")
-            .arg(common::repo().join("scenarios/cluttered/task-03.json"))
-            .args(["--device", "cuda", "--out"])
-            .arg(dir.path().join("gpu.json"))
-            .output()
-            .expect("runs");
+        let gpu = optimize_cli(
+            &[&common::repo().join("designs/ur5e.json")],
+            &["--device", "cuda"],
+            &dir.path().join("gpu.json"),
+        );
         assert_eq!(gpu.status.code(), Some(2));
         assert!(String::from_utf8_lossy(&gpu.stderr).contains("--features cuda"));
         assert!(!dir.path().join("gpu.json").exists());
@@ -486,19 +465,23 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
     assert!(String::from_utf8_lossy(&twice.stderr).contains("another input is also called"));
 }
 
-/// `validate-design optimize` with `inputs` (paths) and `--out out`, 3 steps, no engines.
-fn optimize_cli(inputs: &[&std::path::Path], out: &std::path::Path) -> std::process::Output {
+/// `validate-design optimize` with `inputs` on cluttered task 03, `options`, and `--out out`.
+fn optimize_cli(inputs: &[&std::path::Path], options: &[&str], out: &std::path::Path) -> std::process::Output {
     assert_cmd::Command::cargo_bin("validate-design")
         .expect("binary")
         .arg("optimize")
         .args(inputs)
         .arg("--scenario")
         .arg(common::repo().join("scenarios/cluttered/task-03.json"))
-        .args(["--steps", "3", "--engines", "none", "--out"])
+        .args(options)
+        .arg("--out")
         .arg(out)
         .output()
         .expect("runs")
 }
+
+/// Three steps, no engines: enough to write a tuned design.
+const QUICK: &[&str] = &["--steps", "3", "--engines", "none"];
 
 #[test]
 fn optimize_output_paths_are_checked_before_any_work() {
@@ -510,14 +493,14 @@ fn optimize_output_paths_are_checked_before_any_work() {
     // One design into an existing folder: the folder gets `<input>-tuned.json`.
     let folder = dir.path().join("existing");
     std::fs::create_dir(&folder).expect("folder");
-    let one = optimize_cli(&[&ur5e], &folder);
+    let one = optimize_cli(&[&ur5e], QUICK, &folder);
     assert!(matches!(one.status.code(), Some(0 | 1)), "{}", stderr(&one));
     assert!(folder.join("ur5e-tuned.json").is_file());
 
     // Several designs and `--out` an existing file: refused, the file untouched.
     let file = dir.path().join("a-file");
     std::fs::write(&file, "keep").expect("file");
-    let refused = optimize_cli(&[&ur5e, &ur20], &file);
+    let refused = optimize_cli(&[&ur5e, &ur20], QUICK, &file);
     assert_eq!(refused.status.code(), Some(2));
     assert!(stderr(&refused).contains("is not a folder"), "{}", stderr(&refused));
     assert_eq!(std::fs::read_to_string(&file).expect("read"), "keep");
@@ -529,7 +512,7 @@ fn optimize_output_paths_are_checked_before_any_work() {
     let x_tuned = inputs.join("x-tuned.json");
     std::fs::copy(&ur5e, &x).expect("copy");
     std::fs::copy(&ur20, &x_tuned).expect("copy");
-    let clash = optimize_cli(&[&x_tuned, &x], &inputs);
+    let clash = optimize_cli(&[&x_tuned, &x], QUICK, &inputs);
     assert_eq!(clash.status.code(), Some(2));
     assert!(stderr(&clash).contains("refusing to write"), "{}", stderr(&clash));
     assert!(!inputs.join("x-tuned-tuned.json").exists(), "nothing written");
@@ -538,7 +521,7 @@ fn optimize_output_paths_are_checked_before_any_work() {
     // Names that differ only in case would be one file on a case-insensitive file system.
     let upper = dir.path().join("UR5E.json");
     std::fs::copy(&ur5e, &upper).expect("copy");
-    let cased = optimize_cli(&[&ur5e, &upper], &dir.path().join("cased"));
+    let cased = optimize_cli(&[&ur5e, &upper], QUICK, &dir.path().join("cased"));
     assert_eq!(cased.status.code(), Some(2));
     assert!(stderr(&cased).contains("another input is also called"), "{}", stderr(&cased));
 }

@@ -308,15 +308,15 @@ pub fn starts(design: &Design, scenario: &Scenario, opts: &OptimizeOptions) -> R
 /// [`OptimizeError::Batch`] for designs that cannot share a batch, [`OptimizeError::Pipeline`]
 /// when a collision world cannot be built.
 pub fn starts_of(designs: &[Design], scenario: &Scenario, opts: &OptimizeOptions) -> Result<(Batch, Params), OptimizeError> {
+    let ik = crate::ik::IkOptions {
+        seed: opts.seed,
+        ..Default::default()
+    };
     let mut q = Vec::new();
     let mut samples = Vec::new();
     for (index, design) in designs.iter().enumerate() {
         let model = crate::model::from_design(design).placed(&scenario.world_from_base);
         let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
-        let ik = crate::ik::IkOptions {
-            seed: opts.seed,
-            ..Default::default()
-        };
         let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
         for (goal, found) in solutions.iter().enumerate() {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);

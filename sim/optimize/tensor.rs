@@ -243,7 +243,7 @@ impl Groups {
         let mut shapes = vec![];
         let mut kinds = Vec::new();
         for (index, &(_, capsule, other)) in batch.model.candidates.iter().enumerate() {
-            let other = match other {
+            let (other, radii) = match other {
                 CapsuleOther::Capsule(j) => (Other::Capsule(j), r + r),
                 CapsuleOther::Rounded { start, end, radius } => (Other::Fixed(start, end), r + radius),
                 CapsuleOther::Floor(height) => (Other::Floor(height), r),
@@ -254,7 +254,7 @@ impl Groups {
                 }
             };
             kinds.push((0, closed.len()));
-            closed.push((capsule, other.0, other.1));
+            closed.push((capsule, other, radii));
         }
         let offsets = [0, closed.len()];
         let column = kinds.iter().map(|&(kind, i)| offsets[kind] + i).collect();
