@@ -4,6 +4,7 @@
 //! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
 pub mod analytic;
+pub mod general;
 mod branches;
 mod dls;
 mod error;
@@ -20,7 +21,9 @@ pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 use crate::collide::CollisionWorld;
 use crate::model::{JointKind, KinematicsWorkspace, Model};
 use crate::scenario::{Goal, Scenario, Tolerance};
+use crate::collide::MotionBounds;
 use analytic::{AnalyticSolutions, UrArm};
+use general::General6R;
 use dls::{Convergence, Solver};
 use nalgebra::{Isometry3, Matrix6, Translation3};
 use rand::SeedableRng;
@@ -110,6 +113,11 @@ pub struct GoalSolutions {
     /// Why no configuration reaches the goal, when the complete set proves it: out of reach, none
     /// within the joint limits, or every solution in collision. `None` otherwise.
     pub proof: Option<String>,
+    /// Why a goal whose solutions are all known and none reached is still not proven
+    /// unreachable: a solution whose tolerance neighbourhood may hold a free configuration
+    /// within the limits, or a pose whose solutions are not isolated. `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub undecided: Option<String>,
 }
 
 impl GoalSolutions {
@@ -128,6 +136,10 @@ pub struct Ik<'a> {
     opts: IkOptions,
     /// The closed form, when the model is a UR-type arm.
     analytic: Option<UrArm>,
+    /// Every solution of any other 6R arm, when the elimination holds for its geometry.
+    general: Option<General6R>,
+    /// How far the links can move per joint turn, for certificates against the tolerance.
+    bounds: MotionBounds,
     ws: KinematicsWorkspace,
 }
 
@@ -148,9 +160,12 @@ impl<'a> Ik<'a> {
             solver: Solver::new(model),
             checker: None,
             analytic: UrArm::detect(model),
+            general: None,
+            bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
         }
+        .with_general()
     }
 
     /// A solver for `model` in a collision world built for the same model: solutions are checked
@@ -161,9 +176,26 @@ impl<'a> Ik<'a> {
             solver: Solver::new(model),
             checker: Some(Checker::new(model, world)),
             analytic: UrArm::detect(model),
+            general: None,
+            bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
         }
+        .with_general()
+    }
+
+    /// The general 6R solver where no closed form applies.
+    fn with_general(mut self) -> Self {
+        if self.analytic.is_none() {
+            self.general = General6R::new(self.model);
+        }
+        self
+    }
+
+    /// The general 6R solver, when the model is a 6R arm without a closed form and the
+    /// elimination holds for its geometry.
+    pub fn general(&self) -> Option<&General6R> {
+        self.general.as_ref()
     }
 
     /// The closed-form parametrisation, when the model is a UR-type arm.
@@ -181,9 +213,17 @@ impl<'a> Ik<'a> {
     /// `z_symmetric` goals: those of the goal's own rotation).
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
         let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
-        let exact = match (&self.analytic, goal.tolerance) {
-            (Some(arm), Tolerance::Pose | Tolerance::ZSymmetric) if self.opts.analytic && finite => {
-                arm.solve(&Isometry3::from_parts(Translation3::from(goal.position), goal.rotation))
+        let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
+        let all_solutions = self.opts.analytic && finite && matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric);
+        let exact = match (&self.analytic, &self.general) {
+            (Some(arm), _) if all_solutions => arm.solve(&pose),
+            (None, Some(general)) if all_solutions => {
+                let found = general.solve(&pose);
+                AnalyticSolutions {
+                    configurations: found.configurations,
+                    finite: found.resolved,
+                    out_of_reach: None,
+                }
             }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
         };
@@ -196,6 +236,12 @@ impl<'a> Ik<'a> {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
         let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+        if !exact.finite && !result.reached() {
+            result.undecided = Some(format!(
+                "{}: the pose's solutions are not isolated (a singular pose), so they cannot all be listed",
+                self.method()
+            ));
+        }
         if let Some(proof) = exact.out_of_reach {
             // Proven beyond the tolerance: no start can have reached it.
             result.complete = !result.solutions.iter().any(|s| s.pose_reached);
@@ -207,6 +253,12 @@ impl<'a> Ik<'a> {
     /// The closed form's solutions, polished, moved into the limits and judged; exact solutions
     /// no whole turn brings within the limits start the numeric solver from their clamped
     /// configuration (a configuration at the limit may still be within the tolerance).
+    ///
+    /// A goal none of whose solutions is reached is proven unreachable only when each one is
+    /// certified against the goal's tolerance: the configurations within 1 mm and 1 degree of a
+    /// solution are within `dq` of it (the inverse Jacobian, doubled for the curvature), and a
+    /// solution counts only when its closest pair overlaps by more than the links can move over
+    /// `dq`, or a joint lies further outside its limits than `dq`.
     fn solve_closed_form(
         &mut self,
         goal: &Goal,
@@ -220,6 +272,8 @@ impl<'a> Ik<'a> {
         let mut distinct: Vec<Vec<f64>> = Vec::with_capacity(exact.configurations.len());
         let mut found: Vec<IkSolution> = Vec::with_capacity(exact.configurations.len());
         let mut outside: Vec<Vec<f64>> = Vec::new();
+        let mut collisions: Vec<String> = Vec::new();
+        let mut open: Vec<String> = Vec::new();
         for configuration in &exact.configurations {
             let mut q = configuration.to_vec();
             let (steps, size, error) = self.polish(goal, &mut q);
@@ -231,8 +285,18 @@ impl<'a> Ik<'a> {
             distinct.push(q.clone());
             if self.shift_into_limits(&mut q, first_seed) {
                 // The error at the whole-turn equivalent differs by rounding only.
-                found.push(self.judge(goal, q, Some(error), margin));
+                let solution = self.judge(goal, q, Some(error), margin);
+                if solution.pose_reached && !solution.reached {
+                    match self.collision_certificate(&solution, margin) {
+                        Ok(pair) => collisions.push(pair),
+                        Err(why) => open.push(why),
+                    }
+                }
+                found.push(solution);
             } else {
+                if let Err(why) = self.limits_certificate(&q) {
+                    open.push(why);
+                }
                 outside.push(q);
             }
         }
@@ -267,7 +331,9 @@ impl<'a> Ik<'a> {
             found.extend(closest);
         }
         let reached = found.first().is_some_and(|s| s.reached);
-        let proof = (complete && !reached).then(|| {
+        let method = self.method();
+        let decided = complete && open.is_empty();
+        let proof = (decided && !reached).then(|| {
             let total = distinct.len();
             let within = total - outside.len();
             let limits = if outside.is_empty() {
@@ -275,21 +341,107 @@ impl<'a> Ik<'a> {
             } else {
                 format!(" ({within} of the {total} within the joint limits)")
             };
-            if poses == 0 {
-                format!("closed-form IK: none of the pose's {total} solutions is within the joint limits")
-            } else if margin > 0.0 {
-                format!("closed-form IK: all {poses} solutions of the pose{limits} collide or keep less than the {margin} m margin")
+            let what = if margin > 0.0 {
+                format!("collide or keep less than the {margin} m margin")
             } else {
-                format!("closed-form IK: all {poses} solutions of the pose{limits} collide")
+                "collide".to_string()
+            };
+            if poses == 0 {
+                format!("{method}: none of the pose's {total} solutions is within the joint limits, nor within the goal's tolerance of them")
+            } else {
+                format!("{method}: all {poses} solutions of the pose{limits} {what}, throughout the goal's tolerance ({})", summary(&collisions))
             }
         });
+        let undecided = if reached {
+            None
+        } else if !complete {
+            Some(format!("{method}: the pose is singular or on the workspace boundary: its solutions are not isolated"))
+        } else {
+            (!open.is_empty()).then(|| format!("{method}: every solution is known, but {}", summary(&open)))
+        };
         GoalSolutions {
             solutions: found,
             starts,
             iterations,
             complete,
             proof,
+            undecided,
         }
+    }
+
+    /// Which all-solutions method this solver uses, for proofs.
+    fn method(&self) -> &'static str {
+        if self.analytic.is_some() {
+            "closed-form IK"
+        } else {
+            "all-solutions IK (general 6R)"
+        }
+    }
+
+    /// How far each joint may be from solution `q` while the tool stays within the goal's
+    /// tolerance: the inverse Jacobian's rows against 1 mm and 1 degree, doubled for the
+    /// curvature; `None` near a singularity, where that is no bound.
+    fn tolerance_reach(&mut self, q: &[f64]) -> Option<Vec<f64>> {
+        self.model.tool_jacobian(q, &mut self.ws);
+        let jacobian = Matrix6::from_fn(|r, c| self.ws.jacobian[(r, c)]);
+        let inverse = jacobian.try_inverse()?;
+        let reach: Vec<f64> = (0..6)
+            .map(|i| {
+                let position = inverse.fixed_view::<1, 3>(i, 0).norm();
+                let rotation = inverse.fixed_view::<1, 3>(i, 3).norm();
+                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD)
+            })
+            .collect();
+        reach.iter().all(|r| r.is_finite() && *r <= LINEAR_REACH_RAD).then_some(reach)
+    }
+
+    /// The colliding pair that stays colliding throughout the tolerance neighbourhood of
+    /// `solution` (the checker's last query), named with its depth; else why not.
+    fn collision_certificate(&mut self, solution: &IkSolution, margin: f64) -> Result<String, String> {
+        let clearance = solution.clearance.map_or(f64::INFINITY, |c| c.exact_m);
+        let pair = self.checker.as_ref().and_then(|c| c.closest_pair());
+        let Some((a, b, name)) = pair else {
+            return Err("a solution's collision was not measured".into());
+        };
+        let Some(reach) = self.tolerance_reach(&solution.q) else {
+            return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
+        };
+        let motion = self.bounds.relative_motion(a, b, &reach);
+        if clearance + motion <= margin {
+            Ok(format!("{name} {:.1} mm", clearance * 1e3))
+        } else {
+            Err(format!(
+                "a solution's {name} are at {:.1} mm, within the {:.1} mm the goal's tolerance can move them",
+                clearance * 1e3,
+                motion * 1e3
+            ))
+        }
+    }
+
+    /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays
+    /// outside them throughout the goal's tolerance; else why not.
+    fn limits_certificate(&mut self, q: &[f64]) -> Result<(), String> {
+        let Some(reach) = self.tolerance_reach(q) else {
+            return Err("a solution outside the joint limits is near a singularity".into());
+        };
+        let mut closest: Option<(usize, f64)> = None;
+        for (i, (joint, value)) in self.model.joints.iter().zip(q).enumerate() {
+            let gap = limit_gap(joint, *value);
+            if gap > reach[i] {
+                return Ok(());
+            }
+            if gap > 0.0 && closest.is_none_or(|(_, g)| gap < g) {
+                closest = Some((i, gap));
+            }
+        }
+        Err(match closest {
+            Some((i, gap)) => format!(
+                "a solution is {:.2} deg outside joint {}'s limits, within what the goal's tolerance allows",
+                gap.to_degrees(),
+                i + 1
+            ),
+            None => "a solution is at the joint limits".into(),
+        })
     }
 
     /// Newton steps on the model's own FK until the pose error is below [`POLISHED`] (the
@@ -444,6 +596,7 @@ impl<'a> Ik<'a> {
             iterations,
             complete: false,
             proof: None,
+            undecided: None,
         }
     }
 
@@ -558,6 +711,36 @@ impl<'a> Ik<'a> {
             difference.abs() <= self.opts.distinct_tolerance
         })
     }
+}
+
+/// Doubles the linearised tolerance neighbourhood of a solution: the pose error is not linear
+/// in the joints, and a certificate must hold for all of it.
+const TOLERANCE_CURVATURE: f64 = 2.0;
+/// Joint motions (rad) beyond which the linearised neighbourhood is no bound.
+const LINEAR_REACH_RAD: f64 = 0.1;
+
+/// How far (rad or m) joint value `value` is outside the joint's limits, over its whole-turn
+/// equivalents for a revolute joint; 0 when within them or unlimited.
+fn limit_gap(joint: &crate::model::Joint, value: f64) -> f64 {
+    let Some([lower, upper]) = joint.limits else { return 0.0 };
+    let outside = |v: f64| (lower - v).max(v - upper).max(0.0);
+    if joint.kind == JointKind::Prismatic {
+        return outside(value);
+    }
+    let turns = [((lower - value) / TAU).floor(), ((upper - value) / TAU).ceil()];
+    (turns[0] as i64..=turns[1] as i64)
+        .map(|k| outside(value + k as f64 * TAU))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The first few of `items`, and how many more.
+fn summary(items: &[String]) -> String {
+    const SHOWN: usize = 3;
+    let mut text = items.iter().take(SHOWN).cloned().collect::<Vec<_>>().join("; ");
+    if items.len() > SHOWN {
+        text.push_str(&format!("; {} more", items.len() - SHOWN));
+    }
+    text
 }
 
 /// Convergence of the numeric solver: far tighter than "reached" (1 mm, 1 degree).

@@ -86,6 +86,13 @@ impl<'a> Checker<'a> {
         }
     }
 
+    /// The pair that was closest at the last [`Self::clearance`] query: its bodies and their names.
+    pub(crate) fn closest_pair(&self) -> Option<(Body, Body, String)> {
+        let pair = self.exact.closest.as_ref()?;
+        let name = format!("{} and {}", self.world.body_name(pair.a.body), self.world.body_name(pair.b.body));
+        Some((pair.a.body, pair.b.body, name))
+    }
+
     /// Whether `q` keeps the margin in exact geometry (the sign of the clearance against it).
     fn keeps_margin(&mut self, q: &[f64]) -> bool {
         let same = self.kept_q.len() == q.len() && self.kept_q.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits());

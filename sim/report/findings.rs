@@ -23,7 +23,10 @@ pub enum Severity {
     Info,
     /// Worth a look; does not fail the design.
     Warn,
-    /// Fails the design.
+    /// What the harness could not decide within its limits (IK starts, the planner's budget):
+    /// neither a pass nor a failure of the design.
+    Undecided,
+    /// Fails the design: proven.
     Fail,
 }
 
@@ -31,9 +34,11 @@ pub enum Severity {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FindingKind {
-    /// IK found no collision-free configuration within the thresholds (proven, or not found from
-    /// the IK starts: the finding says which).
+    /// No configuration reaches the goal collision-free within the thresholds, proven.
     GoalUnreachable,
+    /// No collision-free configuration reaching the goal was found, and none is proven not to
+    /// exist: the finding names what was tried.
+    GoalUndecided,
     /// Collision-free configurations exist but the planner found no certified path to one within
     /// its budget.
     GoalNoPath,
@@ -264,28 +269,37 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
                 )
             });
             let proof = validation.proof(index);
-            let why = match (&proof, best) {
-                (Some(proof), _) => format!("proven: {proof}"),
-                (None, Some(s)) if s.pose_reached => format!(
-                    "every solution found from {} IK starts (seed {}) collides (best clearance {:.1} mm); not proven",
+            let open = validation.solutions.get(index).and_then(|g| g.undecided.as_ref());
+            let why = match (&proof, open, best) {
+                (Some(proof), _, _) => format!("unreachable: proven: {proof}"),
+                (None, Some(open), Some(s)) if s.pose_reached => {
+                    format!("undecided: {open} (best clearance {:.1} mm)", clearance * 1e3)
+                }
+                (None, Some(open), _) => format!("undecided: {open}"),
+                (None, None, Some(s)) if s.pose_reached => format!(
+                    "undecided: every solution found from {} IK starts (seed {}) collides (best clearance {:.1} mm); not proven unreachable",
                     settings.ik_seeds,
                     settings.seed,
                     clearance * 1e3
                 ),
                 _ => format!(
-                    "no solution from {} IK starts (seed {}), closest miss {:.1} mm, {:.2} deg; not proven",
+                    "undecided: no solution from {} IK starts (seed {}), closest miss {:.1} mm, {:.2} deg; not proven unreachable",
                     settings.ik_seeds,
                     settings.seed,
                     position * 1e3,
                     orientation.to_degrees()
                 ),
             };
+            let (kind, severity) = match proof {
+                Some(_) => (FindingKind::GoalUnreachable, Severity::Fail),
+                None => (FindingKind::GoalUndecided, Severity::Undecided),
+            };
             out.push(finding(
-                FindingKind::GoalUnreachable,
-                Severity::Fail,
+                kind,
+                severity,
                 Some(index),
                 None,
-                format!("goal {index} ({}): unreachable: {why}", goal.name),
+                format!("goal {index} ({}): {why}", goal.name),
                 &[
                     ("position_m", position),
                     ("orientation_rad", orientation),
@@ -316,7 +330,7 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
             };
             out.push(finding(
                 FindingKind::GoalNoPath,
-                Severity::Fail,
+                Severity::Undecided,
                 Some(index),
                 None,
                 format!(
@@ -549,21 +563,32 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
     }
 }
 
-/// Passed when no finding fails; the reasons count the failing findings by kind, telling proven
-/// failures from the limits of the search (IK starts, planner budget).
+/// Passed when no finding fails or is undecided; failed when one fails (proven), else undecided;
+/// the reasons count those findings by kind, failures first.
 pub(super) fn verdict(findings: &[Finding], settings: &super::Settings, budget: Option<usize>) -> super::Verdict {
     let mut counts: BTreeMap<(FindingKind, bool), usize> = BTreeMap::new();
-    for f in findings.iter().filter(|f| f.severity == Severity::Fail) {
+    let failed = findings.iter().any(|f| f.severity == Severity::Fail);
+    let undecided = findings.iter().any(|f| f.severity == Severity::Undecided);
+    let mut ordered: Vec<&Finding> = findings.iter().filter(|f| f.severity >= Severity::Undecided).collect();
+    // Failures first: the reasons read from what is proven to what is open.
+    ordered.sort_by_key(|f| std::cmp::Reverse(f.severity));
+    let mut order: Vec<(FindingKind, bool)> = Vec::new();
+    for f in ordered {
         let proven = f.values.get("proven").is_some_and(|p| *p > 0.0);
-        *counts.entry((f.kind, proven)).or_default() += 1;
+        let count = counts.entry((f.kind, proven)).or_default();
+        if *count == 0 {
+            order.push((f.kind, proven));
+        }
+        *count += 1;
     }
     let goals = |count: usize| if count == 1 { "goal" } else { "goals" };
-    let reasons = counts
+    let reasons = order
         .iter()
-        .map(|((kind, proven), &count)| match kind {
-            FindingKind::GoalUnreachable if *proven => format!("{count} {} unreachable (proven)", goals(count)),
-            FindingKind::GoalUnreachable => format!(
-                "{count} {} unreachable (no collision-free IK solution found from {} starts, seed {})",
+        .map(|key| (key, counts[key]))
+        .map(|((kind, _), count)| match kind {
+            FindingKind::GoalUnreachable => format!("{count} {} unreachable (proven)", goals(count)),
+            FindingKind::GoalUndecided => format!(
+                "{count} {} undecided (not reached, not proven unreachable; IK {} starts, seed {})",
                 goals(count),
                 settings.ik_seeds,
                 settings.seed
@@ -589,6 +614,13 @@ pub(super) fn verdict(findings: &[Finding], settings: &super::Settings, budget: 
         .collect::<Vec<_>>();
     super::Verdict {
         passed: reasons.is_empty(),
+        word: if failed {
+            "FAIL"
+        } else if undecided {
+            "UNDECIDED"
+        } else {
+            "PASS"
+        },
         reasons,
     }
 }

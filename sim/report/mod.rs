@@ -148,8 +148,9 @@ pub struct GoalReport {
     /// Tolerance mode it is judged by.
     pub tolerance: Tolerance,
     /// `reached` (on a certified path; in reach-only: a collision-free IK solution),
-    /// `unreachable` (no collision-free IK solution from the starts) or `no_path` (solutions
-    /// exist, no certified path found within the planner's budget).
+    /// `unreachable` (proven: no collision-free configuration reaches it, see `proven`),
+    /// `undecided` (not reached, not proven unreachable: the limits of the search) or `no_path`
+    /// (solutions exist, no certified path found within the planner's budget).
     pub outcome: &'static str,
     /// Why no configuration can reach the goal, when that is proven (beyond the arm's reach,
     /// inside an obstacle, or by the closed form's complete solution set); `None` otherwise.
@@ -193,8 +194,10 @@ pub struct TrajectoryReport {
     pub home_replaced: Option<String>,
     /// Goals reached by a certified path.
     pub reached: usize,
-    /// Goals without a collision-free IK solution.
+    /// Goals proven unreachable.
     pub unreachable: usize,
+    /// Goals without a collision-free IK solution found, not proven unreachable.
+    pub undecided: usize,
     /// Goals with collision-free solutions but no certified path within the budget.
     pub no_path: usize,
     /// Per goal in order: its certified path, or the attempt of a goal without one.
@@ -277,6 +280,10 @@ pub struct EngineReport {
 pub struct Verdict {
     /// The design passes the scenario.
     pub passed: bool,
+    /// `PASS`; `FAIL` when a failure is proven (an unreachable goal, a contact, a torque over
+    /// rating); `UNDECIDED` when nothing failed but something was left open by the harness's
+    /// limits (a goal neither reached nor proven unreachable, a path not found in the budget).
+    pub word: &'static str,
     /// One line per failing finding kind, with counts; empty when passed.
     pub reasons: Vec<String>,
 }
@@ -429,6 +436,11 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                 None if ik_reached => "reached",
                 None => "unreachable",
             };
+            // Unreachable is a proof; a goal IK could not reach without one is open.
+            let outcome = match outcome {
+                "unreachable" if validation.proof(index).is_none() => "undecided",
+                other => other,
+            };
             GoalReport {
                 index,
                 name: goal.name.clone(),
@@ -558,7 +570,12 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
         home_clearance_m: trajectory.home_clearance.as_ref().map(|c| c.distance_m),
         home_replaced: trajectory.home_replaced.clone(),
         reached: trajectory.reached(),
-        unreachable: trajectory.count("unreachable"),
+        unreachable: (0..trajectory.steps.len())
+            .filter(|&i| trajectory.steps[i].outcome() == "unreachable" && validation.proof(i).is_some())
+            .count(),
+        undecided: (0..trajectory.steps.len())
+            .filter(|&i| trajectory.steps[i].outcome() == "unreachable" && validation.proof(i).is_none())
+            .count(),
         no_path: trajectory.count("no_path"),
         edges: segments.iter().map(|s| s.edges).sum(),
         segments,

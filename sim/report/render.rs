@@ -71,10 +71,7 @@ pub fn render(report: &Report) -> String {
         "\ngoal                      outcome      pos mm  ori deg  clear mm  capsule mm  held by         closest pair"
     );
     for goal in &report.goals {
-        let status = match goal.outcome {
-            "unreachable" if goal.proven.is_some() => "unreach.(p)",
-            other => other,
-        };
+        let status = goal.outcome;
         let _ = writeln!(
             out,
             "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>8}  {:>10}  {:<14}  {}",
@@ -164,6 +161,7 @@ pub fn render(report: &Report) -> String {
         for f in &report.findings {
             let tag = match f.severity {
                 Severity::Fail => "FAIL",
+                Severity::Undecided => "UNDECIDED",
                 Severity::Warn => "warn",
                 Severity::Info => "info",
             };
@@ -197,14 +195,15 @@ pub fn render(report: &Report) -> String {
 }
 
 fn trajectory_lines(out: &mut String, t: &super::TrajectoryReport) {
-    let goals = t.reached + t.unreachable + t.no_path;
+    let goals = t.reached + t.unreachable + t.undecided + t.no_path;
     let detours = t.segments.iter().filter(|s| s.edges > 1).count();
     let _ = writeln!(
         out,
-        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} without a path; certified clearance {} mm; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
+        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} undecided, {} without a path; certified clearance {} mm; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
         t.reached,
         t.edges,
         t.unreachable,
+        t.undecided,
         t.no_path,
         mm(t.certified_clearance_m),
         t.joint_length,
@@ -250,11 +249,12 @@ fn truncate(text: &str, width: usize) -> String {
     }
 }
 
-/// The verdict as one line: `verdict: PASS`, or `verdict: FAIL: ` and the reasons.
+/// The verdict as one line: `verdict: PASS`, or `verdict: FAIL: ` (`UNDECIDED: `) and the
+/// reasons.
 pub fn verdict_line(verdict: &super::Verdict) -> String {
     if verdict.passed {
         "verdict: PASS".to_string()
     } else {
-        format!("verdict: FAIL: {}", verdict.reasons.join("; "))
+        format!("verdict: {}: {}", verdict.word, verdict.reasons.join("; "))
     }
 }

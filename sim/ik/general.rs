@@ -1,0 +1,568 @@
+//! Every solution of a pose of any 6R arm: the Raghavan–Roth elimination (Manocha & Canny's
+//! matrix form) written on the joint axis lines, so it needs no DH fit.
+//!
+//! The arm is its six axis lines at `q = 0` (a point `c_i` and direction `w_i` each, read from the
+//! model's own FK) and its home tool pose `M`: `T(q) = e1(q1) .. e6(q6) M` with `e_i` the turn
+//! about line `i`. Rearranged, `e3 e4 e5 = e2^-1 e1^-1 T M^-1 e6^-1`; both sides map a point and
+//! the direction of axis 6 alike, and `e6` fixes both. From the point `p` (taken from a point of
+//! axis 3) and the direction `l` the fourteen quantities `p, l, p.p, p.l, p x l,
+//! (p.p) l - 2 (p.l) p` are, on the left, combinations of `{1, s3, c3} x {1, s4, c4} x {1, s5, c5}`
+//! and, on the right, of `{1, s1, c1} x {1, s2, c2}` (the quadratic terms cancel; see
+//! `tests/general_ik.rs`). Their coefficients are read off exactly by interpolating each side at
+//! three angles per joint, so the same code serves every arm. Eliminating the eight products of
+//! joints 1 and 2 leaves six equations in joints 3 to 5; with half-angle tangents and one more
+//! multiple they are a 12 x 12 matrix quadratic in `x3 = tan(theta3 / 2)` whose determinant
+//! vanishes at each solution: a 24 x 24 companion eigenproblem (16 roots at most are real
+//! solutions; eight are always `x3 = +-i`). Each real root gives joints 4 and 5 from the
+//! matrix's null vector, joints 1 and 2 from the eliminated products, joint 6 from the pose.
+//!
+//! When the elimination degenerates for an arm (special geometry: the products of joints 1 and 2
+//! are dependent, or the determinant vanishes identically) the reversed chain is tried, which
+//! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
+//! pose goals stay with the numeric solver.
+
+use crate::model::{JointKind, Model};
+use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
+use std::f64::consts::PI;
+
+/// One joint's axis line: a point on it and its unit direction.
+#[derive(Debug, Clone, Copy)]
+struct Line {
+    point: Vector3<f64>,
+    axis: Vector3<f64>,
+}
+
+impl Line {
+    /// The rotation of a turn `angle` about the line's direction.
+    fn rotation(&self, angle: f64) -> Matrix3<f64> {
+        let (s, c) = angle.sin_cos();
+        let k = self.axis.cross_matrix();
+        Matrix3::identity() + k * s + k * k * (1.0 - c)
+    }
+
+    /// Point `x` turned by `angle` about the line.
+    fn turn(&self, angle: f64, x: &Vector3<f64>) -> Vector3<f64> {
+        self.rotation(angle) * (x - self.point) + self.point
+    }
+}
+
+/// A 6R chain in product-of-exponentials form, lengths divided by `scale` about `origin`.
+#[derive(Debug, Clone)]
+struct Chain {
+    lines: [Line; 6],
+    /// Home tool pose (rotation, translation).
+    home_rotation: Matrix3<f64>,
+    home_translation: Vector3<f64>,
+}
+
+/// The fourteen Raghavan–Roth quantities of a point `p` and a direction `l`.
+fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
+    let pp = p.dot(p);
+    let pl = p.dot(l);
+    let cross = p.cross(l);
+    let last = l * pp - p * (2.0 * pl);
+    [p.x, p.y, p.z, l.x, l.y, l.z, pp, pl, cross.x, cross.y, cross.z, last.x, last.y, last.z]
+}
+
+/// Interpolation nodes: three angles fix a combination of `{1, sin, cos}` exactly.
+const NODES: [f64; 3] = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
+
+/// The inverse of the `{1, sin, cos}` values at [`NODES`]: coefficients from node values.
+fn node_inverse() -> Matrix3<f64> {
+    let v = Matrix3::from_fn(|i, f| match f {
+        0 => 1.0,
+        1 => NODES[i].sin(),
+        _ => NODES[i].cos(),
+    });
+    // The nodes are distinct angles: the matrix is regular.
+    v.try_inverse().unwrap_or_else(Matrix3::identity)
+}
+
+/// Half-angle form of `{1, sin theta, cos theta}` for `theta = offset + t`, times `1 + x^2`
+/// with `x = tan(t / 2)`: row `f`, column the power of `x`.
+fn half_angle(offset: f64) -> Matrix3<f64> {
+    let (s, c) = offset.sin_cos();
+    // cos t (1 + x^2) = 1 - x^2, sin t (1 + x^2) = 2x.
+    Matrix3::new(1.0, 0.0, 1.0, s, 2.0 * c, -s, c, -2.0 * s, -c)
+}
+
+/// Offsets of the half-angle tangents (rad): a solution at `offset + pi` would be at infinity, so
+/// the offsets are angles no design chooses on purpose.
+const OFFSETS: [f64; 3] = [0.713_281_0, -1.302_717_5, 2.218_919_3];
+/// Further offsets of joint 3 tried when the leading matrix is near singular.
+const RETRY_OFFSETS: [f64; 3] = [-0.411_734_9, 1.577_102_6, -2.650_381_7];
+
+/// Ratio of smallest to largest singular value below which a matrix counts as singular.
+const SINGULAR: f64 = 1e-10;
+/// Largest imaginary part (relative) of an eigenvalue still tried as a real root: a double root
+/// (a pose on a workspace boundary) splits into a pair about `sqrt(eps)` off the real line.
+const NEAR_REAL: f64 = 1e-4;
+
+/// The elimination of one chain, with what does not depend on the pose.
+#[derive(Debug, Clone)]
+struct Elimination {
+    chain: Chain,
+    /// Left side: `[quantity][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
+    left: [[[f64; 9]; 3]; 14],
+    nodes: Matrix3<f64>,
+}
+
+/// Every solution of one pose, unpolished.
+#[derive(Debug, Clone, Default)]
+pub struct GeneralSolutions {
+    /// Joint configurations in the model's convention, angles in (-pi, pi].
+    pub configurations: Vec<[f64; 6]>,
+    /// Every real root was resolved into one configuration: with each configuration verified
+    /// by the caller, the list is every solution of the pose. False when a root was ambiguous
+    /// (two solutions share joint 3's angle, a near-double root) or the pose is degenerate for
+    /// the elimination.
+    pub resolved: bool,
+}
+
+/// The general solver of one 6R model.
+#[derive(Debug, Clone)]
+pub struct General6R {
+    elimination: Elimination,
+    /// The reversed chain solves it (joint order reversed in the answer).
+    reversed: bool,
+    origin: Vector3<f64>,
+    scale: f64,
+}
+
+impl General6R {
+    /// The solver for `model` when it has six revolute joints and the elimination does not
+    /// degenerate for its geometry (in the given or the reversed order); `None` otherwise.
+    pub fn new(model: &Model) -> Option<General6R> {
+        if model.dof() != 6 || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+            return None;
+        }
+        let mut ws = model.workspace();
+        model.forward(&[0.0; 6], &mut ws);
+        let raw: [Line; 6] = std::array::from_fn(|i| {
+            let frame = &ws.link_in_world[i + 1];
+            Line {
+                point: frame.translation.vector,
+                axis: (frame.rotation * model.joints[i].axis.into_inner()).normalize(),
+            }
+        });
+        let home = ws.tool_in_world;
+        let origin = raw[0].point;
+        let scale = raw
+            .iter()
+            .map(|l| (l.point - origin).norm())
+            .chain([(home.translation.vector - origin).norm()])
+            .fold(0.0, f64::max);
+        let scale = if scale.is_finite() && scale > 1e-9 { scale } else { 1.0 };
+        let lines = raw.map(|l| Line {
+            point: (l.point - origin) / scale,
+            axis: l.axis,
+        });
+        let home_rotation = home.rotation.to_rotation_matrix().into_inner();
+        let home_translation = (home.translation.vector - origin) / scale;
+        let forward = Chain {
+            lines,
+            home_rotation,
+            home_translation,
+        };
+        // The reversed chain: T^-1 = M^-1 e6(-q6) .. e1(-q1), the lines carried into the home
+        // tool frame with their directions flipped so the angles keep their sign.
+        let inverse_rotation = home_rotation.transpose();
+        let reversed = Chain {
+            lines: std::array::from_fn(|k| {
+                let line = &lines[5 - k];
+                Line {
+                    point: inverse_rotation * (line.point - home_translation),
+                    axis: -(inverse_rotation * line.axis),
+                }
+            }),
+            home_rotation: inverse_rotation,
+            home_translation: -(inverse_rotation * home_translation),
+        };
+        for (chain, is_reversed) in [(forward, false), (reversed, true)] {
+            let elimination = Elimination::new(chain)?;
+            if elimination.regular() {
+                return Some(General6R {
+                    elimination,
+                    reversed: is_reversed,
+                    origin,
+                    scale,
+                });
+            }
+        }
+        None
+    }
+
+    /// Whether the reversed chain is solved (joint 1 eliminated instead of joint 6).
+    pub fn is_reversed(&self) -> bool {
+        self.reversed
+    }
+
+    /// Every configuration whose tool frame is at world pose `goal`, unpolished.
+    pub fn solve(&self, goal: &Isometry3<f64>) -> GeneralSolutions {
+        let rotation = goal.rotation.to_rotation_matrix().into_inner();
+        let translation = (goal.translation.vector - self.origin) / self.scale;
+        let (rotation, translation) = if self.reversed {
+            let inverse = rotation.transpose();
+            (inverse, -(inverse * translation))
+        } else {
+            (rotation, translation)
+        };
+        let mut out = self.elimination.solve(&rotation, &translation);
+        if self.reversed {
+            for q in &mut out.configurations {
+                q.reverse();
+            }
+        }
+        out
+    }
+}
+
+impl Elimination {
+    /// The left side's coefficients of `chain`: interpolated at 27 nodes and checked at a point
+    /// off them (`None` when the check fails: the lines are not a 6R chain, e.g. NaN).
+    fn new(chain: Chain) -> Option<Elimination> {
+        let nodes = node_inverse();
+        let mut values = [[[[0.0; 14]; 3]; 3]; 3];
+        for (i3, plane) in values.iter_mut().enumerate() {
+            for (i4, row) in plane.iter_mut().enumerate() {
+                for (i5, value) in row.iter_mut().enumerate() {
+                    *value = chain.left(NODES[i3], NODES[i4], NODES[i5]);
+                }
+            }
+        }
+        let mut left = [[[0.0; 9]; 3]; 14];
+        for (k, quantity) in left.iter_mut().enumerate() {
+            for (f3, by3) in quantity.iter_mut().enumerate() {
+                for f4 in 0..3 {
+                    for f5 in 0..3 {
+                        let mut sum = 0.0;
+                        for i3 in 0..3 {
+                            for i4 in 0..3 {
+                                for i5 in 0..3 {
+                                    sum += nodes[(f3, i3)] * nodes[(f4, i4)] * nodes[(f5, i5)] * values[i3][i4][i5][k];
+                                }
+                            }
+                        }
+                        by3[f4 * 3 + f5] = sum;
+                    }
+                }
+            }
+        }
+        let elimination = Elimination { chain, left, nodes };
+        let probe = [0.37, -1.91, 2.47];
+        let exact = elimination.chain.left(probe[0], probe[1], probe[2]);
+        let fitted = elimination.left_at(probe[0], probe[1], probe[2]);
+        let agrees = exact.iter().zip(&fitted).all(|(a, b)| (a - b).abs() <= 1e-9 * (1.0 + a.abs()));
+        agrees.then_some(elimination)
+    }
+
+    /// Whether the elimination holds for this chain at a generic pose: the products of joints 1
+    /// and 2 independent and the determinant not identically zero.
+    fn regular(&self) -> bool {
+        let probe = [0.9, -0.4, 1.3, 2.1, -0.7, 0.5];
+        let pose = self.chain.forward(&probe);
+        let Some(system) = self.system(&pose.0, &pose.1) else { return false };
+        let sigma = system.at(0.318).svd(false, false).singular_values;
+        sigma.min() > SINGULAR * sigma.max()
+    }
+
+    /// The left side's fitted quantities at joint angles 3, 4, 5.
+    fn left_at(&self, t3: f64, t4: f64, t5: f64) -> [f64; 14] {
+        let b3 = [1.0, t3.sin(), t3.cos()];
+        let b4 = [1.0, t4.sin(), t4.cos()];
+        let b5 = [1.0, t5.sin(), t5.cos()];
+        std::array::from_fn(|k| {
+            let mut sum = 0.0;
+            for (f3, v3) in b3.iter().enumerate() {
+                for (f4, v4) in b4.iter().enumerate() {
+                    for (f5, v5) in b5.iter().enumerate() {
+                        sum += self.left[k][f3][f4 * 3 + f5] * v3 * v4 * v5;
+                    }
+                }
+            }
+            sum
+        })
+    }
+
+    /// The 12 x 12 matrix quadratic of a pose; `None` when the products of joints 1 and 2 are
+    /// dependent at this pose.
+    fn system(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<System> {
+        let chain = &self.chain;
+        // The point and direction of axis 6 carried by T M^-1.
+        let relative = rotation * chain.home_rotation.transpose();
+        let point = relative * (chain.lines[5].point - chain.home_translation) + translation;
+        let direction = relative * chain.lines[5].axis;
+        let mut values = [[[0.0; 14]; 3]; 3];
+        for (i1, row) in values.iter_mut().enumerate() {
+            for (i2, value) in row.iter_mut().enumerate() {
+                *value = chain.right(NODES[i1], NODES[i2], &point, &direction);
+            }
+        }
+        // right[k][f1 * 3 + f2]
+        let mut right = [[0.0; 9]; 14];
+        for (k, quantity) in right.iter_mut().enumerate() {
+            for f1 in 0..3 {
+                for f2 in 0..3 {
+                    let mut sum = 0.0;
+                    for (i1, row) in values.iter().enumerate() {
+                        for (i2, value) in row.iter().enumerate() {
+                            sum += self.nodes[(f1, i1)] * self.nodes[(f2, i2)] * value[k];
+                        }
+                    }
+                    quantity[f1 * 3 + f2] = sum;
+                }
+            }
+        }
+        let products = SMatrix::<f64, 14, 8>::from_fn(|k, j| right[k][j + 1]);
+        let svd = products.svd(true, false);
+        let sigma = svd.singular_values;
+        let largest = sigma.max();
+        if !(largest > 0.0) || sigma.min() < SINGULAR * largest {
+            return None;
+        }
+        let u = svd.u?;
+        let complement = complement_of(&u);
+        // Six equations in joints 3 to 5: the rows of the left side that no product of joints 1
+        // and 2 reaches, the right side's constant moved over.
+        let mut equations = [[[0.0; 9]; 3]; 6];
+        for (i, equation) in equations.iter_mut().enumerate() {
+            for k in 0..14 {
+                let weight = complement[i][k];
+                for f3 in 0..3 {
+                    for (j, value) in equation[f3].iter_mut().enumerate() {
+                        *value += weight * self.left[k][f3][j];
+                    }
+                }
+                equation[0][0] -= weight * right[k][0];
+            }
+        }
+        Some(System {
+            equations,
+            products,
+            right,
+        })
+    }
+
+    /// Every configuration of the chain at pose (`rotation`, `translation`).
+    fn solve(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> GeneralSolutions {
+        let mut out = GeneralSolutions::default();
+        let Some(system) = self.system(rotation, translation) else { return out };
+        let Some((offset3, roots)) = system.roots() else { return out };
+        out.resolved = true;
+        for x3 in roots {
+            let t3 = offset3 + 2.0 * x3.re.atan();
+            let sigma = system.at_offset(offset3, x3.re).svd(false, true);
+            let Some(v_t) = sigma.v_t else {
+                out.resolved = false;
+                continue;
+            };
+            let values = sigma.singular_values;
+            // Smallest singular value last? nalgebra sorts them in descending order.
+            let (smallest, _) = values.argmin();
+            let second = values
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != smallest)
+                .map(|(_, v)| *v)
+                .fold(f64::INFINITY, f64::min);
+            if second < 1e-6 * values.max() {
+                // Two solutions share this angle of joint 3: the null vector mixes them.
+                out.resolved = false;
+            }
+            let null: [f64; 12] = std::array::from_fn(|i| v_t[(smallest, i)]);
+            let (t4, t5) = angles_of_null_vector(&null);
+            let Some((t1, t2)) = system.first_two(&self.left_at(t3, t4, t5)) else {
+                out.resolved = false;
+                continue;
+            };
+            let mut q = [t1, t2, t3, t4, t5, 0.0];
+            q[5] = self.chain.last_angle(&q, rotation);
+            out.configurations.push(q.map(super::wrap_angle));
+        }
+        out
+    }
+}
+
+/// Angles of joints 4 and 5 from the monomial vector `x4^a x5^b` (index `a * 3 + b`).
+fn angles_of_null_vector(null: &[f64; 12]) -> (f64, f64) {
+    let at = |a: usize, b: usize| null[a * 3 + b];
+    let (mut num4, mut den4, mut num5, mut den5) = (0.0, 0.0, 0.0, 0.0);
+    for a in 0..4 {
+        for b in 0..3 {
+            if a < 3 {
+                num4 += at(a + 1, b) * at(a, b);
+                den4 += at(a, b) * at(a, b);
+            }
+            if b < 2 {
+                num5 += at(a, b + 1) * at(a, b);
+                den5 += at(a, b) * at(a, b);
+            }
+        }
+    }
+    let x4 = num4 / den4;
+    let x5 = num5 / den5;
+    (OFFSETS[1] + 2.0 * x4.atan(), OFFSETS[2] + 2.0 * x5.atan())
+}
+
+/// An orthonormal basis (six rows) of the complement of the eight orthonormal columns of `u`.
+fn complement_of(u: &SMatrix<f64, 14, 8>) -> [[f64; 14]; 6] {
+    let mut basis: Vec<SVector<f64, 14>> = (0..8).map(|j| u.column(j).into_owned()).collect();
+    let mut out = [[0.0; 14]; 6];
+    let mut found = 0;
+    // Standard vectors, most outside the span first.
+    let mut order: Vec<(usize, f64)> = (0..14).map(|k| (k, 1.0 - u.row(k).norm_squared())).collect();
+    order.sort_by(|a, b| b.1.total_cmp(&a.1));
+    for (k, _) in order {
+        if found == 6 {
+            break;
+        }
+        let mut v = SVector::<f64, 14>::zeros();
+        v[k] = 1.0;
+        for _ in 0..2 {
+            for b in &basis {
+                let along = b.dot(&v);
+                v -= b * along;
+            }
+        }
+        let norm = v.norm();
+        if norm > 0.1 {
+            v /= norm;
+            out[found] = std::array::from_fn(|i| v[i]);
+            basis.push(v);
+            found += 1;
+        }
+    }
+    out
+}
+
+/// The eliminated system of one pose.
+struct System {
+    /// `[equation][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
+    equations: [[[f64; 9]; 3]; 6],
+    /// The right side's eight products of joints 1 and 2, as columns.
+    products: SMatrix<f64, 14, 8>,
+    /// The right side's coefficients, the constant first.
+    right: [[f64; 9]; 14],
+}
+
+type Matrix12 = SMatrix<f64, 12, 12>;
+
+impl System {
+    /// The 12 x 12 matrix's coefficients of `x3^0, x3^1, x3^2` for joint 3's tangent offset.
+    fn quadratic(&self, offset3: f64) -> [Matrix12; 3] {
+        let (h3, h4, h5) = (half_angle(offset3), half_angle(OFFSETS[1]), half_angle(OFFSETS[2]));
+        let mut out = [Matrix12::zeros(); 3];
+        for (i, equation) in self.equations.iter().enumerate() {
+            for (f3, by3) in equation.iter().enumerate() {
+                for f4 in 0..3 {
+                    for f5 in 0..3 {
+                        let c = by3[f4 * 3 + f5];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        for p3 in 0..3 {
+                            for p4 in 0..3 {
+                                for p5 in 0..3 {
+                                    let v = c * h3[(f3, p3)] * h4[(f4, p4)] * h5[(f5, p5)];
+                                    out[p3][(i, p4 * 3 + p5)] += v;
+                                    out[p3][(6 + i, (p4 + 1) * 3 + p5)] += v;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The matrix at `x3` for the first offset.
+    fn at(&self, x3: f64) -> Matrix12 {
+        self.at_offset(OFFSETS[0], x3)
+    }
+
+    fn at_offset(&self, offset3: f64, x3: f64) -> Matrix12 {
+        let [c, b, a] = self.quadratic(offset3);
+        c + b * x3 + a * (x3 * x3)
+    }
+
+    /// The offset of joint 3's tangent used and the near-real roots of the determinant; `None`
+    /// when the leading matrix is singular at every offset tried.
+    fn roots(&self) -> Option<(f64, Vec<nalgebra::Complex<f64>>)> {
+        for offset3 in [OFFSETS[0]].into_iter().chain(RETRY_OFFSETS) {
+            let [c, b, a] = self.quadratic(offset3);
+            let sigma = a.svd(false, false).singular_values;
+            if sigma.min() < 1e-8 * sigma.max() {
+                continue;
+            }
+            let lu = a.lu();
+            let (Some(ac), Some(ab)) = (lu.solve(&c), lu.solve(&b)) else { continue };
+            let mut companion = SMatrix::<f64, 24, 24>::zeros();
+            companion.fixed_view_mut::<12, 12>(0, 12).fill_with_identity();
+            companion.fixed_view_mut::<12, 12>(12, 0).copy_from(&(-ac));
+            companion.fixed_view_mut::<12, 12>(12, 12).copy_from(&(-ab));
+            let eigenvalues = companion.complex_eigenvalues();
+            let roots = eigenvalues
+                .iter()
+                .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
+                .copied()
+                .collect();
+            return Some((offset3, roots));
+        }
+        None
+    }
+
+    /// Joints 1 and 2 from the left side's values at joints 3 to 5: the products solved for.
+    fn first_two(&self, left: &[f64; 14]) -> Option<(f64, f64)> {
+        let rhs = SVector::<f64, 14>::from_fn(|k, _| left[k] - self.right[k][0]);
+        let y = self.products.svd(true, true).solve(&rhs, 1e-14).ok()?;
+        // Columns: f1 * 3 + f2 - 1 with f in {1, sin, cos}.
+        let (s2, c2) = (y[0], y[1]);
+        let (s1, c1) = (y[2], y[5]);
+        Some((s1.atan2(c1), s2.atan2(c2)))
+    }
+}
+
+impl Chain {
+    /// The fourteen quantities of `e3 e4 e5` at angles 3, 4, 5.
+    fn left(&self, t3: f64, t4: f64, t5: f64) -> [f64; 14] {
+        let [_, _, l3, l4, l5, l6] = &self.lines;
+        let point = l3.turn(t3, &l4.turn(t4, &l5.turn(t5, &l6.point)));
+        let direction = l3.rotation(t3) * l4.rotation(t4) * l5.rotation(t5) * l6.axis;
+        fourteen(&(point - l3.point), &direction)
+    }
+
+    /// The fourteen quantities of `e2^-1 e1^-1` applied to `point` and `direction`.
+    fn right(&self, t1: f64, t2: f64, point: &Vector3<f64>, direction: &Vector3<f64>) -> [f64; 14] {
+        let [l1, l2, l3, ..] = &self.lines;
+        let moved = l2.turn(-t2, &l1.turn(-t1, point));
+        let turned = l2.rotation(-t2) * l1.rotation(-t1) * direction;
+        fourteen(&(moved - l3.point), &turned)
+    }
+
+    /// Tool pose (rotation, translation) at `q`.
+    fn forward(&self, q: &[f64; 6]) -> (Matrix3<f64>, Vector3<f64>) {
+        let mut rotation = self.home_rotation;
+        let mut translation = self.home_translation;
+        for (line, angle) in self.lines.iter().zip(q).rev() {
+            let r = line.rotation(*angle);
+            rotation = r * rotation;
+            translation = r * (translation - line.point) + line.point;
+        }
+        (rotation, translation)
+    }
+
+    /// Joint 6's angle given joints 1 to 5 and the goal rotation.
+    fn last_angle(&self, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
+        let mut before = Matrix3::identity();
+        for (line, angle) in self.lines.iter().zip(q).take(5) {
+            before *= line.rotation(*angle);
+        }
+        let turn = before.transpose() * goal * self.home_rotation.transpose();
+        let w = self.lines[5].axis;
+        let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let v = w.cross(&helper).normalize();
+        let moved = turn * v;
+        w.dot(&v.cross(&moved)).atan2(v.dot(&moved))
+    }
+}

