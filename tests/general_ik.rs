@@ -94,3 +94,33 @@ fn shipped_six_joint_designs() {
         check_model(path, &model, 5);
     }
 }
+
+/// Solves 40 random poses with the spherical-wrist solver.
+fn check_wrist(name: &str, model: &Model, seed: u64) {
+    use proving_ground::ik::wrist::SphericalWrist;
+    let solver = SphericalWrist::detect(model).unwrap_or_else(|| panic!("{name}: no spherical wrist"));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let (mut total, mut unresolved) = (0, 0);
+    for _ in 0..40 {
+        let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+        let goal = model.tool_pose(&q);
+        let found = solver.solve(&goal);
+        unresolved += usize::from(!found.resolved);
+        total += found.configurations.len();
+        let worst = found.configurations.iter().map(|c| fk_error(model, c, &goal)).fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{name}: a solution misses the pose by {worst}");
+        assert!(
+            found.configurations.iter().any(|c| same(c, &q, 1e-5)),
+            "{name}: the pose's own configuration {q:?} is missing from {:?}",
+            found.configurations
+        );
+    }
+    println!("{name}: wrist: {total} solutions over 40 poses, {unresolved} unresolved, at base {}", solver.at_base());
+}
+
+#[test]
+fn spherical_wrist_designs() {
+    for path in ["designs/abb-irb-2600.json", "designs/economic-spherical-wrist.json"] {
+        check_wrist(path, &shipped(path), 7);
+    }
+}

@@ -21,39 +21,10 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use crate::model::{JointKind, Model};
+use super::lines::{Arm, Chain};
+use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
 use std::f64::consts::PI;
-
-/// One joint's axis line: a point on it and its unit direction.
-#[derive(Debug, Clone, Copy)]
-struct Line {
-    point: Vector3<f64>,
-    axis: Vector3<f64>,
-}
-
-impl Line {
-    /// The rotation of a turn `angle` about the line's direction.
-    fn rotation(&self, angle: f64) -> Matrix3<f64> {
-        let (s, c) = angle.sin_cos();
-        let k = self.axis.cross_matrix();
-        Matrix3::identity() + k * s + k * k * (1.0 - c)
-    }
-
-    /// Point `x` turned by `angle` about the line.
-    fn turn(&self, angle: f64, x: &Vector3<f64>) -> Vector3<f64> {
-        self.rotation(angle) * (x - self.point) + self.point
-    }
-}
-
-/// A 6R chain in product-of-exponentials form, lengths divided by `scale` about `origin`.
-#[derive(Debug, Clone)]
-struct Chain {
-    lines: [Line; 6],
-    /// Home tool pose (rotation, translation).
-    home_rotation: Matrix3<f64>,
-    home_translation: Vector3<f64>,
-}
 
 /// The fourteen Raghavan–Roth quantities of a point `p` and a direction `l`.
 fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
@@ -68,7 +39,7 @@ fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
 const NODES: [f64; 3] = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
 
 /// The inverse of the `{1, sin, cos}` values at [`NODES`]: coefficients from node values.
-fn node_inverse() -> Matrix3<f64> {
+pub(super) fn node_inverse() -> Matrix3<f64> {
     let v = Matrix3::from_fn(|i, f| match f {
         0 => 1.0,
         1 => NODES[i].sin(),
@@ -80,7 +51,7 @@ fn node_inverse() -> Matrix3<f64> {
 
 /// Half-angle form of `{1, sin theta, cos theta}` for `theta = offset + t`, times `1 + x^2`
 /// with `x = tan(t / 2)`: row `f`, column the power of `x`.
-fn half_angle(offset: f64) -> Matrix3<f64> {
+pub(super) fn half_angle(offset: f64) -> Matrix3<f64> {
     let (s, c) = offset.sin_cos();
     // cos t (1 + x^2) = 1 - x^2, sin t (1 + x^2) = 2x.
     Matrix3::new(1.0, 0.0, 1.0, s, 2.0 * c, -s, c, -2.0 * s, -c)
@@ -125,67 +96,25 @@ pub struct General6R {
     elimination: Elimination,
     /// The reversed chain solves it (joint order reversed in the answer).
     reversed: bool,
-    origin: Vector3<f64>,
-    scale: f64,
+    arm: Arm,
 }
 
 impl General6R {
     /// The solver for `model` when it has six revolute joints and the elimination does not
     /// degenerate for its geometry (in the given or the reversed order); `None` otherwise.
     pub fn new(model: &Model) -> Option<General6R> {
-        if model.dof() != 6 || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
-            return None;
-        }
-        let mut ws = model.workspace();
-        model.forward(&[0.0; 6], &mut ws);
-        let raw: [Line; 6] = std::array::from_fn(|i| {
-            let frame = &ws.link_in_world[i + 1];
-            Line {
-                point: frame.translation.vector,
-                axis: (frame.rotation * model.joints[i].axis.into_inner()).normalize(),
-            }
-        });
-        let home = ws.tool_in_world;
-        let origin = raw[0].point;
-        let scale = raw
-            .iter()
-            .map(|l| (l.point - origin).norm())
-            .chain([(home.translation.vector - origin).norm()])
-            .fold(0.0, f64::max);
-        let scale = if scale.is_finite() && scale > 1e-9 { scale } else { 1.0 };
-        let lines = raw.map(|l| Line {
-            point: (l.point - origin) / scale,
-            axis: l.axis,
-        });
-        let home_rotation = home.rotation.to_rotation_matrix().into_inner();
-        let home_translation = (home.translation.vector - origin) / scale;
-        let forward = Chain {
-            lines,
-            home_rotation,
-            home_translation,
-        };
-        // The reversed chain: T^-1 = M^-1 e6(-q6) .. e1(-q1), the lines carried into the home
-        // tool frame with their directions flipped so the angles keep their sign.
-        let inverse_rotation = home_rotation.transpose();
-        let reversed = Chain {
-            lines: std::array::from_fn(|k| {
-                let line = &lines[5 - k];
-                Line {
-                    point: inverse_rotation * (line.point - home_translation),
-                    axis: -(inverse_rotation * line.axis),
-                }
-            }),
-            home_rotation: inverse_rotation,
-            home_translation: -(inverse_rotation * home_translation),
-        };
-        for (chain, is_reversed) in [(forward, false), (reversed, true)] {
-            let elimination = Elimination::new(chain)?;
+        Self::of_arm(Arm::of(model)?)
+    }
+
+    /// The solver of a chain's lines (see [`super::lines`]).
+    pub(crate) fn of_arm(arm: Arm) -> Option<General6R> {
+        for reversed in [false, true] {
+            let elimination = Elimination::new(arm.chain(reversed).clone())?;
             if elimination.regular() {
                 return Some(General6R {
                     elimination,
-                    reversed: is_reversed,
-                    origin,
-                    scale,
+                    reversed,
+                    arm,
                 });
             }
         }
@@ -199,14 +128,7 @@ impl General6R {
 
     /// Every configuration whose tool frame is at world pose `goal`, unpolished.
     pub fn solve(&self, goal: &Isometry3<f64>) -> GeneralSolutions {
-        let rotation = goal.rotation.to_rotation_matrix().into_inner();
-        let translation = (goal.translation.vector - self.origin) / self.scale;
-        let (rotation, translation) = if self.reversed {
-            let inverse = rotation.transpose();
-            (inverse, -(inverse * translation))
-        } else {
-            (rotation, translation)
-        };
+        let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.elimination.solve(&rotation, &translation);
         if self.reversed {
             for q in &mut out.configurations {
@@ -538,31 +460,5 @@ impl Chain {
         let moved = l2.turn(-t2, &l1.turn(-t1, point));
         let turned = l2.rotation(-t2) * l1.rotation(-t1) * direction;
         fourteen(&(moved - l3.point), &turned)
-    }
-
-    /// Tool pose (rotation, translation) at `q`.
-    fn forward(&self, q: &[f64; 6]) -> (Matrix3<f64>, Vector3<f64>) {
-        let mut rotation = self.home_rotation;
-        let mut translation = self.home_translation;
-        for (line, angle) in self.lines.iter().zip(q).rev() {
-            let r = line.rotation(*angle);
-            rotation = r * rotation;
-            translation = r * (translation - line.point) + line.point;
-        }
-        (rotation, translation)
-    }
-
-    /// Joint 6's angle given joints 1 to 5 and the goal rotation.
-    fn last_angle(&self, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
-        let mut before = Matrix3::identity();
-        for (line, angle) in self.lines.iter().zip(q).take(5) {
-            before *= line.rotation(*angle);
-        }
-        let turn = before.transpose() * goal * self.home_rotation.transpose();
-        let w = self.lines[5].axis;
-        let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-        let v = w.cross(&helper).normalize();
-        let moved = turn * v;
-        w.dot(&v.cross(&moved)).atan2(v.dot(&moved))
     }
 }

@@ -5,6 +5,9 @@
 
 pub mod analytic;
 pub mod general;
+mod lines;
+pub mod solvers;
+pub mod wrist;
 mod branches;
 mod dls;
 mod error;
@@ -23,9 +26,9 @@ use crate::model::{JointKind, KinematicsWorkspace, Model};
 use crate::scenario::{Goal, Scenario, Tolerance};
 use crate::collide::MotionBounds;
 use analytic::{AnalyticSolutions, UrArm};
-use general::General6R;
+use solvers::AllSolutions;
 use dls::{Convergence, Solver};
-use nalgebra::{Isometry3, Matrix6, Translation3};
+use nalgebra::{Isometry3, Translation3};
 use rand::SeedableRng;
 use refine::Checker;
 use serde::Serialize;
@@ -136,8 +139,9 @@ pub struct Ik<'a> {
     opts: IkOptions,
     /// The closed form, when the model is a UR-type arm.
     analytic: Option<UrArm>,
-    /// Every solution of any other 6R arm, when the elimination holds for its geometry.
-    general: Option<General6R>,
+    /// Every solution of any other 6R arm (5R on `z_symmetric` goals), when a method holds for
+    /// its geometry, and the goal mode it decides.
+    all: Option<(AllSolutions, Tolerance)>,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
@@ -160,7 +164,7 @@ impl<'a> Ik<'a> {
             solver: Solver::new(model),
             checker: None,
             analytic: UrArm::detect(model),
-            general: None,
+            all: None,
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -176,7 +180,7 @@ impl<'a> Ik<'a> {
             solver: Solver::new(model),
             checker: Some(Checker::new(model, world)),
             analytic: UrArm::detect(model),
-            general: None,
+            all: None,
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -184,18 +188,17 @@ impl<'a> Ik<'a> {
         .with_general()
     }
 
-    /// The general 6R solver where no closed form applies.
+    /// The all-solutions method where no closed form applies.
     fn with_general(mut self) -> Self {
         if self.analytic.is_none() {
-            self.general = General6R::new(self.model);
+            self.all = AllSolutions::of(self.model);
         }
         self
     }
 
-    /// The general 6R solver, when the model is a 6R arm without a closed form and the
-    /// elimination holds for its geometry.
-    pub fn general(&self) -> Option<&General6R> {
-        self.general.as_ref()
+    /// The all-solutions method, when the model has no UR closed form and one applies.
+    pub fn all_solutions(&self) -> Option<&AllSolutions> {
+        self.all.as_ref().map(|(method, _)| method)
     }
 
     /// The closed-form parametrisation, when the model is a UR-type arm.
@@ -215,10 +218,10 @@ impl<'a> Ik<'a> {
         let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
         let all_solutions = self.opts.analytic && finite && matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric);
-        let exact = match (&self.analytic, &self.general) {
+        let exact = match (&self.analytic, &self.all) {
             (Some(arm), _) if all_solutions => arm.solve(&pose),
-            (None, Some(general)) if all_solutions => {
-                let found = general.solve(&pose);
+            (None, Some((method, mode))) if self.opts.analytic && finite && goal.tolerance == *mode => {
+                let found = method.solve(&pose);
                 AnalyticSolutions {
                     configurations: found.configurations,
                     finite: found.resolved,
@@ -227,7 +230,7 @@ impl<'a> Ik<'a> {
             }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
         };
-        if goal.tolerance == Tolerance::ZSymmetric {
+        if goal.tolerance == Tolerance::ZSymmetric && self.analytic.is_some() {
             // A continuum of solutions (any turn about tool z): the goal rotation's own are on
             // every branch, good starts, never the whole set.
             return self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
@@ -274,8 +277,10 @@ impl<'a> Ik<'a> {
         let mut outside: Vec<Vec<f64>> = Vec::new();
         let mut collisions: Vec<String> = Vec::new();
         let mut open: Vec<String> = Vec::new();
+        let dof = self.model.dof();
         for configuration in &exact.configurations {
-            let mut q = configuration.to_vec();
+            // A 5R arm's sixth angle is the virtual joint's.
+            let mut q = configuration[..dof].to_vec();
             let (steps, size, error) = self.polish(goal, &mut q);
             iterations += steps;
             complete &= size <= EXACT;
@@ -287,14 +292,14 @@ impl<'a> Ik<'a> {
                 // The error at the whole-turn equivalent differs by rounding only.
                 let solution = self.judge(goal, q, Some(error), margin);
                 if solution.pose_reached && !solution.reached {
-                    match self.collision_certificate(&solution, margin) {
+                    match self.collision_certificate(goal, &solution, margin) {
                         Ok(pair) => collisions.push(pair),
                         Err(why) => open.push(why),
                     }
                 }
                 found.push(solution);
             } else {
-                if let Err(why) = self.limits_certificate(&q) {
+                if let Err(why) = self.limits_certificate(goal, &q) {
                     open.push(why);
                 }
                 outside.push(q);
@@ -371,24 +376,24 @@ impl<'a> Ik<'a> {
 
     /// Which all-solutions method this solver uses, for proofs.
     fn method(&self) -> &'static str {
-        if self.analytic.is_some() {
-            "closed-form IK"
-        } else {
-            "all-solutions IK (general 6R)"
+        match (&self.analytic, &self.all) {
+            (Some(_), _) => "closed-form IK",
+            (None, Some((method, _))) => method.name(),
+            (None, None) => "numeric IK",
         }
     }
 
     /// How far each joint may be from solution `q` while the tool stays within the goal's
     /// tolerance: the inverse Jacobian's rows against 1 mm and 1 degree, doubled for the
     /// curvature; `None` near a singularity, where that is no bound.
-    fn tolerance_reach(&mut self, q: &[f64]) -> Option<Vec<f64>> {
-        self.model.tool_jacobian(q, &mut self.ws);
-        let jacobian = Matrix6::from_fn(|r, c| self.ws.jacobian[(r, c)]);
-        let inverse = jacobian.try_inverse()?;
-        let reach: Vec<f64> = (0..6)
+    fn tolerance_reach(&mut self, goal: &Goal, q: &[f64]) -> Option<Vec<f64>> {
+        // Columns: constrained rows (position first); the rotation rows' error is at most the
+        // tolerance angle in whichever directions are constrained.
+        let inverse = self.constrained_inverse(goal, q)?;
+        let reach: Vec<f64> = (0..q.len())
             .map(|i| {
-                let position = inverse.fixed_view::<1, 3>(i, 0).norm();
-                let rotation = inverse.fixed_view::<1, 3>(i, 3).norm();
+                let position = inverse.view((i, 0), (1, 3)).norm();
+                let rotation = inverse.view((i, 3), (1, 3)).norm();
                 TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD)
             })
             .collect();
@@ -397,13 +402,13 @@ impl<'a> Ik<'a> {
 
     /// The colliding pair that stays colliding throughout the tolerance neighbourhood of
     /// `solution` (the checker's last query), named with its depth; else why not.
-    fn collision_certificate(&mut self, solution: &IkSolution, margin: f64) -> Result<String, String> {
+    fn collision_certificate(&mut self, goal: &Goal, solution: &IkSolution, margin: f64) -> Result<String, String> {
         let clearance = solution.clearance.map_or(f64::INFINITY, |c| c.exact_m);
         let pair = self.checker.as_ref().and_then(|c| c.closest_pair());
         let Some((a, b, name)) = pair else {
             return Err("a solution's collision was not measured".into());
         };
-        let Some(reach) = self.tolerance_reach(&solution.q) else {
+        let Some(reach) = self.tolerance_reach(goal, &solution.q) else {
             return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
         };
         let motion = self.bounds.relative_motion(a, b, &reach);
@@ -420,8 +425,8 @@ impl<'a> Ik<'a> {
 
     /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays
     /// outside them throughout the goal's tolerance; else why not.
-    fn limits_certificate(&mut self, q: &[f64]) -> Result<(), String> {
-        let Some(reach) = self.tolerance_reach(q) else {
+    fn limits_certificate(&mut self, goal: &Goal, q: &[f64]) -> Result<(), String> {
+        let Some(reach) = self.tolerance_reach(goal, q) else {
             return Err("a solution outside the joint limits is near a singularity".into());
         };
         let mut closest: Option<(usize, f64)> = None;
@@ -464,11 +469,9 @@ impl<'a> Ik<'a> {
         let mut tool = self.model.tool_pose(q);
         let (mut e, mut size) = error_of(&tool);
         let mut steps = 0;
+        let mut next = vec![0.0; q.len()];
         while size > POLISHED && steps < POLISH_STEPS {
-            self.model.tool_jacobian(q, &mut self.ws);
-            let jacobian = Matrix6::from_fn(|r, c| self.ws.jacobian[(r, c)]);
-            let Some(step) = jacobian.lu().solve(&e) else { break };
-            let mut next = [0.0; 6];
+            let Some(step) = self.newton_step(goal, q, &e) else { break };
             for ((n, value), delta) in next.iter_mut().zip(q.iter()).zip(step.iter()) {
                 *n = wrap_angle(value + delta);
             }
@@ -483,6 +486,37 @@ impl<'a> Ik<'a> {
             (tool, e, size) = (next_tool, next_e, next_size);
         }
         (steps, size, goal_error(goal, &tool))
+    }
+
+    /// The joint step that removes task error `e` at `q` to first order, over the directions
+    /// the goal constrains (six for `pose`; five for `z_symmetric`: no turn about goal z); `None`
+    /// when they are not as many as the joints, or the Jacobian is singular there.
+    fn newton_step(&mut self, goal: &Goal, q: &[f64], e: &nalgebra::Vector6<f64>) -> Option<Vec<f64>> {
+        let inverse = self.constrained_inverse(goal, q)?;
+        let constrained = constrained_rows(goal) * e;
+        Some((0..q.len()).map(|i| (0..6).map(|k| inverse[(i, k)] * constrained[k]).sum()).collect())
+    }
+
+    /// The inverse of the Jacobian's constrained rows at `q` (joints by 6, the unconstrained
+    /// rows' columns zero); `None` as in [`Self::newton_step`].
+    fn constrained_inverse(&mut self, goal: &Goal, q: &[f64]) -> Option<nalgebra::DMatrix<f64>> {
+        self.model.tool_jacobian(q, &mut self.ws);
+        let dof = q.len();
+        let rows = constrained_rows(goal);
+        let constrained = match goal.tolerance {
+            Tolerance::Pose => 6,
+            Tolerance::ZSymmetric => 5,
+            Tolerance::Position => 3,
+        };
+        if constrained != dof {
+            return None;
+        }
+        let projected = rows * &self.ws.jacobian;
+        let square = projected.rows(0, dof).into_owned();
+        let inverse = square.try_inverse()?;
+        let mut out = nalgebra::DMatrix::zeros(dof, 6);
+        out.view_mut((0, 0), (dof, dof)).copy_from(&inverse);
+        Some(out)
     }
 
     /// Moves each revolute angle of `q` by whole turns into its limits, to the equivalent nearest
@@ -716,8 +750,28 @@ impl<'a> Ik<'a> {
 /// Doubles the linearised tolerance neighbourhood of a solution: the pose error is not linear
 /// in the joints, and a certificate must hold for all of it.
 const TOLERANCE_CURVATURE: f64 = 2.0;
-/// Joint motions (rad) beyond which the linearised neighbourhood is no bound.
-const LINEAR_REACH_RAD: f64 = 0.1;
+/// Joint motions (rad) beyond which the linearised neighbourhood is no bound (near a
+/// singularity the tolerance may reach a different branch).
+const LINEAR_REACH_RAD: f64 = 0.5;
+
+/// The rows of the task error a goal constrains, first: all six for `pose`; for `z_symmetric`
+/// the position and the two turns across goal z (the last row zero); the position alone for
+/// `position`.
+fn constrained_rows(goal: &Goal) -> nalgebra::Matrix6<f64> {
+    let mut rows = nalgebra::Matrix6::identity();
+    match goal.tolerance {
+        Tolerance::Pose => {}
+        Tolerance::ZSymmetric => {
+            let x = goal.rotation * nalgebra::Vector3::x();
+            let y = goal.rotation * nalgebra::Vector3::y();
+            rows.fixed_view_mut::<3, 3>(3, 3).fill(0.0);
+            rows.fixed_view_mut::<1, 3>(3, 3).copy_from(&x.transpose());
+            rows.fixed_view_mut::<1, 3>(4, 3).copy_from(&y.transpose());
+        }
+        Tolerance::Position => rows.fixed_view_mut::<3, 3>(3, 3).fill(0.0),
+    }
+    rows
+}
 
 /// How far (rad or m) joint value `value` is outside the joint's limits, over its whole-turn
 /// equivalents for a revolute joint; 0 when within them or unlimited.

@@ -155,6 +155,10 @@ pub struct GoalReport {
     /// Why no configuration can reach the goal, when that is proven (beyond the arm's reach,
     /// inside an obstacle, or by the closed form's complete solution set); `None` otherwise.
     pub proven: Option<String>,
+    /// Why a goal every solution of which is known is still undecided (a solution whose
+    /// tolerance neighbourhood may hold a free configuration, a singular pose); `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub undecided: Option<String>,
     /// IK found a collision-free solution within the thresholds.
     pub reached: bool,
     /// Distinct solutions IK found that reach the pose (colliding or not).
@@ -447,6 +451,10 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                 tolerance: goal.tolerance,
                 outcome,
                 proven: if outcome == "unreachable" { validation.proof(index) } else { None },
+                undecided: match outcome {
+                    "undecided" => validation.solutions.get(index).and_then(|g| g.undecided.clone()),
+                    _ => None,
+                },
                 reached: ik_reached,
                 solutions_found: found.iter().filter(|s| s.pose_reached).count(),
                 solutions_complete: validation.solutions.get(index).is_some_and(|g| g.complete),

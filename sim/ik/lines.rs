@@ -1,0 +1,194 @@
+//! A 6R arm as its six joint axis lines at `q = 0` and its home tool pose, in product-of-
+//! exponentials form (`T(q) = e1(q1) .. e6(q6) M`, `e_i` the turn about line `i`), read from the
+//! model's own FK: no DH fit, any joint frames. Lengths are divided by the arm's size about joint
+//! 1's origin, so the all-solutions methods see numbers near 1 whatever the units. The reversed
+//! chain (`T^-1 = M^-1 e6(-q6) .. e1(-q1)`) is a 6R arm too: a method that needs special
+//! structure at the wrist applies it at the base by solving the reversed chain.
+
+use crate::model::{JointKind, Model};
+use nalgebra::{Isometry3, Matrix3, Vector3};
+
+/// One joint's axis line: a point on it and its unit direction.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Line {
+    pub(crate) point: Vector3<f64>,
+    pub(crate) axis: Vector3<f64>,
+}
+
+impl Line {
+    /// The rotation of a turn `angle` about the line's direction.
+    pub(crate) fn rotation(&self, angle: f64) -> Matrix3<f64> {
+        let (s, c) = angle.sin_cos();
+        let k = self.axis.cross_matrix();
+        Matrix3::identity() + k * s + k * k * (1.0 - c)
+    }
+
+    /// Point `x` turned by `angle` about the line.
+    pub(crate) fn turn(&self, angle: f64, x: &Vector3<f64>) -> Vector3<f64> {
+        self.rotation(angle) * (x - self.point) + self.point
+    }
+}
+
+/// A 6R chain in product-of-exponentials form, lengths divided by `scale` about `origin`.
+#[derive(Debug, Clone)]
+pub(crate) struct Chain {
+    pub(crate) lines: [Line; 6],
+    /// Home tool pose (rotation, translation).
+    pub(crate) home_rotation: Matrix3<f64>,
+    pub(crate) home_translation: Vector3<f64>,
+}
+
+
+impl Chain {
+    /// Tool pose (rotation, translation) at `q`.
+    pub(crate) fn forward(&self, q: &[f64; 6]) -> (Matrix3<f64>, Vector3<f64>) {
+        let mut rotation = self.home_rotation;
+        let mut translation = self.home_translation;
+        for (line, angle) in self.lines.iter().zip(q).rev() {
+            let r = line.rotation(*angle);
+            rotation = r * rotation;
+            translation = r * (translation - line.point) + line.point;
+        }
+        (rotation, translation)
+    }
+
+    /// Joint 6's angle given joints 1 to 5 and the goal rotation.
+    pub(crate) fn last_angle(&self, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
+        let mut before = Matrix3::identity();
+        for (line, angle) in self.lines.iter().zip(q).take(5) {
+            before *= line.rotation(*angle);
+        }
+        let turn = before.transpose() * goal * self.home_rotation.transpose();
+        let w = self.lines[5].axis;
+        let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let v = w.cross(&helper).normalize();
+        let moved = turn * v;
+        w.dot(&v.cross(&moved)).atan2(v.dot(&moved))
+    }
+}
+
+/// An arm's chain in both orders, with the scaling that made it.
+#[derive(Debug, Clone)]
+pub(crate) struct Arm {
+    pub(crate) forward: Chain,
+    pub(crate) reversed: Chain,
+    origin: Vector3<f64>,
+    scale: f64,
+}
+
+impl Arm {
+    /// The chains of `model` when it has six revolute joints.
+    pub(crate) fn of(model: &Model) -> Option<Arm> {
+        if model.dof() != 6 {
+            return None;
+        }
+        Self::with_lines(model)
+    }
+
+    /// The chains of a five-joint `model` with a sixth, virtual joint turning the tool about its
+    /// own z axis: a `z_symmetric` goal of the five joints is a pose goal of the six (the virtual
+    /// angle is the free turn about tool z).
+    pub(crate) fn with_virtual_tool_joint(model: &Model) -> Option<Arm> {
+        if model.dof() != 5 {
+            return None;
+        }
+        Self::with_lines(model)
+    }
+
+    /// The axis lines of every joint, and of a virtual one about tool z where only five exist.
+    fn with_lines(model: &Model) -> Option<Arm> {
+        if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+            return None;
+        }
+        let mut ws = model.workspace();
+        model.forward(&vec![0.0; model.dof()], &mut ws);
+        let home = ws.tool_in_world;
+        let raw: [Line; 6] = std::array::from_fn(|i| match model.joints.get(i) {
+            Some(joint) => {
+                let frame = &ws.link_in_world[i + 1];
+                Line {
+                    point: frame.translation.vector,
+                    axis: (frame.rotation * joint.axis.into_inner()).normalize(),
+                }
+            }
+            None => Line {
+                point: home.translation.vector,
+                axis: home.rotation * Vector3::z(),
+            },
+        });
+        let origin = raw[0].point;
+        let scale = raw
+            .iter()
+            .map(|l| (l.point - origin).norm())
+            .chain([(home.translation.vector - origin).norm()])
+            .fold(0.0, f64::max);
+        let scale = if scale.is_finite() && scale > 1e-9 { scale } else { 1.0 };
+        let lines = raw.map(|l| Line {
+            point: (l.point - origin) / scale,
+            axis: l.axis,
+        });
+        if lines.iter().any(|l| !(l.point.iter().chain(l.axis.iter()).all(|x| x.is_finite()))) {
+            return None;
+        }
+        let home_rotation = home.rotation.to_rotation_matrix().into_inner();
+        let home_translation = (home.translation.vector - origin) / scale;
+        let forward = Chain {
+            lines,
+            home_rotation,
+            home_translation,
+        };
+        // The lines carried into the home tool frame, their directions flipped so the angles
+        // keep their sign.
+        let inverse_rotation = home_rotation.transpose();
+        let reversed = Chain {
+            lines: std::array::from_fn(|k| {
+                let line = &lines[5 - k];
+                Line {
+                    point: inverse_rotation * (line.point - home_translation),
+                    axis: -(inverse_rotation * line.axis),
+                }
+            }),
+            home_rotation: inverse_rotation,
+            home_translation: -(inverse_rotation * home_translation),
+        };
+        Some(Arm {
+            forward,
+            reversed,
+            origin,
+            scale,
+        })
+    }
+
+    /// The chain in the given order.
+    pub(crate) fn chain(&self, reversed: bool) -> &Chain {
+        if reversed {
+            &self.reversed
+        } else {
+            &self.forward
+        }
+    }
+
+    /// World pose `goal` as the pose (rotation, translation) the chain in the given order must
+    /// reach.
+    pub(crate) fn goal(&self, goal: &Isometry3<f64>, reversed: bool) -> (Matrix3<f64>, Vector3<f64>) {
+        let rotation = goal.rotation.to_rotation_matrix().into_inner();
+        let translation = (goal.translation.vector - self.origin) / self.scale;
+        if reversed {
+            let inverse = rotation.transpose();
+            (inverse, -(inverse * translation))
+        } else {
+            (rotation, translation)
+        }
+    }
+}
+
+/// The angle of the turn about unit `axis` that takes `from` to `to` (their parts across the
+/// axis); `None` when either part is shorter than `shortest` (on the axis: any angle).
+pub(crate) fn angle_about(axis: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3<f64>, shortest: f64) -> Option<f64> {
+    let u = from - axis * axis.dot(from);
+    let v = to - axis * axis.dot(to);
+    if u.norm() < shortest || v.norm() < shortest {
+        return None;
+    }
+    Some(axis.dot(&u.cross(&v)).atan2(u.dot(&v)))
+}

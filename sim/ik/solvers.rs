@@ -1,0 +1,76 @@
+//! Which all-solutions method serves a model: chosen once, from its axis lines.
+//!
+//! UR-type arms have their own closed form ([`super::analytic`]). Otherwise, for a 6R arm on
+//! `pose` goals or a 5R arm on `z_symmetric` goals (a virtual sixth joint about tool z): Pieper's
+//! decomposition where three consecutive axes meet at either end ([`super::wrist`]), else the
+//! general elimination ([`super::general`]) where it holds for the geometry.
+
+use super::general::General6R;
+use super::lines::Arm;
+use super::wrist::SphericalWrist;
+use crate::model::Model;
+use crate::scenario::Tolerance;
+use nalgebra::Isometry3;
+
+/// An all-solutions method of one model.
+#[derive(Debug, Clone)]
+pub enum AllSolutions {
+    /// Three consecutive axes meet at the wrist or at the base.
+    Wrist(SphericalWrist),
+    /// Any other 6R geometry the elimination holds for.
+    General(General6R),
+}
+
+/// Every solution of one pose, unpolished, each with six angles (the sixth is the virtual
+/// joint's for a 5R arm).
+#[derive(Debug, Clone, Default)]
+pub struct Solutions {
+    /// The configurations, angles in (-pi, pi].
+    pub configurations: Vec<[f64; 6]>,
+    /// Every solution is listed, given each is verified (see the methods' `resolved`).
+    pub resolved: bool,
+}
+
+impl AllSolutions {
+    /// The method for `model`, and the goal mode it decides (`pose` for six joints,
+    /// `z_symmetric` for five); `None` when no method applies.
+    pub fn of(model: &Model) -> Option<(AllSolutions, Tolerance)> {
+        let (arm, tolerance) = match model.dof() {
+            6 => (Arm::of(model)?, Tolerance::Pose),
+            5 => (Arm::with_virtual_tool_joint(model)?, Tolerance::ZSymmetric),
+            _ => return None,
+        };
+        if let Some(wrist) = SphericalWrist::of_arm(arm.clone()) {
+            return Some((AllSolutions::Wrist(wrist), tolerance));
+        }
+        General6R::of_arm(arm).map(|general| (AllSolutions::General(general), tolerance))
+    }
+
+    /// The method's name, for proofs.
+    pub fn name(&self) -> &'static str {
+        match self {
+            AllSolutions::Wrist(_) => "all-solutions IK (spherical wrist)",
+            AllSolutions::General(_) => "all-solutions IK (general 6R)",
+        }
+    }
+
+    /// Every configuration reaching world pose `goal`.
+    pub fn solve(&self, goal: &Isometry3<f64>) -> Solutions {
+        match self {
+            AllSolutions::Wrist(wrist) => {
+                let found = wrist.solve(goal);
+                Solutions {
+                    configurations: found.configurations,
+                    resolved: found.resolved,
+                }
+            }
+            AllSolutions::General(general) => {
+                let found = general.solve(goal);
+                Solutions {
+                    configurations: found.configurations,
+                    resolved: found.resolved,
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,329 @@
+//! Every solution of a pose of a 6R arm whose last three axes meet in one point (a spherical
+//! wrist: Pieper's decomposition), or whose first three do (the same on the reversed chain).
+//!
+//! The wrist centre `c` is fixed by joints 4 to 6, so `e1 e2 e3 c = T M^-1 c =: X`: a 3R
+//! positioning problem. Turning about axis 1 keeps a point's distance from a point `o` of that
+//! axis and its height along it, so `|e2 e3 c - o|^2 = |X - o|^2` and `w1 . (e2 e3 c - o) =
+//! w1 . (X - o)`: two equations in joints 2 and 3, each a combination of `{1, s2, c2} x {1, s3,
+//! c3}` (read off exactly by interpolation, as in [`super::general`]). With half-angle tangents
+//! they are two quadratics in `x2`; their Sylvester resultant is a 4 x 4 matrix quadratic in `x3`
+//! whose determinant vanishes at each solution (at most 4 real), found as an 8 x 8 companion
+//! eigenproblem. Joint 1 is the turn about axis 1 onto `X`; joints 4 and 5 turn axis 6 onto its
+//! goal direction (the two-rotation subproblem, up to two ways, for any twist between the wrist
+//! axes); joint 6 is the rest.
+
+use super::lines::{angle_about, Arm, Chain};
+use crate::model::Model;
+use nalgebra::{Complex, Isometry3, Matrix3, Matrix4, SMatrix, Vector3};
+use std::f64::consts::PI;
+
+/// Lines closer than this (scaled lengths) meet.
+const MEET: f64 = 1e-9;
+/// Sine of the angle below which two wrist axes count as parallel: no spherical wrist.
+const PARALLEL: f64 = 1e-6;
+/// A point closer than this (scaled) to an axis leaves that joint's angle free: a continuum.
+const ON_AXIS: f64 = 1e-9;
+/// Largest imaginary part (relative) of a root still tried as real (see `general`).
+const NEAR_REAL: f64 = 1e-4;
+/// Offsets of the half-angle tangents of joints 2 and 3 (rad), and retries for joint 3.
+const OFFSET2: f64 = 0.583_117_2;
+const OFFSETS3: [f64; 4] = [-1.193_406_1, 0.377_212_9, 2.441_730_5, -2.806_102_3];
+
+/// Every solution of one pose, unpolished.
+#[derive(Debug, Clone, Default)]
+pub struct WristSolutions {
+    /// Joint configurations in the model's convention, angles in (-pi, pi].
+    pub configurations: Vec<[f64; 6]>,
+    /// Every solution is listed (given each is verified by the caller); false at a singular
+    /// pose (a continuum of solutions) or where a root could not be resolved.
+    pub resolved: bool,
+}
+
+/// Pieper's solver of one model.
+#[derive(Debug, Clone)]
+pub struct SphericalWrist {
+    arm: Arm,
+    /// The wrist is at the base: the reversed chain is solved.
+    reversed: bool,
+    /// The wrist centre (scaled chain coordinates).
+    centre: Vector3<f64>,
+    /// `[equation][{1, s2, c2} x {1, s3, c3}]`: squared distance from axis 1's point, height
+    /// along axis 1.
+    position: [[f64; 9]; 2],
+}
+
+impl SphericalWrist {
+    /// The solver of `model` when it is a 6R arm with three consecutive axes meeting at one end
+    /// (the last three, else the first three).
+    pub fn detect(model: &Model) -> Option<SphericalWrist> {
+        Self::of_arm(Arm::of(model)?)
+    }
+
+    /// The solver of a chain's lines (see [`super::lines`]).
+    pub(crate) fn of_arm(arm: Arm) -> Option<SphericalWrist> {
+        for reversed in [false, true] {
+            let chain = arm.chain(reversed);
+            let Some(centre) = meeting_point(chain) else { continue };
+            let position = position_coefficients(chain, &centre);
+            let wrist = SphericalWrist {
+                arm: arm.clone(),
+                reversed,
+                centre,
+                position,
+            };
+            if wrist.regular() {
+                return Some(wrist);
+            }
+        }
+        None
+    }
+
+    /// Whether the wrist is at the base (axes 1 to 3 meet).
+    pub fn at_base(&self) -> bool {
+        self.reversed
+    }
+
+    /// Whether the positioning resultant holds for this arm: not identically zero.
+    fn regular(&self) -> bool {
+        let chain = self.arm.chain(self.reversed);
+        let q = [0.7, -0.9, 1.2, 0.4, -1.1, 0.3];
+        let (rotation, translation) = chain.forward(&q);
+        let [s0, s1, s2] = self.resultant(&rotation, &translation, OFFSETS3[0]);
+        let probe = s0 + s1 * 0.41 + s2 * (0.41 * 0.41);
+        let sigma = probe.svd(false, false).singular_values;
+        sigma.min() > 1e-10 * sigma.max()
+    }
+
+    /// Every configuration whose tool frame is at world pose `goal`, unpolished.
+    pub fn solve(&self, goal: &Isometry3<f64>) -> WristSolutions {
+        let (rotation, translation) = self.arm.goal(goal, self.reversed);
+        let mut out = self.solve_chain(&rotation, &translation);
+        if self.reversed {
+            for q in &mut out.configurations {
+                q.reverse();
+            }
+        }
+        out
+    }
+
+    /// The resultant's matrix coefficients of `x3^0, x3^1, x3^2` at a pose.
+    fn resultant(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, offset3: f64) -> [Matrix4<f64>; 3] {
+        let chain = self.arm.chain(self.reversed);
+        let target = self.target(chain, rotation, translation);
+        let axis1 = &chain.lines[0];
+        let relative = target - axis1.point;
+        let goals = [relative.norm_squared(), axis1.axis.dot(&relative)];
+        let (h2, h3) = (super::general::half_angle(OFFSET2), super::general::half_angle(offset3));
+        // poly[equation][power of x2][power of x3]
+        let mut poly = [[[0.0; 3]; 3]; 2];
+        for (e, coefficients) in self.position.iter().enumerate() {
+            for f2 in 0..3 {
+                for f3 in 0..3 {
+                    let mut c = coefficients[f2 * 3 + f3];
+                    if f2 == 0 && f3 == 0 {
+                        c -= goals[e];
+                    }
+                    for p2 in 0..3 {
+                        for p3 in 0..3 {
+                            poly[e][p2][p3] += c * h2[(f2, p2)] * h3[(f3, p3)];
+                        }
+                    }
+                }
+            }
+        }
+        // Sylvester rows: each quadratic in x2 times x2 and times 1, against (x2^3, x2^2, x2, 1).
+        let mut out = [Matrix4::zeros(); 3];
+        for (e, equation) in poly.iter().enumerate() {
+            for shift in 0..2 {
+                let row = 2 * e + shift;
+                for (p2, by3) in equation.iter().enumerate() {
+                    let column = 3 - (p2 + shift);
+                    for (p3, value) in by3.iter().enumerate() {
+                        out[p3][(row, column)] = *value;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Where the wrist centre must be: `T M^-1 c`.
+    fn target(&self, chain: &Chain, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Vector3<f64> {
+        rotation * (chain.home_rotation.transpose() * (self.centre - chain.home_translation)) + translation
+    }
+
+    fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> WristSolutions {
+        let mut out = WristSolutions::default();
+        let chain = self.arm.chain(self.reversed);
+        let Some((offset3, roots)) = self.roots(rotation, translation) else { return out };
+        out.resolved = true;
+        let target = self.target(chain, rotation, translation);
+        let [l1, l2, l3, ..] = &chain.lines;
+        let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
+        for x3 in roots {
+            let [s0, s1, s2] = self.resultant(rotation, translation, offset3);
+            let matrix = s0 + s1 * x3 + s2 * (x3 * x3);
+            let svd = matrix.svd(false, true);
+            let Some(v_t) = svd.v_t else {
+                out.resolved = false;
+                continue;
+            };
+            let sigma = svd.singular_values;
+            let (smallest, _) = sigma.argmin();
+            let second = (0..4).filter(|&i| i != smallest).map(|i| sigma[i]).fold(f64::INFINITY, f64::min);
+            let t3 = offset3 + 2.0 * x3.atan();
+            let t2s: Vec<f64> = if second < 1e-7 * sigma.max() {
+                // Both quadratics share both roots in x2: solve one of them.
+                self.shared_roots(rotation, translation, offset3, x3)
+            } else {
+                let v: [f64; 4] = std::array::from_fn(|i| v_t[(smallest, i)]);
+                // (x2^3, x2^2, x2, 1): the ratio by least squares.
+                let x2 = (v[0] * v[1] + v[1] * v[2] + v[2] * v[3]) / (v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+                vec![OFFSET2 + 2.0 * x2.atan()]
+            };
+            for t2 in t2s {
+                let point = l2.turn(t2, &l3.turn(t3, &self.centre));
+                let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS) else {
+                    // The wrist centre on axis 1: joint 1 is free.
+                    out.resolved = false;
+                    continue;
+                };
+                positions.push([t1, t2, t3]);
+            }
+        }
+        for [t1, t2, t3] in positions {
+            let before = l1.rotation(t1) * l2.rotation(t2) * l3.rotation(t3);
+            let wrist = before.transpose() * rotation * chain.home_rotation.transpose();
+            let [.., l4, l5, l6] = &chain.lines;
+            let (w4, w5, w6) = (l4.axis, l5.axis, l6.axis);
+            let goal = wrist * w6;
+            let cosine = w4.dot(&w5);
+            let normal = w4.cross(&w5);
+            let denominator = 1.0 - cosine * cosine;
+            let alpha = (goal.dot(&w4) - cosine * w6.dot(&w5)) / denominator;
+            let beta = (w6.dot(&w5) - cosine * goal.dot(&w4)) / denominator;
+            let squared = (1.0 - alpha * alpha - beta * beta - 2.0 * alpha * beta * cosine) / normal.norm_squared();
+            if squared < -1e-12 {
+                continue;
+            }
+            let gamma = squared.max(0.0).sqrt();
+            let signs: &[f64] = if gamma == 0.0 { &[1.0] } else { &[1.0, -1.0] };
+            for sign in signs {
+                let z = w4 * alpha + w5 * beta + normal * (sign * gamma);
+                let (Some(t5), Some(t4)) = (angle_about(&w5, &w6, &z, ON_AXIS), angle_about(&w4, &z, &goal, ON_AXIS)) else {
+                    // Axis 6 along axis 4: joints 4 and 6 turn about one line.
+                    out.resolved = false;
+                    continue;
+                };
+                let mut q = [t1, t2, t3, t4, t5, 0.0];
+                q[5] = chain.last_angle(&q, rotation);
+                out.configurations.push(q.map(super::wrap_angle));
+            }
+        }
+        out
+    }
+
+    /// The offset used and the near-real roots in `x3`; `None` when the leading matrix is
+    /// singular at every offset tried.
+    fn roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<(f64, Vec<f64>)> {
+        for offset3 in OFFSETS3 {
+            let [c, b, a] = self.resultant(rotation, translation, offset3);
+            let sigma = a.svd(false, false).singular_values;
+            if !(sigma.min() > 1e-8 * sigma.max()) {
+                continue;
+            }
+            let lu = a.lu();
+            let (Some(ac), Some(ab)) = (lu.solve(&c), lu.solve(&b)) else { continue };
+            let mut companion = SMatrix::<f64, 8, 8>::zeros();
+            companion.fixed_view_mut::<4, 4>(0, 4).fill_with_identity();
+            companion.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-ac));
+            companion.fixed_view_mut::<4, 4>(4, 4).copy_from(&(-ab));
+            let roots = near_real(companion.complex_eigenvalues().iter());
+            return Some((offset3, roots));
+        }
+        None
+    }
+
+    /// The real roots in `x2` of the first quadratic at `x3` (both share them).
+    fn shared_roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, offset3: f64, x3: f64) -> Vec<f64> {
+        let [s0, s1, s2] = self.resultant(rotation, translation, offset3);
+        let m = s0 + s1 * x3 + s2 * (x3 * x3);
+        // Rows 0 and 2: (0, a, b, c) of a x2^2 + b x2 + c, one per equation: take the larger.
+        let row = if m.row(0).norm() >= m.row(2).norm() { 0 } else { 2 };
+        let (a, b, c) = (m[(row, 1)], m[(row, 2)], m[(row, 3)]);
+        let mut out = Vec::new();
+        if a.abs() < 1e-14 {
+            if b.abs() > 1e-14 {
+                out.push(-c / b);
+            }
+        } else {
+            let disc = b * b - 4.0 * a * c;
+            if disc >= 0.0 {
+                let root = disc.sqrt();
+                out.push((-b + root) / (2.0 * a));
+                out.push((-b - root) / (2.0 * a));
+            }
+        }
+        out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
+    }
+}
+
+/// The real parts of the eigenvalues within [`NEAR_REAL`] of the real line.
+fn near_real<'a>(values: impl Iterator<Item = &'a Complex<f64>>) -> Vec<f64> {
+    values
+        .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
+        .map(|z| z.re)
+        .collect()
+}
+
+/// Where the chain's last three axes meet, when they do and no two are parallel.
+fn meeting_point(chain: &Chain) -> Option<Vector3<f64>> {
+    let [.., l4, l5, l6] = &chain.lines;
+    let a = crossing(l4.point, l4.axis, l5.point, l5.axis)?;
+    let b = crossing(l5.point, l5.axis, l6.point, l6.axis)?;
+    ((a - b).norm() < MEET).then(|| (a + b) / 2.0)
+}
+
+/// The point where two non-parallel lines meet, when they do.
+fn crossing(p: Vector3<f64>, u: Vector3<f64>, q: Vector3<f64>, v: Vector3<f64>) -> Option<Vector3<f64>> {
+    let n = u.cross(&v);
+    if n.norm() < PARALLEL {
+        return None;
+    }
+    let w = p - q;
+    let b = u.dot(&v);
+    let denominator = 1.0 - b * b;
+    let s = (b * v.dot(&w) - u.dot(&w)) / denominator;
+    let t = (v.dot(&w) - b * u.dot(&w)) / denominator;
+    let (on_first, on_second) = (p + u * s, q + v * t);
+    ((on_first - on_second).norm() < MEET).then(|| (on_first + on_second) / 2.0)
+}
+
+/// The two positioning equations' coefficients, interpolated at three angles per joint.
+fn position_coefficients(chain: &Chain, centre: &Vector3<f64>) -> [[f64; 9]; 2] {
+    let nodes = super::general::node_inverse();
+    let angles = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
+    let [l1, l2, l3, ..] = &chain.lines;
+    let mut values = [[[0.0; 2]; 3]; 3];
+    for (i2, row) in values.iter_mut().enumerate() {
+        for (i3, value) in row.iter_mut().enumerate() {
+            let point = l2.turn(angles[i2], &l3.turn(angles[i3], centre)) - l1.point;
+            *value = [point.norm_squared(), l1.axis.dot(&point)];
+        }
+    }
+    let mut out = [[0.0; 9]; 2];
+    for (e, equation) in out.iter_mut().enumerate() {
+        for f2 in 0..3 {
+            for f3 in 0..3 {
+                let mut sum = 0.0;
+                for (i2, row) in values.iter().enumerate() {
+                    for (i3, value) in row.iter().enumerate() {
+                        sum += nodes[(f2, i2)] * nodes[(f3, i3)] * value[e];
+                    }
+                }
+                equation[f2 * 3 + f3] = sum;
+            }
+        }
+    }
+    out
+}
