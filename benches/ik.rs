@@ -3,6 +3,11 @@
 //! branch restarts that find every branch: `ik-4-seeds-branches`); the closed form of a UR-type arm a few
 //! microseconds per goal, every solution found, polished and judged (`ik-closed-form`), of
 //! which the bare closed form (`closed-form-bare`) is a fraction.
+//!
+//! Issue 22: every solution of a pose, bare (`all-solutions-bare`: the general 6R elimination on
+//! `free-offset-6dof`, target median <= 20 us; the spherical wrist on `abb-irb-2600` and
+//! `economic-spherical-wrist`, target <= 3 us) and polished, deduplicated and judged
+//! (`ik-all-solutions`).
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -19,6 +24,8 @@ fn ik(c: &mut Criterion) {
         "designs/modular-elbow.json",
         "designs/paper-real-world.json",
         "designs/free-offset-6dof.json",
+        "designs/abb-irb-2600.json",
+        "designs/economic-spherical-wrist.json",
     ] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(design);
         let model = load_model(&path, &LoadOptions::default()).expect("shipped design loads");
@@ -53,6 +60,24 @@ fn ik(c: &mut Criterion) {
             });
         }
         let mut solver = Ik::new(&model, IkOptions::default());
+        if let Some(method) = solver.all_solutions().cloned() {
+            let poses: Vec<nalgebra::Isometry3<f64>> = goals
+                .iter()
+                .map(|g| nalgebra::Isometry3::from_parts(g.position.into(), g.rotation))
+                .collect();
+            c.bench_function(&format!("ik-all-solutions/{}", model.name), |b| {
+                b.iter(|| {
+                    i = (i + 1) % goals.len();
+                    black_box(solver.solve(black_box(&goals[i]), i, None).reached())
+                })
+            });
+            c.bench_function(&format!("all-solutions-bare/{}", model.name), |b| {
+                b.iter(|| {
+                    i = (i + 1) % poses.len();
+                    black_box(method.solve(black_box(&poses[i])).configurations.len())
+                })
+            });
+        }
         let Some(arm) = solver.closed_form().cloned() else { continue };
         c.bench_function(&format!("ik-closed-form/{}", model.name), |b| {
             b.iter(|| {

@@ -1,7 +1,8 @@
 //! `validate-design`: reads a design, a URDF or an MJCF robot, checks our kinematics of it against
 //! MuJoCo's, validates it on a scenario (IK, certified trajectory, rapier and MuJoCo), prints the
-//! report and exits 0 (passes), 1 (fails) or 2 (bad input); `validate-design generate` writes
-//! generated scenarios.
+//! report and exits 0 (passes), 1 (fails, proven), 2 (bad input) or 3 (undecided: a goal neither
+//! reached nor proven unreachable, a path not found in the budget); `validate-design generate`
+//! writes generated scenarios.
 
 mod optimize_cli;
 mod sweep_cli;
@@ -48,10 +49,14 @@ Exit codes:
   0  the design passes the scenario (every goal reached by a certified collision-free path,
      held by every engine run, no contact, no joint over its rating under gravity); with
      --describe or --kinematics-only: the model was built (and MuJoCo agrees with our kinematics)
-  1  the design fails: the verdict line lists the reasons (or MuJoCo disagrees with our
-     kinematics on the export by more than 1e-9 m / rad)
+  1  the design fails, proven: the verdict line (FAIL) lists the reasons: a goal proven
+     unreachable, a contact, a joint over its rating (or MuJoCo disagrees with our kinematics
+     on the export by more than 1e-9 m / rad)
   2  bad input or usage: the message names the file and the field or line (also a limit
      passed, an output that is a file the run read, a failed write, MuJoCo missing)
+  3  undecided: nothing failed, but the harness's limits left something open; the verdict
+     line (UNDECIDED) names it: a goal neither reached nor proven unreachable (IK starts), a
+     path not found within the planner's budget
   snapshot: 0 every snapshot matches (or was accepted), 1 a difference, new snapshot or
      orphan, 2 bad input
   sweep, merge, table1, ga: 0 the runs finished (whatever the designs' verdicts: they are in the
@@ -532,11 +537,16 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     } else {
         print!("{}", report::render(&report));
     }
-    Ok(if report.verdict.passed {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
-    })
+    Ok(verdict_exit(&report.verdict))
+}
+
+/// The exit code of a verdict: 0 pass, 1 fail (proven), 3 undecided.
+fn verdict_exit(verdict: &report::Verdict) -> ExitCode {
+    match (verdict.passed, verdict.word) {
+        (true, _) => ExitCode::SUCCESS,
+        (false, "UNDECIDED") => ExitCode::from(3),
+        (false, _) => ExitCode::from(1),
+    }
 }
 
 /// `--svg DIR`, `--png DIR`, `--html FILE`.

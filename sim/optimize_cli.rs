@@ -246,7 +246,7 @@ fn batches(tunings: &[Tuning], scenario: &proving_ground::scenario::Scenario) ->
 fn side_by_side(before: &Report, after: &Report) -> String {
     let reached = |r: &Report| format!("{}/{}", r.goals.iter().filter(|g| g.outcome == "reached").count(), r.goals.len());
     let loss = |value: Option<f64>| value.map_or_else(|| "none".into(), |v| format!("{v:.4}"));
-    let verdict = |r: &Report| if r.verdict.passed { "PASS" } else { "FAIL" }.to_string();
+    let verdict = |r: &Report| r.verdict.word.to_string();
     let rows = [
         ("", before.design.name.clone(), after.design.name.clone()),
         ("goals reached", reached(before), reached(after)),

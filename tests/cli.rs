@@ -456,9 +456,11 @@ fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the
 }
 
 #[test]
-fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
+fn an_undecided_design_exits_3_with_the_reasons_and_the_json_report_says_why() {
     let dir = tempfile::tempdir().expect("temp dir");
     let json = dir.path().join("report.json");
+    // The course's goals are z_symmetric: for a 6-joint arm a continuum of solutions, searched
+    // from IK starts; the ones not found are undecided, not failures.
     let output = validate_design()
         .args(["designs/abb-irb-2600.json", "--engines", "none", "--json"])
         .arg(&json)
@@ -467,16 +469,18 @@ fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(
         output.status.code(),
-        Some(1),
+        Some(3),
         "{stdout}\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
     let verdict = stdout.lines().last().unwrap_or_default();
-    assert!(verdict.starts_with("verdict: FAIL: "), "{stdout}");
+    assert!(verdict.starts_with("verdict: UNDECIDED: ") && verdict.contains("undecided"), "{stdout}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("json");
     assert_eq!(report["schema_version"], 2);
     assert_eq!(report["verdict"]["passed"], false);
+    assert_eq!(report["verdict"]["word"], "UNDECIDED");
     assert!(report["verdict"]["reasons"].as_array().is_some_and(|r| !r.is_empty()));
+    assert!(report["goals"].as_array().is_some_and(|g| g.iter().any(|g| g["outcome"] == "undecided")));
     assert_eq!(report["criteria"]["position_m"], 0.001);
     // The course's home is the 5-joint paper robot's: the ABB starts from its own.
     assert!(
@@ -486,6 +490,26 @@ fn a_failing_design_exits_1_with_the_reasons_and_the_json_report_says_why() {
         "{report}"
     );
     assert!(report["engines"].as_array().is_some_and(Vec::is_empty));
+}
+
+#[test]
+fn a_goal_proven_unreachable_fails_the_design_with_exit_1() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scenario = dir.path().join("far.json");
+    std::fs::write(
+        &scenario,
+        r#"{"name": "far", "tolerance": "pose", "goals": [{"position": [3.0, 0.0, 0.5], "quaternion": [1.0, 0.0, 0.0, 0.0]}]}"#,
+    )
+    .expect("writes");
+    let output = validate_design()
+        .args(["designs/ur5e.json", "--engines", "none", "--scenario"])
+        .arg(&scenario)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(1), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    let verdict = stdout.lines().last().unwrap_or_default();
+    assert_eq!(verdict, "verdict: FAIL: 1 goal unreachable (proven)", "{stdout}");
 }
 
 #[test]

@@ -124,3 +124,92 @@ fn spherical_wrist_designs() {
         check_wrist(path, &shipped(path), 7);
     }
 }
+
+/// A dense multi-start numeric search (2000 starts within the limits) finds no solution the
+/// all-solutions method missed, on random general arms, the shipped free design and the
+/// spherical-wrist designs.
+#[test]
+fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
+    use proving_ground::ik::solvers::AllSolutions;
+    use proving_ground::ik::{Ik, IkOptions};
+    use proving_ground::scenario::{Goal, Tolerance};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+    let mut models: Vec<Model> = (0..3).map(|i| random_free_design(&mut rng, 100 + i)).collect();
+    for path in ["designs/free-offset-6dof.json", "designs/abb-irb-2600.json", "designs/economic-spherical-wrist.json"] {
+        models.push(shipped(path));
+    }
+    let dense = IkOptions {
+        analytic: false,
+        seeds: 2000,
+        branch_starts: 0,
+        ..Default::default()
+    };
+    let (mut numeric_total, mut all_total) = (0, 0);
+    for model in &models {
+        let (method, _) = AllSolutions::of(model).expect("a method applies");
+        let mut numeric = Ik::new(model, dense.clone());
+        for k in 0..4 {
+            let q = model.random_configuration(&mut rng);
+            let pose = model.tool_pose(&q);
+            let goal = Goal {
+                name: format!("g{k}"),
+                position: pose.translation.vector,
+                rotation: pose.rotation,
+                tolerance: Tolerance::Pose,
+            };
+            let all = method.solve(&pose);
+            assert!(all.resolved, "{}: pose {k} unresolved", model.name);
+            let found = numeric.solve(&goal, k, None);
+            let converged: Vec<&[f64]> = found
+                .solutions
+                .iter()
+                .filter(|s| s.pose_reached && s.error.position_m < 1e-6 && s.error.orientation_rad < 1e-6)
+                .map(|s| s.q.as_slice())
+                .collect();
+            for q in &converged {
+                assert!(
+                    all.configurations.iter().any(|c| same(c, q, 1e-4)),
+                    "{}: pose {k}: the dense search found {q:?}, missing from the {} of {}",
+                    model.name,
+                    all.configurations.len(),
+                    method.name()
+                );
+            }
+            numeric_total += converged.len();
+            all_total += all.configurations.len();
+        }
+    }
+    println!("dense search: {numeric_total} solutions within the limits; all-solutions: {all_total}");
+    assert!(numeric_total > 0);
+}
+
+/// The solutions are distinct and never more than the arm can have: 16 for a general 6R, 8 for
+/// a spherical wrist; a seeded general arm has a pose with all 16 real.
+#[test]
+fn counts_never_exceed_the_truth_and_sixteen_real_solutions_occur() {
+    use proving_ground::ik::solvers::AllSolutions;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let mut most = 0;
+    for index in 0..40 {
+        let model = random_free_design(&mut rng, 200 + index);
+        let Some((method, _)) = AllSolutions::of(&model) else { continue };
+        let limit = match method {
+            AllSolutions::Wrist(_) => 8,
+            AllSolutions::General(_) => 16,
+        };
+        for _ in 0..50 {
+            let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+            let pose = model.tool_pose(&q);
+            let found = method.solve(&pose).configurations;
+            assert!(found.len() <= limit, "{}: {} solutions", model.name, found.len());
+            for (i, a) in found.iter().enumerate() {
+                for b in &found[i + 1..] {
+                    assert!(!same(a, b, 1e-9), "{}: a solution listed twice: {a:?}", model.name);
+                }
+            }
+            most = most.max(found.len());
+        }
+    }
+    println!("most solutions of one pose: {most}");
+    assert_eq!(most, 16, "no pose with 16 real solutions among the seeded arms");
+}

@@ -12,6 +12,9 @@ use crate::model::Model;
 use crate::scenario::Tolerance;
 use nalgebra::Isometry3;
 
+/// Configurations closer than this in every joint (rad) are one root found twice.
+const SAME_RAD: f64 = 1e-6;
+
 /// An all-solutions method of one model.
 #[derive(Debug, Clone)]
 pub enum AllSolutions {
@@ -54,8 +57,24 @@ impl AllSolutions {
         }
     }
 
-    /// Every configuration reaching world pose `goal`.
+    /// Every configuration reaching world pose `goal`, each once: a double root (two branches
+    /// meeting) or a complex pair just off the real line gives one configuration twice.
     pub fn solve(&self, goal: &Isometry3<f64>) -> Solutions {
+        let mut found = self.solve_raw(goal);
+        let mut kept: Vec<[f64; 6]> = Vec::with_capacity(found.configurations.len());
+        for q in found.configurations.drain(..) {
+            let known = kept
+                .iter()
+                .any(|k| k.iter().zip(&q).all(|(a, b)| super::wrap_angle(a - b).abs() <= SAME_RAD));
+            if !known {
+                kept.push(q);
+            }
+        }
+        found.configurations = kept;
+        found
+    }
+
+    fn solve_raw(&self, goal: &Isometry3<f64>) -> Solutions {
         match self {
             AllSolutions::Wrist(wrist) => {
                 let found = wrist.solve(goal);

@@ -47,7 +47,7 @@ pub fn page(validation: &Validation, report: &Report) -> String {
     out.push_str(&format!(
         "<header><h1>{}</h1><p class=\"{}\">{}</p>{}</header>\n",
         escape(&title),
-        if report.verdict.passed { "pass" } else { "fail" },
+        report.verdict.word.to_lowercase(),
         escape(&crate::report::verdict_line(&report.verdict)),
         reasons(report)
     ));

@@ -25,8 +25,12 @@ pub struct Record {
     /// Goals with a collision-free IK solution within 1 mm and 1 degree (reach-only), or reached
     /// on the certified trajectory (full).
     pub goals_solved: usize,
-    /// Goals proven unreachable (closed form, or out of reach).
+    /// Goals proven unreachable (every solution known, or out of reach).
     pub goals_proven_unreachable: usize,
+    /// Goals neither solved nor proven unreachable: the limits of the search (IK starts, the
+    /// planner's budget). Records written before it existed read 0.
+    #[serde(default)]
+    pub goals_undecided: usize,
     /// Every goal solved (full: and the verdict passed).
     pub task_solved: bool,
     /// Mean over goals of the position error (mm) of IK's best configuration of the goal.
@@ -38,7 +42,7 @@ pub struct Record {
     /// The task loss: per goal the paper's `w_d d + w_col c_col` minimised over the goal's IK
     /// solutions, summed, plus `w_c c_h`; `None` when a goal has no configuration at all.
     pub task_loss: Option<f64>,
-    /// Full validation: the verdict line's first word, `PASS` or `FAIL`.
+    /// Full validation: the verdict's word, `PASS`, `FAIL` or `UNDECIDED`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub verdict: Option<String>,
 }
@@ -107,7 +111,7 @@ pub fn evaluate(
             let report = crate::report::build(&validation);
             let solved = report.goals.iter().filter(|g| g.outcome == "reached").count();
             let passed = report.verdict.passed;
-            (solved, passed, Some(if passed { "PASS" } else { "FAIL" }.to_string()))
+            (solved, passed, Some(report.verdict.word.to_string()))
         }
     };
     Ok(Record {
@@ -116,6 +120,7 @@ pub fn evaluate(
         goals,
         goals_solved,
         goals_proven_unreachable,
+        goals_undecided: goals.saturating_sub(goals_solved + goals_proven_unreachable),
         task_solved,
         position_error_mm: position_error_mm.map(|v| round(v, ERROR_DECIMALS)),
         orientation_error_deg: orientation_error_deg.map(|v| round(v, ERROR_DECIMALS)),

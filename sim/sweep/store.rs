@@ -444,6 +444,7 @@ mod tests {
             goals: 1,
             goals_solved: 1,
             goals_proven_unreachable: 0,
+            goals_undecided: 0,
             task_solved: true,
             position_error_mm: Some(0.0),
             orientation_error_deg: Some(0.0),

@@ -93,18 +93,19 @@ fn fixed(value: Option<f64>, decimals: usize) -> String {
 /// The CSV: one row per record, canonical order, with its score and percentile.
 pub fn csv(records: &[Record], distributions: &BTreeMap<String, Distribution>) -> String {
     let mut out = String::from(
-        "design,scenario,goals,goals_solved,goals_proven_unreachable,task_solved,position_error_mm,orientation_error_deg,hardware_cost_m,task_loss,score,percentile,verdict\n",
+        "design,scenario,goals,goals_solved,goals_proven_unreachable,goals_undecided,task_solved,position_error_mm,orientation_error_deg,hardware_cost_m,task_loss,score,percentile,verdict\n",
     );
     for r in records {
         let distribution = distributions.get(&r.scenario);
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             quote(&r.design),
             quote(&r.scenario),
             r.goals,
             r.goals_solved,
             r.goals_proven_unreachable,
+            r.goals_undecided,
             r.task_solved,
             fixed(r.position_error_mm, 4),
             fixed(r.orientation_error_deg, 4),
@@ -139,6 +140,10 @@ pub struct Overall {
     pub goals_solved: usize,
     /// Goals over every scenario.
     pub goals: usize,
+    /// Goals proven unreachable.
+    pub goals_proven: usize,
+    /// Goals neither solved nor proven unreachable.
+    pub goals_undecided: usize,
     /// Mean position error over every goal (mm).
     pub position_error_mm: Option<f64>,
     /// Mean orientation error over every goal (deg).
@@ -182,6 +187,8 @@ pub fn overall(records: &[Record], distributions: &BTreeMap<String, Distribution
                 tasks: list.len(),
                 goals_solved: list.iter().map(|r| r.goals_solved).sum(),
                 goals,
+                goals_proven: list.iter().map(|r| r.goals_proven_unreachable).sum(),
+                goals_undecided: list.iter().map(|r| r.goals_undecided).sum(),
                 position_error_mm: weighted(|r| r.position_error_mm),
                 orientation_error_deg: weighted(|r| r.orientation_error_deg),
                 hardware_cost_m: list.first().and_then(|r| r.hardware_cost_m),
@@ -281,17 +288,19 @@ pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, 
     );
     let _ = writeln!(
         out,
-        "{:>5}  {:<32} {:>13} {:>13} {:>9} {:>9} {:>8} {:>7} {:>6}",
-        "rank", "design", "tasks solved", "goals solved", "pos mm", "ori deg", "cost m", "score", "pct"
+        "{:>5}  {:<32} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
+        "rank", "design", "tasks solved", "goals solved", "proven", "undecided", "pos mm", "ori deg", "cost m", "score", "pct"
     );
     for (rank, o) in rows.iter().take(top).enumerate() {
         let _ = writeln!(
             out,
-            "{:>5}  {:<32} {:>13} {:>13} {:>9} {:>9} {:>8} {:>7} {:>6}",
+            "{:>5}  {:<32} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
             rank + 1,
             o.design,
             format!("{}/{} {:.0}%", o.tasks_solved, o.tasks, percent(o.tasks_solved, o.tasks)),
             format!("{:.2}%", percent(o.goals_solved, o.goals)),
+            o.goals_proven,
+            o.goals_undecided,
             fixed(o.position_error_mm, 2),
             fixed(o.orientation_error_deg, 2),
             fixed(o.hardware_cost_m, 3),
@@ -313,6 +322,7 @@ mod tests {
             goals: 8,
             goals_solved: 8,
             goals_proven_unreachable: 0,
+            goals_undecided: 0,
             task_solved: true,
             position_error_mm: Some(0.0),
             orientation_error_deg: Some(0.0),
