@@ -213,3 +213,30 @@ fn counts_never_exceed_the_truth_and_sixteen_real_solutions_occur() {
     println!("most solutions of one pose: {most}");
     assert_eq!(most, 16, "no pose with 16 real solutions among the seeded arms");
 }
+
+/// A pose whose wrist centre is out of reach is proven so by the spherical-wrist method, and a
+/// reachable pose is never called out of reach.
+#[test]
+fn spherical_wrist_out_of_reach_is_proven_and_never_claimed_for_a_reachable_pose() {
+    use proving_ground::ik::wrist::SphericalWrist;
+    for path in ["designs/abb-irb-2600.json", "designs/economic-spherical-wrist.json"] {
+        let model = shipped(path);
+        let wrist = SphericalWrist::detect(&model).expect("a spherical wrist");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
+        let mut proven = 0;
+        for _ in 0..20 {
+            let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+            let pose = model.tool_pose(&q);
+            assert!(wrist.solve(&pose).out_of_reach.is_none(), "{path}: a reachable pose called out of reach");
+            // Pushed 5 m away: no solution, and the wrist centre proves it.
+            let far = nalgebra::Isometry3::from_parts(
+                nalgebra::Translation3::from(pose.translation.vector * 5.0 + nalgebra::Vector3::new(2.0, 0.0, 0.0)),
+                pose.rotation,
+            );
+            let found = wrist.solve(&far);
+            assert!(found.configurations.is_empty());
+            proven += usize::from(found.out_of_reach.is_some());
+        }
+        assert_eq!(proven, 20, "{path}: far poses not proven out of reach");
+    }
+}

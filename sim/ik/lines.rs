@@ -159,6 +159,11 @@ impl Arm {
         })
     }
 
+    /// The length the chain's coordinates are divided by (m).
+    pub(crate) fn scale(&self) -> f64 {
+        self.scale
+    }
+
     /// The chain in the given order.
     pub(crate) fn chain(&self, reversed: bool) -> &Chain {
         if reversed {

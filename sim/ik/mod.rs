@@ -225,7 +225,7 @@ impl<'a> Ik<'a> {
                 AnalyticSolutions {
                     configurations: found.configurations,
                     finite: found.resolved,
-                    out_of_reach: None,
+                    out_of_reach: found.out_of_reach,
                 }
             }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
@@ -290,11 +290,16 @@ impl<'a> Ik<'a> {
             distinct.push(q.clone());
             if self.shift_into_limits(&mut q, first_seed) {
                 // The error at the whole-turn equivalent differs by rounding only.
-                let solution = self.judge(goal, q, Some(error), margin);
+                let mut solution = self.judge(goal, q, Some(error), margin);
                 if solution.pose_reached && !solution.reached {
                     match self.collision_certificate(goal, &solution, margin) {
                         Ok(pair) => collisions.push(pair),
-                        Err(why) => open.push(why),
+                        // Not proven: the tolerance may hold a free configuration of this
+                        // branch; it stands for the branch when found.
+                        Err(why) => match self.free_within_tolerance(goal, &solution.q, margin) {
+                            Some(free) => solution = free,
+                            None => open.push(why),
+                        },
                     }
                 }
                 found.push(solution);
@@ -405,13 +410,20 @@ impl<'a> Ik<'a> {
     fn collision_certificate(&mut self, goal: &Goal, solution: &IkSolution, margin: f64) -> Result<String, String> {
         let clearance = solution.clearance.map_or(f64::INFINITY, |c| c.exact_m);
         let pair = self.checker.as_ref().and_then(|c| c.closest_pair());
-        let Some((a, b, name)) = pair else {
+        let Some(pair) = pair else {
             return Err("a solution's collision was not measured".into());
         };
+        let name = &pair.name;
         let Some(reach) = self.tolerance_reach(goal, &solution.q) else {
             return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
         };
-        let motion = self.bounds.relative_motion(a, b, &reach);
+        // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
+        // doubled for the curvature like the reach): the smaller.
+        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
+        let first_order = self
+            .distance_gradient(goal, &solution.q, &pair)
+            .map_or(f64::INFINITY, |h| TOLERANCE_CURVATURE * Self::tolerance_gain(&h));
+        let motion = whole.min(first_order);
         if clearance + motion <= margin {
             Ok(format!("{name} {:.1} mm", clearance * 1e3))
         } else {
@@ -421,6 +433,82 @@ impl<'a> Ik<'a> {
                 motion * 1e3
             ))
         }
+    }
+
+    /// The pair's distance gradient at `q` in task space: `h` with `d(q + dq) ~ d(q) + h . J dq`
+    /// over the goal's constrained directions (position first), from the witness points'
+    /// velocities along the normal; `None` where the Jacobian is singular.
+    fn distance_gradient(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair) -> Option<nalgebra::Vector6<f64>> {
+        let inverse = self.constrained_inverse(goal, q)?;
+        self.model.forward(q, &mut self.ws);
+        let mut h = nalgebra::Vector6::zeros();
+        for (i, joint) in self.model.joints.iter().enumerate() {
+            let frame = &self.ws.link_in_world[i + 1];
+            let axis = frame.rotation * joint.axis.into_inner();
+            // Joint i moves links i + 1 onwards; obstacles and the floor stay.
+            let velocity = |body: crate::collide::Body, point: &nalgebra::Vector3<f64>| match body {
+                crate::collide::Body::Link(k) if k > i => match joint.kind {
+                    JointKind::Prismatic => axis,
+                    _ => axis.cross(&(point - frame.translation.vector)),
+                },
+                _ => nalgebra::Vector3::zeros(),
+            };
+            let rate = pair
+                .normal
+                .dot(&(velocity(pair.bodies[1], &pair.points[1]) - velocity(pair.bodies[0], &pair.points[0])));
+            for k in 0..6 {
+                h[k] += inverse[(i, k)] * rate;
+            }
+        }
+        Some(h)
+    }
+
+    /// The most the pair's distance can grow over the goal's tolerance to first order (the
+    /// gradient's position part times 1 mm plus its rotation part times 1 degree).
+    fn tolerance_gain(h: &nalgebra::Vector6<f64>) -> f64 {
+        h.fixed_rows::<3>(0).norm() * REACHED_POSITION_M + h.fixed_rows::<3>(3).norm() * REACHED_ORIENTATION_RAD
+    }
+
+    /// A collision-free configuration within the goal's tolerance near colliding exact solution
+    /// `q`, when moving the tool within 90 % of the tolerance along the closest pair's
+    /// separating direction finds one (a few steps, each re-measured exactly).
+    fn free_within_tolerance(&mut self, goal: &Goal, q: &[f64], margin: f64) -> Option<IkSolution> {
+        if goal.tolerance != Tolerance::Pose {
+            return None;
+        }
+        let mut current = q.to_vec();
+        for _ in 0..TOLERANCE_SEARCH_STEPS {
+            let pair = self.checker.as_mut().map(|c| {
+                c.clearance(&current, true);
+                c.closest_pair()
+            })??;
+            let h = self.distance_gradient(goal, &current, &pair)?;
+            let (position, rotation) = (h.fixed_rows::<3>(0).into_owned(), h.fixed_rows::<3>(3).into_owned());
+            let towards = |v: nalgebra::Vector3<f64>, size: f64| {
+                let norm = v.norm();
+                if norm > 0.0 {
+                    v * (TOLERANCE_USED * size / norm)
+                } else {
+                    v
+                }
+            };
+            let shifted = Goal {
+                position: goal.position + towards(position, REACHED_POSITION_M),
+                rotation: nalgebra::UnitQuaternion::from_scaled_axis(towards(rotation, REACHED_ORIENTATION_RAD)) * goal.rotation,
+                ..goal.clone()
+            };
+            let mut next = current.clone();
+            let (_, size, _) = self.polish(&shifted, &mut next);
+            if size > EXACT {
+                return None;
+            }
+            let solution = self.judge(goal, next.clone(), None, margin);
+            if solution.reached {
+                return Some(solution);
+            }
+            current = next;
+        }
+        None
     }
 
     /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays
@@ -750,6 +838,11 @@ impl<'a> Ik<'a> {
 /// Doubles the linearised tolerance neighbourhood of a solution: the pose error is not linear
 /// in the joints, and a certificate must hold for all of it.
 const TOLERANCE_CURVATURE: f64 = 2.0;
+/// Steps of the search for a free configuration within a colliding solution's tolerance.
+const TOLERANCE_SEARCH_STEPS: usize = 4;
+/// The part of the tolerance that search may use: the configuration it finds must stay within
+/// the tolerance after rounding.
+const TOLERANCE_USED: f64 = 0.9;
 /// Joint motions (rad) beyond which the linearised neighbourhood is no bound (near a
 /// singularity the tolerance may reach a different branch).
 const LINEAR_REACH_RAD: f64 = 0.5;

@@ -36,6 +36,15 @@ pub struct Clearance {
     pub approximate_m: f64,
 }
 
+/// The closest pair of a query: what a certificate needs of it.
+pub(crate) struct ClosestPair {
+    pub(crate) bodies: [Body; 2],
+    pub(crate) points: [Vector3<f64>; 2],
+    /// From `a` to `b`: moving `b` along it separates the pair.
+    pub(crate) normal: Vector3<f64>,
+    pub(crate) name: String,
+}
+
 /// Collision queries for IK, with their buffers.
 pub(crate) struct Checker<'a> {
     world: &'a CollisionWorld,
@@ -86,11 +95,16 @@ impl<'a> Checker<'a> {
         }
     }
 
-    /// The pair that was closest at the last [`Self::clearance`] query: its bodies and their names.
-    pub(crate) fn closest_pair(&self) -> Option<(Body, Body, String)> {
+    /// The pair that was closest at the last [`Self::clearance`] query: its bodies, their
+    /// witness points (world) and their names.
+    pub(crate) fn closest_pair(&self) -> Option<ClosestPair> {
         let pair = self.exact.closest.as_ref()?;
-        let name = format!("{} and {}", self.world.body_name(pair.a.body), self.world.body_name(pair.b.body));
-        Some((pair.a.body, pair.b.body, name))
+        Some(ClosestPair {
+            bodies: [pair.a.body, pair.b.body],
+            points: [pair.point_a, pair.point_b],
+            normal: pair.normal,
+            name: format!("{} and {}", self.world.body_name(pair.a.body), self.world.body_name(pair.b.body)),
+        })
     }
 
     /// Whether `q` keeps the margin in exact geometry (the sign of the clearance against it).

@@ -32,6 +32,8 @@ pub struct Solutions {
     pub configurations: Vec<[f64; 6]>,
     /// Every solution is listed, given each is verified (see the methods' `resolved`).
     pub resolved: bool,
+    /// Why no configuration reaches the pose within the tolerance, when a method proves it.
+    pub out_of_reach: Option<String>,
 }
 
 impl AllSolutions {
@@ -81,6 +83,7 @@ impl AllSolutions {
                 Solutions {
                     configurations: found.configurations,
                     resolved: found.resolved,
+                    out_of_reach: found.out_of_reach,
                 }
             }
             AllSolutions::General(general) => {
@@ -88,6 +91,7 @@ impl AllSolutions {
                 Solutions {
                     configurations: found.configurations,
                     resolved: found.resolved,
+                    out_of_reach: None,
                 }
             }
         }

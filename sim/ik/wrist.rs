@@ -37,6 +37,9 @@ pub struct WristSolutions {
     /// Every solution is listed (given each is verified by the caller); false at a singular
     /// pose (a continuum of solutions) or where a root could not be resolved.
     pub resolved: bool,
+    /// Why no configuration reaches the pose within 1 mm and 1 degree, when the wrist centre
+    /// proves it (see [`SphericalWrist::out_of_reach`]); only looked for when no solution exists.
+    pub out_of_reach: Option<String>,
 }
 
 /// Pieper's solver of one model.
@@ -102,8 +105,46 @@ impl SphericalWrist {
             for q in &mut out.configurations {
                 q.reverse();
             }
+        } else if out.resolved && out.configurations.is_empty() {
+            out.out_of_reach = self.out_of_reach(&rotation, &translation);
         }
         out
+    }
+
+    /// Why no configuration reaches the pose within the tolerance, from the wrist centre alone:
+    /// a tool within 1 mm and 1 degree puts the wrist centre within `1 mm + L * 1 deg` of where
+    /// the pose needs it (`L` its distance from the tool). Turning about axis 1 keeps a point's
+    /// distance from that axis and its height along it, so the wrist centre's closest approach
+    /// is the closest approach of `(r, h)(q2, q3)` to the target's; a branch and bound over
+    /// joints 2 and 3 bounds it from below (Lipschitz constants from the axis distances) and
+    /// proves it larger than the slack, or gives up (`None`).
+    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<String> {
+        let chain = self.arm.chain(false);
+        let scale = self.arm.scale();
+        let target = self.target(chain, rotation, translation);
+        let lever = (self.centre - chain.home_translation).norm() * scale;
+        let slack = (super::REACHED_POSITION_M + lever * super::REACHED_ORIENTATION_RAD) / scale;
+        let [l1, l2, l3, ..] = &chain.lines;
+        let cylindrical = |p: &Vector3<f64>| {
+            let v = p - l1.point;
+            let h = l1.axis.dot(&v);
+            ((v - l1.axis * h).norm(), h)
+        };
+        let (target_r, target_h) = cylindrical(&target);
+        let gap = |t2: f64, t3: f64| {
+            let (r, h) = cylindrical(&l2.turn(t2, &l3.turn(t3, &self.centre)));
+            (r - target_r).hypot(h - target_h)
+        };
+        // A turn of joint 3 moves the centre at its distance from axis 3; of joint 2, at most
+        // at axis 3's point's distance from axis 2 plus the centre's from that point.
+        let lipschitz3 = (self.centre - l3.point).cross(&l3.axis).norm();
+        let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (self.centre - l3.point).norm();
+        let closest = lower_bound_above(&gap, [lipschitz2, lipschitz3], slack)?;
+        Some(format!(
+            "all-solutions IK (spherical wrist): pose out of reach: its wrist centre comes no closer than {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
+            closest * scale * 1e3,
+            slack * scale * 1e3
+        ))
     }
 
     /// The resultant's matrix coefficients of `x3^0, x3^1, x3^2` at a pose.
@@ -266,6 +307,45 @@ impl SphericalWrist {
         }
         out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
     }
+}
+
+/// Boxes the branch and bound may evaluate before it gives up.
+const MAX_BOXES: usize = 200_000;
+
+/// A lower bound on `f` over the torus of two angles, when it is above `floor`: branch and
+/// bound with `f`'s Lipschitz constants per angle; `None` when some box's centre is within
+/// `floor` (the bound fails) or the box budget runs out.
+fn lower_bound_above(f: &dyn Fn(f64, f64) -> f64, lipschitz: [f64; 2], floor: f64) -> Option<f64> {
+    const START: usize = 32;
+    let half = PI / START as f64;
+    let mut boxes: Vec<(f64, f64, f64)> = Vec::with_capacity(START * START);
+    for i in 0..START {
+        for j in 0..START {
+            boxes.push((-PI + (2 * i + 1) as f64 * half, -PI + (2 * j + 1) as f64 * half, half));
+        }
+    }
+    let mut bound = f64::INFINITY;
+    let mut evaluated = 0;
+    while let Some((a, b, h)) = boxes.pop() {
+        evaluated += 1;
+        if evaluated > MAX_BOXES {
+            return None;
+        }
+        let value = f(a, b);
+        if value <= floor {
+            return None;
+        }
+        let low = value - (lipschitz[0] + lipschitz[1]) * h;
+        if low > floor {
+            bound = bound.min(low);
+            continue;
+        }
+        let quarter = h / 2.0;
+        for (da, db) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
+            boxes.push((a + da * quarter, b + db * quarter, quarter));
+        }
+    }
+    Some(bound)
 }
 
 /// The real parts of the eigenvalues within [`NEAR_REAL`] of the real line.
