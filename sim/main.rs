@@ -57,6 +57,8 @@ Exit codes:
   3  undecided: nothing failed, but the harness's limits left something open; the verdict
      line (UNDECIDED) names it: a goal neither reached nor proven unreachable (IK starts), a
      path not found within the planner's budget
+  optimize: as validation, of the tuned designs: 1 when one fails, else 3 when one is
+     undecided, else 0; 2 bad input
   snapshot: 0 every snapshot matches (or was accepted), 1 a difference, new snapshot or
      orphan, 2 bad input
   sweep, merge, table1, ga: 0 the runs finished (whatever the designs' verdicts: they are in the

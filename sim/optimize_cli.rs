@@ -169,7 +169,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         engines,
         ..Default::default()
     };
-    let mut all_pass = true;
+    let (mut failed, mut undecided) = (false, false);
     for tuning in tunings {
         println!("{}", tuning.summary);
         let Some(back) = tuning.tuned else {
@@ -182,9 +182,17 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         };
         let after = report::build(&pipeline::validate(after_loaded, scenario.clone(), &validate_options)?);
         print!("{}", side_by_side(&before, &after));
-        all_pass &= after.verdict.passed;
+        failed |= after.verdict.word == "FAIL";
+        undecided |= after.verdict.word == "UNDECIDED";
     }
-    Ok(if all_pass { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    // As a single validation: 1 when a tuned design fails, else 3 when one is undecided.
+    Ok(if failed {
+        ExitCode::from(1)
+    } else if undecided {
+        ExitCode::from(3)
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 /// Whether `--out` names a folder: several designs, an existing folder, or a trailing `/`.

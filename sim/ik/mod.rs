@@ -239,11 +239,26 @@ impl<'a> Ik<'a> {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
         let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
-        if !exact.finite && !result.reached() {
-            result.undecided = Some(format!(
-                "{}: the pose's solutions are not isolated (a singular pose), so they cannot all be listed",
-                self.method()
-            ));
+        if !result.reached() {
+            let miss = result.solutions.first().map_or(String::new(), |s| {
+                format!(
+                    " (closest miss from {} IK starts: {:.1} mm, {:.2} deg)",
+                    result.starts,
+                    s.error.position_m * 1e3,
+                    s.error.orientation_rad.to_degrees()
+                )
+            });
+            result.undecided = Some(if exact.finite {
+                format!(
+                    "{}: the pose itself has no solution, but a configuration within the goal's tolerance is not ruled out{miss}",
+                    self.method()
+                )
+            } else {
+                format!(
+                    "{}: the pose's solutions are not isolated (a singular pose), so they cannot all be listed{miss}",
+                    self.method()
+                )
+            });
         }
         if let Some(proof) = exact.out_of_reach {
             // Proven beyond the tolerance: no start can have reached it.
