@@ -291,3 +291,45 @@ fn spherical_wrist_out_of_reach_is_proven_and_never_claimed_for_a_reachable_pose
         assert_eq!(proven, 20, "{path}: far poses not proven out of reach");
     }
 }
+
+/// A 6R arm on a `z_symmetric` goal: the self-motion over the free turn about tool z is swept.
+/// With joint 1 limited to +-0.1 rad and the goal to the arm's side, no turn has a solution
+/// within the limits: proven, and a sweep ten times denser than the certificate's finds every
+/// solution outside the limits too.
+#[test]
+fn a_z_symmetric_goal_of_a_six_joint_arm_is_decided_over_the_free_turn() {
+    use nalgebra::{UnitQuaternion, Vector3};
+    use proving_ground::ik::analytic::UrArm;
+    use proving_ground::ik::{Ik, IkOptions};
+    use proving_ground::scenario::{Goal, Tolerance};
+    let mut model = shipped("designs/ur5e.json");
+    model.joints[0].limits = Some([-0.1, 0.1]);
+    let goal = Goal {
+        name: "side".into(),
+        position: Vector3::new(0.05, -0.45, 0.25),
+        rotation: UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI),
+        tolerance: Tolerance::ZSymmetric,
+    };
+    let solved = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
+    assert!(!solved.reached());
+    let proof = solved.proof.clone().unwrap_or_default();
+    assert!(proof.contains("over the free turn about tool z") && proof.contains("outside the joint limits"), "{solved:?}");
+    let arm = UrArm::detect(&model).expect("UR-type");
+    for k in 0..720 {
+        let turn = k as f64 * std::f64::consts::TAU / 720.0;
+        let rotation = goal.rotation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn);
+        let pose = nalgebra::Isometry3::from_parts(goal.position.into(), rotation);
+        for q in arm.solve(&pose).configurations {
+            let wrapped = proving_ground::ik::wrap_angle(q[0]);
+            assert!(wrapped.abs() > 0.1, "turn {k}: joint 1 at {wrapped} is within its limits");
+        }
+    }
+
+    // The same goal with joint 1 free: a turn reaches it.
+    let free = shipped("designs/ur5e.json");
+    let opts = IkOptions {
+        seeds: 0,
+        ..Default::default()
+    };
+    assert!(Ik::new(&free, opts).solve(&goal, 0, None).reached());
+}

@@ -212,7 +212,7 @@ impl UrArm {
         let mut out = AnalyticSolutions {
             configurations: Vec::with_capacity(8),
             finite: true,
-            out_of_reach: self.out_of_reach(&centre),
+            out_of_reach: self.out_of_reach(&centre, 0.0),
         };
         let rotation = flange.rotation.to_rotation_matrix();
         let (x6, y6, z6) = (
@@ -282,13 +282,23 @@ impl UrArm {
         out
     }
 
+    /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within 1 mm and
+    /// 1 degree: the wrist-centre proof of [`UrArm::solve`] with the turn added to the slack.
+    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        let flange = self.base_inverse * goal * self.tool_inverse;
+        self.out_of_reach(&flange.translation.vector, turn)
+    }
+
     /// Why no configuration reaches `goal` within 1 mm and 1 degree, from the wrist centre
     /// `centre` (DH base frame) alone: it lies `d4` off the arm's plane, at most `|a2| + |a3| +
     /// |d5|` and at least `||a2| - |a3|| - |d5|` from axis 2 in that plane. A tool within the
     /// tolerance puts the wrist centre within `1 mm + L * 1 deg` of it (`L` its distance from the
     /// tool), so a centre further than that outside the region proves the pose out of reach.
-    fn out_of_reach(&self, centre: &Vector3<f64>) -> Option<String> {
-        let slack = super::REACHED_POSITION_M + self.tool.translation.vector.norm() * super::REACHED_ORIENTATION_RAD;
+    ///
+    /// With `turn` > 0 the pose may also turn that much about tool z (a sample of a
+    /// `z_symmetric` goal's free turn): the centre moves by at most `L * turn` more.
+    fn out_of_reach(&self, centre: &Vector3<f64>, turn: f64) -> Option<String> {
+        let slack = super::REACHED_POSITION_M + self.tool.translation.vector.norm() * (super::REACHED_ORIENTATION_RAD + turn);
         let d4 = self.d4.abs();
         let radius = centre.x.hypot(centre.y);
         let distance = centre.norm();

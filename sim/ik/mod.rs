@@ -6,6 +6,7 @@
 pub mod analytic;
 pub mod general;
 mod lines;
+mod selfmotion;
 pub mod solvers;
 pub mod wrist;
 mod branches;
@@ -228,12 +229,25 @@ impl<'a> Ik<'a> {
                     out_of_reach: found.out_of_reach,
                 }
             }
+            (None, Some((method, Tolerance::Pose))) if self.opts.analytic && finite && goal.tolerance == Tolerance::ZSymmetric => {
+                let starts = method.solve(&pose).configurations;
+                let mut result = self.solve_numeric(goal, goal_index, first_seed, &starts);
+                if !result.reached() {
+                    self.sweep_free_turn(goal, &mut result);
+                }
+                return result;
+            }
             _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
         };
         if goal.tolerance == Tolerance::ZSymmetric && self.analytic.is_some() {
             // A continuum of solutions (any turn about tool z): the goal rotation's own are on
-            // every branch, good starts, never the whole set.
-            return self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+            // every branch, good starts, never the whole set; what they miss, the self-motion
+            // sweep decides.
+            let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+            if !result.reached() {
+                self.sweep_free_turn(goal, &mut result);
+            }
+            return result;
         }
         if exact.finite && !exact.configurations.is_empty() {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
@@ -307,7 +321,7 @@ impl<'a> Ik<'a> {
                 // The error at the whole-turn equivalent differs by rounding only.
                 let mut solution = self.judge(goal, q, Some(error), margin);
                 if solution.pose_reached && !solution.reached {
-                    match self.collision_certificate(goal, &solution, margin) {
+                    match self.collision_certificate(goal, &solution, margin, 0.0) {
                         Ok(pair) => collisions.push(pair),
                         // Not proven: the tolerance may hold a free configuration of this
                         // branch; it stands for the branch when found.
@@ -319,7 +333,7 @@ impl<'a> Ik<'a> {
                 }
                 found.push(solution);
             } else {
-                if let Err(why) = self.limits_certificate(goal, &q) {
+                if let Err(why) = self.limits_certificate(goal, &q, 0.0) {
                     open.push(why);
                 }
                 outside.push(q);
@@ -394,6 +408,33 @@ impl<'a> Ik<'a> {
         }
     }
 
+    /// Every solution of a world pose by the closed form or the all-solutions method, when the
+    /// model is a 6R arm that has one.
+    fn exact_pose(&self, pose: &Isometry3<f64>) -> Option<AnalyticSolutions> {
+        match (&self.analytic, &self.all) {
+            (Some(arm), _) => Some(arm.solve(pose)),
+            (None, Some((method, Tolerance::Pose))) => {
+                let found = method.solve(pose);
+                Some(AnalyticSolutions {
+                    configurations: found.configurations,
+                    finite: found.resolved,
+                    out_of_reach: found.out_of_reach,
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// Why no configuration reaches pose `pose`, turned by up to `turn` about tool z, within
+    /// the tolerance, when the closed form or the all-solutions method proves it.
+    fn exact_out_of_reach(&self, pose: &Isometry3<f64>, turn: f64) -> Option<String> {
+        match (&self.analytic, &self.all) {
+            (Some(arm), _) => arm.out_of_reach_over_turn(pose, turn),
+            (None, Some((method, Tolerance::Pose))) => method.out_of_reach_over_turn(pose, turn),
+            _ => None,
+        }
+    }
+
     /// Which all-solutions method this solver uses, for proofs.
     fn method(&self) -> &'static str {
         match (&self.analytic, &self.all) {
@@ -405,16 +446,21 @@ impl<'a> Ik<'a> {
 
     /// How far each joint may be from solution `q` while the tool stays within the goal's
     /// tolerance: the inverse Jacobian's rows against 1 mm and 1 degree, doubled for the
-    /// curvature; `None` near a singularity, where that is no bound.
-    fn tolerance_reach(&mut self, goal: &Goal, q: &[f64]) -> Option<Vec<f64>> {
+    /// curvature; with `turn` > 0 also the branch's motion over that much of the free turn about
+    /// tool z; `None` near a singularity, where that is no bound.
+    fn neighbourhood(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Option<Vec<f64>> {
         // Columns: constrained rows (position first); the rotation rows' error is at most the
         // tolerance angle in whichever directions are constrained.
         let inverse = self.constrained_inverse(goal, q)?;
+        let z = goal.rotation * nalgebra::Vector3::z();
         let reach: Vec<f64> = (0..q.len())
             .map(|i| {
                 let position = inverse.view((i, 0), (1, 3)).norm();
                 let rotation = inverse.view((i, 3), (1, 3)).norm();
-                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD)
+                // The branch's joint rate along the free turn: the inverse applied to a turn
+                // about tool z.
+                let along = (0..3).map(|k| inverse[(i, 3 + k)] * z[k]).sum::<f64>().abs();
+                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD + along * turn)
             })
             .collect();
         reach.iter().all(|r| r.is_finite() && *r <= LINEAR_REACH_RAD).then_some(reach)
@@ -422,22 +468,27 @@ impl<'a> Ik<'a> {
 
     /// The colliding pair that stays colliding throughout the tolerance neighbourhood of
     /// `solution` (the checker's last query), named with its depth; else why not.
-    fn collision_certificate(&mut self, goal: &Goal, solution: &IkSolution, margin: f64) -> Result<String, String> {
+    ///
+    /// With `turn` > 0 the solution is a sample of a self-motion (a 6R arm on a `z_symmetric`
+    /// goal, see [`selfmotion`]) and the neighbourhood also covers the branch over `turn` (rad)
+    /// of the free turn about tool z either side.
+    fn collision_certificate(&mut self, goal: &Goal, solution: &IkSolution, margin: f64, turn: f64) -> Result<String, String> {
         let clearance = solution.clearance.map_or(f64::INFINITY, |c| c.exact_m);
         let pair = self.checker.as_ref().and_then(|c| c.closest_pair());
         let Some(pair) = pair else {
             return Err("a solution's collision was not measured".into());
         };
         let name = &pair.name;
-        let Some(reach) = self.tolerance_reach(goal, &solution.q) else {
+        let Some(reach) = self.neighbourhood(goal, &solution.q, turn) else {
             return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
         };
         // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
         // doubled for the curvature like the reach): the smaller.
         let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
-        let first_order = self
-            .distance_gradient(goal, &solution.q, &pair)
-            .map_or(f64::INFINITY, |h| TOLERANCE_CURVATURE * Self::tolerance_gain(&h));
+        let z = goal.rotation * nalgebra::Vector3::z();
+        let first_order = self.distance_gradient(goal, &solution.q, &pair).map_or(f64::INFINITY, |h| {
+            TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + h.fixed_rows::<3>(3).dot(&z).abs() * turn)
+        });
         let motion = whole.min(first_order);
         if clearance + motion <= margin {
             Ok(format!("{name} {:.1} mm", clearance * 1e3))
@@ -528,8 +579,8 @@ impl<'a> Ik<'a> {
 
     /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays
     /// outside them throughout the goal's tolerance; else why not.
-    fn limits_certificate(&mut self, goal: &Goal, q: &[f64]) -> Result<(), String> {
-        let Some(reach) = self.tolerance_reach(goal, q) else {
+    fn limits_certificate(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Result<(), String> {
+        let Some(reach) = self.neighbourhood(goal, q, turn) else {
             return Err("a solution outside the joint limits is near a singularity".into());
         };
         let mut closest: Option<(usize, f64)> = None;

@@ -76,6 +76,15 @@ impl AllSolutions {
         found
     }
 
+    /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within the
+    /// tolerance, when the method proves it.
+    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        match self {
+            AllSolutions::Wrist(wrist) => wrist.out_of_reach_over_turn(goal, turn),
+            AllSolutions::General(_) => None,
+        }
+    }
+
     fn solve_raw(&self, goal: &Isometry3<f64>) -> Solutions {
         match self {
             AllSolutions::Wrist(wrist) => {

@@ -106,9 +106,20 @@ impl SphericalWrist {
                 q.reverse();
             }
         } else if out.resolved && out.configurations.is_empty() {
-            out.out_of_reach = self.out_of_reach(&rotation, &translation);
+            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0);
         }
         out
+    }
+
+    /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within the
+    /// tolerance: the wrist-centre proof with the turn added to the slack (wrist at the tool
+    /// only).
+    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        if self.reversed {
+            return None;
+        }
+        let (rotation, translation) = self.arm.goal(goal, false);
+        self.out_of_reach(&rotation, &translation, turn)
     }
 
     /// Why no configuration reaches the pose within the tolerance, from the wrist centre alone:
@@ -118,12 +129,15 @@ impl SphericalWrist {
     /// is the closest approach of `(r, h)(q2, q3)` to the target's; a branch and bound over
     /// joints 2 and 3 bounds it from below (Lipschitz constants from the axis distances) and
     /// proves it larger than the slack, or gives up (`None`).
-    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<String> {
+    ///
+    /// With `turn` > 0 the pose may also turn that much about tool z: the centre moves by at
+    /// most `L * turn` more.
+    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, turn: f64) -> Option<String> {
         let chain = self.arm.chain(false);
         let scale = self.arm.scale();
         let target = self.target(chain, rotation, translation);
         let lever = (self.centre - chain.home_translation).norm() * scale;
-        let slack = (super::REACHED_POSITION_M + lever * super::REACHED_ORIENTATION_RAD) / scale;
+        let slack = (super::REACHED_POSITION_M + lever * (super::REACHED_ORIENTATION_RAD + turn)) / scale;
         let [l1, l2, l3, ..] = &chain.lines;
         let cylindrical = |p: &Vector3<f64>| {
             let v = p - l1.point;
