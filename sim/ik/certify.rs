@@ -1,0 +1,249 @@
+//! Certificates that a known solution proves nothing about the goal's tolerance, or does: the
+//! configurations within 1 mm and 1 degree of a pose lie near its exact solutions (the inverse
+//! Jacobian's rows against the tolerance, doubled for the curvature), so a colliding solution
+//! counts only when its closest pair stays colliding throughout that neighbourhood, and a
+//! solution outside the limits only when it stays outside. A colliding branch that no
+//! certificate covers is searched for a free configuration within the tolerance first. First
+//! order (doubled), not interval arithmetic: the README says so.
+
+use super::{refine, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use crate::model::JointKind;
+use crate::scenario::{Goal, Tolerance};
+use std::f64::consts::TAU;
+
+impl Ik<'_> {
+    /// The joint step that removes task error `e` at `q` to first order, over the directions
+    /// the goal constrains (six for `pose`; five for `z_symmetric`: no turn about goal z); `None`
+    /// when they are not as many as the joints, or the Jacobian is singular there.
+    pub(super) fn newton_step(&mut self, goal: &Goal, q: &[f64], e: &nalgebra::Vector6<f64>) -> Option<Vec<f64>> {
+        let inverse = self.constrained_inverse(goal, q)?;
+        let constrained = constrained_rows(goal) * e;
+        Some((0..q.len()).map(|i| (0..6).map(|k| inverse[(i, k)] * constrained[k]).sum()).collect())
+    }
+
+    /// The inverse of the Jacobian's constrained rows at `q` (joints by 6, the unconstrained
+    /// rows' columns zero); `None` as in [`Self::newton_step`].
+    fn constrained_inverse(&mut self, goal: &Goal, q: &[f64]) -> Option<nalgebra::DMatrix<f64>> {
+        self.model.tool_jacobian(q, &mut self.ws);
+        let dof = q.len();
+        let rows = constrained_rows(goal);
+        let constrained = match goal.tolerance {
+            Tolerance::Pose => 6,
+            Tolerance::ZSymmetric => 5,
+            Tolerance::Position => 3,
+        };
+        if constrained != dof {
+            return None;
+        }
+        let projected = rows * &self.ws.jacobian;
+        let square = projected.rows(0, dof).into_owned();
+        let inverse = square.try_inverse()?;
+        let mut out = nalgebra::DMatrix::zeros(dof, 6);
+        out.view_mut((0, 0), (dof, dof)).copy_from(&inverse);
+        Some(out)
+    }
+
+    /// How far each joint may be from solution `q` while the tool stays within the goal's
+    /// tolerance: the inverse Jacobian's rows against 1 mm and 1 degree, doubled for the
+    /// curvature; with `turn` > 0 also the branch's motion over that much of the free turn about
+    /// tool z; `None` near a singularity, where that is no bound.
+    fn neighbourhood(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Option<Vec<f64>> {
+        // Columns: constrained rows (position first); the rotation rows' error is at most the
+        // tolerance angle in whichever directions are constrained.
+        let inverse = self.constrained_inverse(goal, q)?;
+        let z = goal.rotation * nalgebra::Vector3::z();
+        let reach: Vec<f64> = (0..q.len())
+            .map(|i| {
+                let position = inverse.view((i, 0), (1, 3)).norm();
+                let rotation = inverse.view((i, 3), (1, 3)).norm();
+                // The branch's joint rate along the free turn: the inverse applied to a turn
+                // about tool z.
+                let along = (0..3).map(|k| inverse[(i, 3 + k)] * z[k]).sum::<f64>().abs();
+                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD + along * turn)
+            })
+            .collect();
+        reach.iter().all(|r| r.is_finite() && *r <= LINEAR_REACH_RAD).then_some(reach)
+    }
+
+    /// The colliding pair that stays colliding throughout the tolerance neighbourhood of
+    /// `solution` (the checker's last query), named with its depth; else why not.
+    ///
+    /// With `turn` > 0 the solution is a sample of a self-motion (a 6R arm on a `z_symmetric`
+    /// goal, see [`selfmotion`]) and the neighbourhood also covers the branch over `turn` (rad)
+    /// of the free turn about tool z either side.
+    pub(super) fn collision_certificate(&mut self, goal: &Goal, solution: &IkSolution, margin: f64, turn: f64) -> Result<String, String> {
+        let clearance = solution.clearance.map_or(f64::INFINITY, |c| c.exact_m);
+        let pair = self.checker.as_ref().and_then(|c| c.closest_pair());
+        let Some(pair) = pair else {
+            return Err("a solution's collision was not measured".into());
+        };
+        let name = &pair.name;
+        let Some(reach) = self.neighbourhood(goal, &solution.q, turn) else {
+            return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
+        };
+        // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
+        // doubled for the curvature like the reach): the smaller.
+        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
+        let z = goal.rotation * nalgebra::Vector3::z();
+        let first_order = self.distance_gradient(goal, &solution.q, &pair).map_or(f64::INFINITY, |h| {
+            TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + h.fixed_rows::<3>(3).dot(&z).abs() * turn)
+        });
+        let motion = whole.min(first_order);
+        if clearance + motion <= margin {
+            Ok(format!("{name} {:.1} mm", clearance * 1e3))
+        } else {
+            Err(format!(
+                "a solution's {name} are at {:.1} mm, within the {:.1} mm the goal's tolerance can move them",
+                clearance * 1e3,
+                motion * 1e3
+            ))
+        }
+    }
+
+    /// The pair's distance gradient at `q` in task space: `h` with `d(q + dq) ~ d(q) + h . J dq`
+    /// over the goal's constrained directions (position first), from the witness points'
+    /// velocities along the normal; `None` where the Jacobian is singular.
+    fn distance_gradient(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair) -> Option<nalgebra::Vector6<f64>> {
+        let inverse = self.constrained_inverse(goal, q)?;
+        self.model.forward(q, &mut self.ws);
+        let mut h = nalgebra::Vector6::zeros();
+        for (i, joint) in self.model.joints.iter().enumerate() {
+            let frame = &self.ws.link_in_world[i + 1];
+            let axis = frame.rotation * joint.axis.into_inner();
+            // Joint i moves links i + 1 onwards; obstacles and the floor stay.
+            let velocity = |body: crate::collide::Body, point: &nalgebra::Vector3<f64>| match body {
+                crate::collide::Body::Link(k) if k > i => match joint.kind {
+                    JointKind::Prismatic => axis,
+                    _ => axis.cross(&(point - frame.translation.vector)),
+                },
+                _ => nalgebra::Vector3::zeros(),
+            };
+            let rate = pair
+                .normal
+                .dot(&(velocity(pair.bodies[1], &pair.points[1]) - velocity(pair.bodies[0], &pair.points[0])));
+            for k in 0..6 {
+                h[k] += inverse[(i, k)] * rate;
+            }
+        }
+        Some(h)
+    }
+
+    /// The most the pair's distance can grow over the goal's tolerance to first order (the
+    /// gradient's position part times 1 mm plus its rotation part times 1 degree).
+    fn tolerance_gain(h: &nalgebra::Vector6<f64>) -> f64 {
+        h.fixed_rows::<3>(0).norm() * REACHED_POSITION_M + h.fixed_rows::<3>(3).norm() * REACHED_ORIENTATION_RAD
+    }
+
+    /// A collision-free configuration within the goal's tolerance near colliding exact solution
+    /// `q`, when moving the tool within 90 % of the tolerance along the closest pair's
+    /// separating direction finds one (a few steps, each re-measured exactly).
+    pub(super) fn free_within_tolerance(&mut self, goal: &Goal, q: &[f64], margin: f64) -> Option<IkSolution> {
+        if goal.tolerance != Tolerance::Pose {
+            return None;
+        }
+        let mut current = q.to_vec();
+        for _ in 0..TOLERANCE_SEARCH_STEPS {
+            let pair = self.checker.as_mut().map(|c| {
+                c.clearance(&current, true);
+                c.closest_pair()
+            })??;
+            let h = self.distance_gradient(goal, &current, &pair)?;
+            let (position, rotation) = (h.fixed_rows::<3>(0).into_owned(), h.fixed_rows::<3>(3).into_owned());
+            let towards = |v: nalgebra::Vector3<f64>, size: f64| {
+                let norm = v.norm();
+                if norm > 0.0 {
+                    v * (TOLERANCE_USED * size / norm)
+                } else {
+                    v
+                }
+            };
+            let shifted = Goal {
+                position: goal.position + towards(position, REACHED_POSITION_M),
+                rotation: nalgebra::UnitQuaternion::from_scaled_axis(towards(rotation, REACHED_ORIENTATION_RAD)) * goal.rotation,
+                ..goal.clone()
+            };
+            let mut next = current.clone();
+            let (_, size, _) = self.polish(&shifted, &mut next);
+            if size > EXACT {
+                return None;
+            }
+            let solution = self.judge(goal, next.clone(), None, margin);
+            if solution.reached {
+                return Some(solution);
+            }
+            current = next;
+        }
+        None
+    }
+
+    /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays
+    /// outside them throughout the goal's tolerance; else why not.
+    pub(super) fn limits_certificate(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Result<(), String> {
+        let Some(reach) = self.neighbourhood(goal, q, turn) else {
+            return Err("a solution outside the joint limits is near a singularity".into());
+        };
+        let mut closest: Option<(usize, f64)> = None;
+        for (i, (joint, value)) in self.model.joints.iter().zip(q).enumerate() {
+            let gap = limit_gap(joint, *value);
+            if gap > reach[i] {
+                return Ok(());
+            }
+            if gap > 0.0 && closest.is_none_or(|(_, g)| gap < g) {
+                closest = Some((i, gap));
+            }
+        }
+        Err(match closest {
+            Some((i, gap)) => format!(
+                "a solution is {:.2} deg outside joint {}'s limits, within what the goal's tolerance allows",
+                gap.to_degrees(),
+                i + 1
+            ),
+            None => "a solution is at the joint limits".into(),
+        })
+    }
+}
+
+/// Doubles the linearised tolerance neighbourhood of a solution: the pose error is not linear
+/// in the joints, and a certificate must hold for all of it.
+pub(super) const TOLERANCE_CURVATURE: f64 = 2.0;
+/// Steps of the search for a free configuration within a colliding solution's tolerance.
+const TOLERANCE_SEARCH_STEPS: usize = 4;
+/// The part of the tolerance that search may use: the configuration it finds must stay within
+/// the tolerance after rounding.
+const TOLERANCE_USED: f64 = 0.9;
+/// Joint motions (rad) beyond which the linearised neighbourhood is no bound (near a
+/// singularity the tolerance may reach a different branch).
+const LINEAR_REACH_RAD: f64 = 0.5;
+
+/// The rows of the task error a goal constrains, first: all six for `pose`; for `z_symmetric`
+/// the position and the two turns across goal z (the last row zero); the position alone for
+/// `position`.
+fn constrained_rows(goal: &Goal) -> nalgebra::Matrix6<f64> {
+    let mut rows = nalgebra::Matrix6::identity();
+    match goal.tolerance {
+        Tolerance::Pose => {}
+        Tolerance::ZSymmetric => {
+            let x = goal.rotation * nalgebra::Vector3::x();
+            let y = goal.rotation * nalgebra::Vector3::y();
+            rows.fixed_view_mut::<3, 3>(3, 3).fill(0.0);
+            rows.fixed_view_mut::<1, 3>(3, 3).copy_from(&x.transpose());
+            rows.fixed_view_mut::<1, 3>(4, 3).copy_from(&y.transpose());
+        }
+        Tolerance::Position => rows.fixed_view_mut::<3, 3>(3, 3).fill(0.0),
+    }
+    rows
+}
+
+/// How far (rad or m) joint value `value` is outside the joint's limits, over its whole-turn
+/// equivalents for a revolute joint; 0 when within them or unlimited.
+pub(super) fn limit_gap(joint: &crate::model::Joint, value: f64) -> f64 {
+    let Some([lower, upper]) = joint.limits else { return 0.0 };
+    let outside = |v: f64| (lower - v).max(v - upper).max(0.0);
+    if joint.kind == JointKind::Prismatic {
+        return outside(value);
+    }
+    let turns = [((lower - value) / TAU).floor(), ((upper - value) / TAU).ceil()];
+    (turns[0] as i64..=turns[1] as i64)
+        .map(|k| outside(value + k as f64 * TAU))
+        .fold(f64::INFINITY, f64::min)
+}
