@@ -279,7 +279,112 @@ impl UrArm {
                 }
             }
         }
+        if out.finite && out.configurations.is_empty() && out.out_of_reach.is_none() {
+            out.out_of_reach = self.elbow_out_of_reach(goal, 0.0);
+        }
         out
+    }
+
+    /// Joint 1's sine condition and the elbow cosine of each of the four (shoulder, wrist)
+    /// branches at `goal`: a branch has a solution when its cosine is within [-1, 1]; `None` when
+    /// joint 1 has none (the sine beyond 1) or the pose is singular for the closed form.
+    fn branch_cosines(&self, goal: &Isometry3<f64>) -> Option<(f64, [f64; 4])> {
+        let flange = self.base_inverse * goal * self.tool_inverse;
+        let centre = flange.translation.vector;
+        let rotation = flange.rotation.to_rotation_matrix();
+        let (x6, y6, z6) = (
+            rotation.matrix().column(0).into_owned(),
+            rotation.matrix().column(1).into_owned(),
+            rotation.matrix().column(2).into_owned(),
+        );
+        let radius = centre.x.hypot(centre.y);
+        let sine1 = self.d4 / radius;
+        if radius < SHOULDER_SINGULAR_M || sine1.abs() > 1.0 {
+            return None;
+        }
+        let psi = centre.y.atan2(centre.x);
+        let lean = sine1.asin();
+        let mut cosines = [0.0; 4];
+        for (b, (theta1, wrist)) in [(psi + lean, 1.0), (psi + lean, -1.0), (psi + PI - lean, 1.0), (psi + PI - lean, -1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let (s1, c1) = theta1.sin_cos();
+            let z1 = Vector3::new(s1, -c1, 0.0);
+            let theta5: f64 = wrist * z6.dot(&z1).clamp(-1.0, 1.0).acos();
+            let s5 = theta5.sin();
+            if s5.abs() < WRIST_SINGULAR {
+                return None;
+            }
+            let flip = s5.signum();
+            let theta6 = (-z1.dot(&y6) * flip).atan2(z1.dot(&x6) * flip);
+            let frame4 = flange * (dh(theta5, self.d5, 0.0, -FRAC_PI_2) * dh(theta6, 0.0, 0.0, 0.0)).inverse();
+            let in_first = dh(theta1, 0.0, 0.0, FRAC_PI_2).inverse() * frame4;
+            let (x, y) = (in_first.translation.x, in_first.translation.y);
+            cosines[b] = (x * x + y * y - self.a2 * self.a2 - self.a3 * self.a3) / (2.0 * self.a2 * self.a3);
+        }
+        Some((sine1, cosines))
+    }
+
+    /// Why no configuration reaches `goal` (turned by up to `turn` about tool z) within the
+    /// tolerance, when joint 1 has its two branches but every branch's elbow cosine lies beyond
+    /// +-1 by more than the tolerance can move it: the cosines' gradients over the pose (central
+    /// differences in the six world directions, and the turn about tool z), times 1 mm and
+    /// 1 degree (and the turn), doubled for the curvature like the other certificates.
+    pub fn elbow_out_of_reach(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        let (sine1, cosines) = self.branch_cosines(goal)?;
+        if cosines.iter().any(|c| c.abs() <= 1.0) {
+            return None;
+        }
+        const STEP: f64 = 1e-6;
+        let shifted = |direction: usize, sign: f64| -> Option<(f64, [f64; 4])> {
+            let h = sign * STEP;
+            let pose = match direction {
+                0..=2 => {
+                    let mut t = goal.translation.vector;
+                    t[direction] += h;
+                    Isometry3::from_parts(Translation3::from(t), goal.rotation)
+                }
+                3..=5 => {
+                    let axis = Vector3::ith(direction - 3, 1.0);
+                    Isometry3::from_parts(goal.translation, UnitQuaternion::from_scaled_axis(axis * h) * goal.rotation)
+                }
+                _ => {
+                    let z = goal.rotation * Vector3::z();
+                    Isometry3::from_parts(goal.translation, UnitQuaternion::from_scaled_axis(z * h) * goal.rotation)
+                }
+            };
+            self.branch_cosines(&pose)
+        };
+        // Per quantity (the sine, then each cosine), the squared gradient over position, over
+        // rotation, and the rate along the turn.
+        let mut position = [0.0; 5];
+        let mut rotation = [0.0; 5];
+        let mut along = [0.0; 5];
+        for direction in 0..7 {
+            let (plus, minus) = (shifted(direction, 1.0)?, shifted(direction, -1.0)?);
+            let values = |v: (f64, [f64; 4])| [v.0, v.1[0], v.1[1], v.1[2], v.1[3]];
+            let (plus, minus) = (values(plus), values(minus));
+            for i in 0..5 {
+                let derivative = (plus[i] - minus[i]) / (2.0 * STEP);
+                match direction {
+                    0..=2 => position[i] += derivative * derivative,
+                    3..=5 => rotation[i] += derivative * derivative,
+                    _ => along[i] = derivative.abs(),
+                }
+            }
+        }
+        let change = |i: usize| {
+            2.0 * (position[i].sqrt() * super::REACHED_POSITION_M + rotation[i].sqrt() * super::REACHED_ORIENTATION_RAD + along[i] * turn)
+        };
+        let branches_stay = 1.0 - sine1.abs() > change(0);
+        let every_elbow_out = (0..4).all(|b| cosines[b].abs() - 1.0 > change(b + 1));
+        (branches_stay && every_elbow_out).then(|| {
+            let least = cosines.iter().map(|c| c.abs() - 1.0).fold(f64::INFINITY, f64::min);
+            format!(
+                "closed-form IK: pose out of reach: on every branch the elbow's cosine lies at least {least:.4} beyond +-1, more than the goal's tolerance can move it (first order, doubled)"
+            )
+        })
     }
 
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within 1 mm and
@@ -287,6 +392,7 @@ impl UrArm {
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
         let flange = self.base_inverse * goal * self.tool_inverse;
         self.out_of_reach(&flange.translation.vector, turn)
+            .or_else(|| self.elbow_out_of_reach(goal, turn))
     }
 
     /// Why no configuration reaches `goal` within 1 mm and 1 degree, from the wrist centre

@@ -63,6 +63,11 @@ const OFFSETS: [f64; 3] = [0.713_281_0, -1.302_717_5, 2.218_919_3];
 /// Further offsets of joint 3 tried when the leading matrix is near singular.
 const RETRY_OFFSETS: [f64; 3] = [-0.411_734_9, 1.577_102_6, -2.650_381_7];
 
+/// Pose error (scaled lengths and rad) beyond which a fast candidate is recomputed by the SVD.
+const CANDIDATE: f64 = 1e-6;
+/// Tangents beyond this (joint 3 within about 2 degrees of the offset's half turn) are retried
+/// with another offset.
+const LARGE_ROOT: f64 = 50.0;
 /// Ratio of smallest to largest singular value below which a matrix counts as singular.
 const SINGULAR: f64 = 1e-10;
 /// Largest imaginary part (relative) of an eigenvalue still tried as a real root: a double root
@@ -236,7 +241,7 @@ impl Elimination {
             }
         }
         let products = SMatrix::<f64, 14, 8>::from_fn(|k, j| right[k][j + 1]);
-        let svd = products.svd(true, false);
+        let svd = products.svd(true, true);
         let sigma = svd.singular_values;
         let largest = sigma.max();
         if !(largest > 0.0) || sigma.min() < SINGULAR * largest {
@@ -244,6 +249,7 @@ impl Elimination {
         }
         let u = svd.u?;
         let complement = complement_of(&u);
+        let products_inverse = svd.pseudo_inverse(0.0).ok()?;
         // Six equations in joints 3 to 5: the rows of the left side that no product of joints 1
         // and 2 reaches, the right side's constant moved over.
         let mut equations = [[[0.0; 9]; 3]; 6];
@@ -260,7 +266,7 @@ impl Elimination {
         }
         Some(System {
             equations,
-            products,
+            products_inverse,
             right,
         })
     }
@@ -269,40 +275,66 @@ impl Elimination {
     fn solve(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> GeneralSolutions {
         let mut out = GeneralSolutions::default();
         let Some(system) = self.system(rotation, translation) else { return out };
-        let Some((offset3, roots)) = system.roots() else { return out };
-        out.resolved = true;
+        let Some((offset3, roots, [c, b, a])) = system.roots() else { return out };
+        out.resolved = !nearly_repeated(&roots);
         for x3 in roots {
-            let t3 = offset3 + 2.0 * x3.re.atan();
-            let sigma = system.at_offset(offset3, x3.re).svd(false, true);
-            let Some(v_t) = sigma.v_t else {
-                out.resolved = false;
-                continue;
-            };
-            let values = sigma.singular_values;
-            // Smallest singular value last? nalgebra sorts them in descending order.
-            let (smallest, _) = values.argmin();
-            let second = values
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| *i != smallest)
-                .map(|(_, v)| *v)
-                .fold(f64::INFINITY, f64::min);
-            if second < 1e-6 * values.max() {
-                // Two solutions share this angle of joint 3: the null vector mixes them.
-                out.resolved = false;
+            let t3 = offset3 + 2.0 * x3.atan();
+            let matrix = c + b * x3 + a * (x3 * x3);
+            // The null vector by inverse iteration (one LU); where its configuration misses the
+            // pose (an ill-conditioned root), by the SVD.
+            let fast = null_vector(&matrix).and_then(|null| self.configuration(&system, &null, t3, rotation));
+            let found = fast
+                .filter(|q| self.chain.misses(q, rotation, translation) < CANDIDATE)
+                .or_else(|| {
+                    let svd = matrix.svd(false, true);
+                    let (smallest, _) = svd.singular_values.argmin();
+                    let v_t = svd.v_t?;
+                    let null: [f64; 12] = std::array::from_fn(|i| v_t[(smallest, i)]);
+                    self.configuration(&system, &null, t3, rotation)
+                });
+            match found {
+                Some(q) => out.configurations.push(q),
+                None => out.resolved = false,
             }
-            let null: [f64; 12] = std::array::from_fn(|i| v_t[(smallest, i)]);
-            let (t4, t5) = angles_of_null_vector(&null);
-            let Some((t1, t2)) = system.first_two(&self.left_at(t3, t4, t5)) else {
-                out.resolved = false;
-                continue;
-            };
-            let mut q = [t1, t2, t3, t4, t5, 0.0];
-            q[5] = self.chain.last_angle(&q, rotation);
-            out.configurations.push(q.map(super::wrap_angle));
         }
         out
     }
+
+    /// The configuration of a root: joints 4 and 5 from the null vector, 1 and 2 from the
+    /// eliminated products, 6 from the pose.
+    fn configuration(&self, system: &System, null: &[f64; 12], t3: f64, rotation: &Matrix3<f64>) -> Option<[f64; 6]> {
+        let (t4, t5) = angles_of_null_vector(null);
+        let (t1, t2) = system.first_two(&self.left_at(t3, t4, t5))?;
+        let mut q = [t1, t2, t3, t4, t5, 0.0];
+        q[5] = self.chain.last_angle(&q, rotation);
+        Some(q.map(super::wrap_angle))
+    }
+}
+
+/// Whether two roots are one within rounding: two solutions sharing joint 3's angle (the null
+/// vector would mix them) or a double root.
+fn nearly_repeated(roots: &[f64]) -> bool {
+    roots
+        .iter()
+        .enumerate()
+        .any(|(i, a)| roots[i + 1..].iter().any(|b| (a - b).abs() <= 1e-7 * (1.0 + a.abs())))
+}
+
+/// The null vector of a matrix singular to rounding, by two steps of inverse iteration (one LU);
+/// `None` when the LU breaks down.
+fn null_vector(matrix: &Matrix12) -> Option<[f64; 12]> {
+    let lu = matrix.lu();
+    // Any fixed start with a part along the null vector; generic entries make that sure.
+    let mut v = SVector::<f64, 12>::from_fn(|i, _| 1.0 + 0.1 * i as f64);
+    for _ in 0..2 {
+        v = lu.solve(&v)?;
+        let norm = v.norm();
+        if !(norm.is_finite() && norm > 0.0) {
+            return None;
+        }
+        v /= norm;
+    }
+    Some(std::array::from_fn(|i| v[i]))
 }
 
 /// Angles of joints 4 and 5 from the monomial vector `x4^a x5^b` (index `a * 3 + b`).
@@ -361,8 +393,8 @@ fn complement_of(u: &SMatrix<f64, 14, 8>) -> [[f64; 14]; 6] {
 struct System {
     /// `[equation][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
     equations: [[[f64; 9]; 3]; 6],
-    /// The right side's eight products of joints 1 and 2, as columns.
-    products: SMatrix<f64, 14, 8>,
+    /// The pseudo-inverse of the right side's eight products of joints 1 and 2 (full rank).
+    products_inverse: SMatrix<f64, 8, 14>,
     /// The right side's coefficients, the constant first.
     right: [[f64; 9]; 14],
 }
@@ -410,15 +442,15 @@ impl System {
 
     /// The offset of joint 3's tangent used and the near-real roots of the determinant; `None`
     /// when the leading matrix is singular at every offset tried.
-    fn roots(&self) -> Option<(f64, Vec<nalgebra::Complex<f64>>)> {
+    fn roots(&self) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
         for offset3 in [OFFSETS[0]].into_iter().chain(RETRY_OFFSETS) {
             let [c, b, a] = self.quadratic(offset3);
-            let sigma = a.svd(false, false).singular_values;
-            if sigma.min() < 1e-8 * sigma.max() {
+            // Conditioning from the inverse: cheaper than a 12 x 12 SVD.
+            let Some(inverse) = a.try_inverse() else { continue };
+            if inverse.norm() * a.norm() > 1e8 {
                 continue;
             }
-            let lu = a.lu();
-            let (Some(ac), Some(ab)) = (lu.solve(&c), lu.solve(&b)) else { continue };
+            let (ac, ab) = (inverse * c, inverse * b);
             let mut companion = SMatrix::<f64, 24, 24>::zeros();
             companion.fixed_view_mut::<12, 12>(0, 12).fill_with_identity();
             companion.fixed_view_mut::<12, 12>(12, 0).copy_from(&(-ac));
@@ -427,9 +459,14 @@ impl System {
             let roots = eigenvalues
                 .iter()
                 .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
-                .copied()
-                .collect();
-            return Some((offset3, roots));
+                .map(|z| z.re)
+                .collect::<Vec<f64>>();
+            // A root near infinity (joint 3 near the offset's half turn) is imprecise: another
+            // offset moves it.
+            if roots.iter().any(|x| x.abs() > LARGE_ROOT) && offset3 != RETRY_OFFSETS[RETRY_OFFSETS.len() - 1] {
+                continue;
+            }
+            return Some((offset3, roots, [c, b, a]));
         }
         None
     }
@@ -437,7 +474,10 @@ impl System {
     /// Joints 1 and 2 from the left side's values at joints 3 to 5: the products solved for.
     fn first_two(&self, left: &[f64; 14]) -> Option<(f64, f64)> {
         let rhs = SVector::<f64, 14>::from_fn(|k, _| left[k] - self.right[k][0]);
-        let y = self.products.svd(true, true).solve(&rhs, 1e-14).ok()?;
+        let y = self.products_inverse * rhs;
+        if !y.iter().all(|v| v.is_finite()) {
+            return None;
+        }
         // Columns: f1 * 3 + f2 - 1 with f in {1, sin, cos}.
         let (s2, c2) = (y[0], y[1]);
         let (s1, c1) = (y[2], y[5]);

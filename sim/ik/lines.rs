@@ -52,6 +52,19 @@ impl Chain {
         (rotation, translation)
     }
 
+    /// How far the chain's pose at `q` is from (`rotation`, `translation`): the larger of the
+    /// position error (scaled) and the largest rotation-matrix entry error.
+    pub(crate) fn misses(&self, q: &[f64; 6], rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> f64 {
+        let (r, t) = self.forward(q);
+        let position = (t - translation).norm();
+        let angle = (r - rotation).amax();
+        if position.is_nan() || angle.is_nan() {
+            f64::INFINITY
+        } else {
+            position.max(angle)
+        }
+    }
+
     /// Joint 6's angle given joints 1 to 5 and the goal rotation.
     pub(crate) fn last_angle(&self, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
         let mut before = Matrix3::identity();

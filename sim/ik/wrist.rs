@@ -210,30 +210,25 @@ impl SphericalWrist {
     fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> WristSolutions {
         let mut out = WristSolutions::default();
         let chain = self.arm.chain(self.reversed);
-        let Some((offset3, roots)) = self.roots(rotation, translation) else { return out };
+        let Some((offset3, roots, [s0, s1, s2])) = self.roots(rotation, translation) else { return out };
         out.resolved = true;
         let target = self.target(chain, rotation, translation);
         let [l1, l2, l3, ..] = &chain.lines;
         let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
         for x3 in roots {
-            let [s0, s1, s2] = self.resultant(rotation, translation, offset3);
             let matrix = s0 + s1 * x3 + s2 * (x3 * x3);
-            let svd = matrix.svd(false, true);
-            let Some(v_t) = svd.v_t else {
-                out.resolved = false;
-                continue;
-            };
-            let sigma = svd.singular_values;
-            let (smallest, _) = sigma.argmin();
-            let second = (0..4).filter(|&i| i != smallest).map(|i| sigma[i]).fold(f64::INFINITY, f64::min);
             let t3 = offset3 + 2.0 * x3.atan();
-            let t2s: Vec<f64> = if second < 1e-7 * sigma.max() {
+            // Rows 0 and 2: (0, a, b, c) of the two quadratics a x2^2 + b x2 + c at this x3.
+            let (a1, b1, c1) = (matrix[(0, 1)], matrix[(0, 2)], matrix[(0, 3)]);
+            let (a2, b2, c2) = (matrix[(2, 1)], matrix[(2, 2)], matrix[(2, 3)]);
+            let denominator = b1 * a2 - b2 * a1;
+            let scale = (a1.abs() + b1.abs() + c1.abs()) * (a2.abs() + b2.abs() + c2.abs());
+            let t2s: Vec<f64> = if denominator.abs() <= 1e-9 * scale {
                 // Both quadratics share both roots in x2: solve one of them.
-                self.shared_roots(rotation, translation, offset3, x3)
+                shared_roots(&matrix)
             } else {
-                let v: [f64; 4] = std::array::from_fn(|i| v_t[(smallest, i)]);
-                // (x2^3, x2^2, x2, 1): the ratio by least squares.
-                let x2 = (v[0] * v[1] + v[1] * v[2] + v[2] * v[3]) / (v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+                // Their common root: a2 (first) - a1 (second) removes x2^2.
+                let x2 = (c2 * a1 - c1 * a2) / denominator;
                 vec![OFFSET2 + 2.0 * x2.atan()]
             };
             for t2 in t2s {
@@ -280,47 +275,49 @@ impl SphericalWrist {
 
     /// The offset used and the near-real roots in `x3`; `None` when the leading matrix is
     /// singular at every offset tried.
-    fn roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<(f64, Vec<f64>)> {
+    fn roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<(f64, Vec<f64>, [Matrix4<f64>; 3])> {
         for offset3 in OFFSETS3 {
             let [c, b, a] = self.resultant(rotation, translation, offset3);
-            let sigma = a.svd(false, false).singular_values;
-            if !(sigma.min() > 1e-8 * sigma.max()) {
+            let Some(inverse) = a.try_inverse() else { continue };
+            if !(inverse.norm() * a.norm() < 1e8) {
                 continue;
             }
-            let lu = a.lu();
-            let (Some(ac), Some(ab)) = (lu.solve(&c), lu.solve(&b)) else { continue };
+            let (ac, ab) = (inverse * c, inverse * b);
             let mut companion = SMatrix::<f64, 8, 8>::zeros();
             companion.fixed_view_mut::<4, 4>(0, 4).fill_with_identity();
             companion.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-ac));
             companion.fixed_view_mut::<4, 4>(4, 4).copy_from(&(-ab));
             let roots = near_real(companion.complex_eigenvalues().iter());
-            return Some((offset3, roots));
+            // A root near infinity is imprecise: another offset moves it.
+            if roots.iter().any(|x| x.abs() > 50.0) && offset3 != OFFSETS3[OFFSETS3.len() - 1] {
+                continue;
+            }
+            return Some((offset3, roots, [c, b, a]));
         }
         None
     }
+}
 
-    /// The real roots in `x2` of the first quadratic at `x3` (both share them).
-    fn shared_roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, offset3: f64, x3: f64) -> Vec<f64> {
-        let [s0, s1, s2] = self.resultant(rotation, translation, offset3);
-        let m = s0 + s1 * x3 + s2 * (x3 * x3);
-        // Rows 0 and 2: (0, a, b, c) of a x2^2 + b x2 + c, one per equation: take the larger.
-        let row = if m.row(0).norm() >= m.row(2).norm() { 0 } else { 2 };
-        let (a, b, c) = (m[(row, 1)], m[(row, 2)], m[(row, 3)]);
-        let mut out = Vec::new();
-        if a.abs() < 1e-14 {
-            if b.abs() > 1e-14 {
-                out.push(-c / b);
-            }
-        } else {
-            let disc = b * b - 4.0 * a * c;
-            if disc >= 0.0 {
-                let root = disc.sqrt();
-                out.push((-b + root) / (2.0 * a));
-                out.push((-b - root) / (2.0 * a));
-            }
+/// The real roots in `x2` (as angles) of the larger of the two quadratics in a resultant matrix
+/// at some `x3`, when both share their roots.
+fn shared_roots(m: &Matrix4<f64>) -> Vec<f64> {
+    // Rows 0 and 2: (0, a, b, c) of a x2^2 + b x2 + c, one per equation: take the larger.
+    let row = if m.row(0).norm() >= m.row(2).norm() { 0 } else { 2 };
+    let (a, b, c) = (m[(row, 1)], m[(row, 2)], m[(row, 3)]);
+    let mut out = Vec::new();
+    if a.abs() < 1e-14 {
+        if b.abs() > 1e-14 {
+            out.push(-c / b);
         }
-        out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let root = disc.sqrt();
+            out.push((-b + root) / (2.0 * a));
+            out.push((-b - root) / (2.0 * a));
+        }
     }
+    out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
 }
 
 /// Boxes the branch and bound may evaluate before it gives up.
