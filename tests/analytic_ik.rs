@@ -297,7 +297,10 @@ fn a_goal_whose_every_solution_collides_is_proven_unreachable_in_the_report() {
     let goal = &json["goals"][0];
     assert_eq!(goal["outcome"], "unreachable", "{goal}");
     let proven = goal["proven"].as_str().unwrap_or_default();
-    assert!(proven.starts_with("closed-form IK: all ") && proven.contains(" collide, throughout the goal's tolerance ("), "{goal}");
+    assert!(
+        proven.starts_with("closed-form IK: all ") && proven.contains(" collide, throughout the goal's tolerance ("),
+        "{goal}"
+    );
     assert_eq!(goal["solutions_free"], 0);
     assert!(goal["solutions_found"].as_u64().is_some_and(|n| n >= 2), "{goal}");
 }
@@ -392,7 +395,11 @@ fn the_elbow_out_of_reach_proof_holds_against_a_dense_numeric_search() {
     let mut numeric = Ik::new(&model, dense);
     let mut claimed = 0;
     for i in 0..400 {
-        let position = Vector3::new(rng.random_range(-0.9..0.9), rng.random_range(-0.9..0.9), rng.random_range(-0.4..1.0));
+        let position = Vector3::new(
+            rng.random_range(-0.9..0.9),
+            rng.random_range(-0.9..0.9),
+            rng.random_range(-0.4..1.0),
+        );
         let rotation = UnitQuaternion::from_euler_angles(rng.random_range(-PI..PI), rng.random_range(-PI..PI), rng.random_range(-PI..PI));
         let pose = Isometry3::from_parts(Translation3::from(position), rotation);
         if arm.elbow_out_of_reach(&pose, 0.0).is_none() {
@@ -403,7 +410,10 @@ fn the_elbow_out_of_reach_proof_holds_against_a_dense_numeric_search() {
             continue;
         }
         let found = numeric.solve(&pose_goal(&pose), i, None);
-        assert!(!found.solutions.iter().any(|s| s.pose_reached), "pose {i}: proven out of reach, yet reached: {found:?}");
+        assert!(
+            !found.solutions.iter().any(|s| s.pose_reached),
+            "pose {i}: proven out of reach, yet reached: {found:?}"
+        );
     }
     assert!(claimed > 0, "no pose proven out of reach by the elbow");
     println!("elbow proofs: {claimed} of 400 random poses");

@@ -474,13 +474,18 @@ fn an_undecided_design_exits_3_with_the_reasons_and_the_json_report_says_why() {
         String::from_utf8_lossy(&output.stderr)
     );
     let verdict = stdout.lines().last().unwrap_or_default();
-    assert!(verdict.starts_with("verdict: UNDECIDED: ") && verdict.contains("undecided"), "{stdout}");
+    assert!(
+        verdict.starts_with("verdict: UNDECIDED: ") && verdict.contains("undecided"),
+        "{stdout}"
+    );
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("json");
     assert_eq!(report["schema_version"], 2);
     assert_eq!(report["verdict"]["passed"], false);
     assert_eq!(report["verdict"]["word"], "UNDECIDED");
     assert!(report["verdict"]["reasons"].as_array().is_some_and(|r| !r.is_empty()));
-    assert!(report["goals"].as_array().is_some_and(|g| g.iter().any(|g| g["outcome"] == "undecided")));
+    assert!(report["goals"]
+        .as_array()
+        .is_some_and(|g| g.iter().any(|g| g["outcome"] == "undecided")));
     assert_eq!(report["criteria"]["position_m"], 0.001);
     // The course's home is the 5-joint paper robot's: the ABB starts from its own.
     assert!(
@@ -507,7 +512,12 @@ fn a_goal_proven_unreachable_fails_the_design_with_exit_1() {
         .output()
         .expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);
-    assert_eq!(output.status.code(), Some(1), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(
+        output.status.code(),
+        Some(1),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     let verdict = stdout.lines().last().unwrap_or_default();
     assert_eq!(verdict, "verdict: FAIL: 1 goal unreachable (proven)", "{stdout}");
 }

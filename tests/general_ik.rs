@@ -23,7 +23,10 @@ fn random_free_design(rng: &mut impl Rng, index: usize) -> Model {
             )
         })
         .collect();
-    let text = format!("{{\"name\": \"random-{index}\", \"mode\": \"free\", \"joints\": [{}]}}", joints.join(","));
+    let text = format!(
+        "{{\"name\": \"random-{index}\", \"mode\": \"free\", \"joints\": [{}]}}",
+        joints.join(",")
+    );
     let design = design::parse(&text, Path::new("random.json")).expect("random design parses");
     from_design(&design)
 }
@@ -38,7 +41,9 @@ fn fk_error(model: &Model, q: &[f64], goal: &Isometry3<f64>) -> f64 {
 }
 
 fn same(a: &[f64], b: &[f64], tolerance: f64) -> bool {
-    a.iter().zip(b).all(|(x, y)| proving_ground::ik::wrap_angle(x - y).abs() <= tolerance)
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| proving_ground::ik::wrap_angle(x - y).abs() <= tolerance)
 }
 
 /// Solves 40 random poses of `model` (FK of random configurations): each pose's configuration is
@@ -61,7 +66,10 @@ fn check_model(name: &str, model: &Model, seed: u64) -> (usize, usize) {
             found.configurations
         );
     }
-    println!("{name}: {total} solutions over 40 poses, {unresolved} unresolved, reversed {}", solver.is_reversed());
+    println!(
+        "{name}: {total} solutions over 40 poses, {unresolved} unresolved, reversed {}",
+        solver.is_reversed()
+    );
     (total, unresolved)
 }
 
@@ -115,7 +123,10 @@ fn check_wrist(name: &str, model: &Model, seed: u64) {
             found.configurations
         );
     }
-    println!("{name}: wrist: {total} solutions over 40 poses, {unresolved} unresolved, at base {}", solver.at_base());
+    println!(
+        "{name}: wrist: {total} solutions over 40 poses, {unresolved} unresolved, at base {}",
+        solver.at_base()
+    );
 }
 
 #[test]
@@ -135,7 +146,11 @@ fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
     use proving_ground::scenario::{Goal, Tolerance};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     let mut models: Vec<Model> = (0..3).map(|i| random_free_design(&mut rng, 100 + i)).collect();
-    for path in ["designs/free-offset-6dof.json", "designs/abb-irb-2600.json", "designs/economic-spherical-wrist.json"] {
+    for path in [
+        "designs/free-offset-6dof.json",
+        "designs/abb-irb-2600.json",
+        "designs/economic-spherical-wrist.json",
+    ] {
         models.push(shipped(path));
     }
     let dense = IkOptions {
@@ -278,7 +293,10 @@ fn spherical_wrist_out_of_reach_is_proven_and_never_claimed_for_a_reachable_pose
         for _ in 0..20 {
             let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
             let pose = model.tool_pose(&q);
-            assert!(wrist.solve(&pose).out_of_reach.is_none(), "{path}: a reachable pose called out of reach");
+            assert!(
+                wrist.solve(&pose).out_of_reach.is_none(),
+                "{path}: a reachable pose called out of reach"
+            );
             // Pushed 5 m away: no solution, and the wrist centre proves it.
             let far = nalgebra::Isometry3::from_parts(
                 nalgebra::Translation3::from(pose.translation.vector * 5.0 + nalgebra::Vector3::new(2.0, 0.0, 0.0)),
@@ -313,7 +331,10 @@ fn a_z_symmetric_goal_of_a_six_joint_arm_is_decided_over_the_free_turn() {
     let solved = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
     assert!(!solved.reached());
     let proof = solved.proof.clone().unwrap_or_default();
-    assert!(proof.contains("over the free turn about tool z") && proof.contains("outside the joint limits"), "{solved:?}");
+    assert!(
+        proof.contains("over the free turn about tool z") && proof.contains("outside the joint limits"),
+        "{solved:?}"
+    );
     let arm = UrArm::detect(&model).expect("UR-type");
     for k in 0..720 {
         let turn = k as f64 * std::f64::consts::TAU / 720.0;

@@ -305,9 +305,14 @@ impl UrArm {
         let psi = centre.y.atan2(centre.x);
         let lean = sine1.asin();
         let mut cosines = [0.0; 4];
-        for (b, (theta1, wrist)) in [(psi + lean, 1.0), (psi + lean, -1.0), (psi + PI - lean, 1.0), (psi + PI - lean, -1.0)]
-            .into_iter()
-            .enumerate()
+        for (b, (theta1, wrist)) in [
+            (psi + lean, 1.0),
+            (psi + lean, -1.0),
+            (psi + PI - lean, 1.0),
+            (psi + PI - lean, -1.0),
+        ]
+        .into_iter()
+        .enumerate()
         {
             let (s1, c1) = theta1.sin_cos();
             let z1 = Vector3::new(s1, -c1, 0.0);

@@ -18,7 +18,11 @@ impl Ik<'_> {
     pub(super) fn newton_step(&mut self, goal: &Goal, q: &[f64], e: &nalgebra::Vector6<f64>) -> Option<Vec<f64>> {
         let inverse = self.constrained_inverse(goal, q)?;
         let constrained = constrained_rows(goal) * e;
-        Some((0..q.len()).map(|i| (0..6).map(|k| inverse[(i, k)] * constrained[k]).sum()).collect())
+        Some(
+            (0..q.len())
+                .map(|i| (0..6).map(|k| inverse[(i, k)] * constrained[k]).sum())
+                .collect(),
+        )
     }
 
     /// The inverse of the Jacobian's constrained rows at `q` (joints by 6, the unconstrained
@@ -79,7 +83,10 @@ impl Ik<'_> {
         };
         let name = &pair.name;
         let Some(reach) = self.neighbourhood(goal, &solution.q, turn) else {
-            return Err(format!("a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far", clearance * 1e3));
+            return Err(format!(
+                "a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far",
+                clearance * 1e3
+            ));
         };
         // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
         // doubled for the curvature like the reach): the smaller.

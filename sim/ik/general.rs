@@ -32,7 +32,9 @@ fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
     let pl = p.dot(l);
     let cross = p.cross(l);
     let last = l * pp - p * (2.0 * pl);
-    [p.x, p.y, p.z, l.x, l.y, l.z, pp, pl, cross.x, cross.y, cross.z, last.x, last.y, last.z]
+    [
+        p.x, p.y, p.z, l.x, l.y, l.z, pp, pl, cross.x, cross.y, cross.z, last.x, last.y, last.z,
+    ]
 }
 
 /// Interpolation nodes: three angles fix a combination of `{1, sin, cos}` exactly.
@@ -188,7 +190,9 @@ impl Elimination {
     fn regular(&self) -> bool {
         let probe = [0.9, -0.4, 1.3, 2.1, -0.7, 0.5];
         let pose = self.chain.forward(&probe);
-        let Some(system) = self.system(&pose.0, &pose.1) else { return false };
+        let Some(system) = self.system(&pose.0, &pose.1) else {
+            return false;
+        };
         let sigma = system.at(0.318).svd(false, false).singular_values;
         sigma.min() > SINGULAR * sigma.max()
     }
@@ -274,8 +278,12 @@ impl Elimination {
     /// Every configuration of the chain at pose (`rotation`, `translation`).
     fn solve(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> GeneralSolutions {
         let mut out = GeneralSolutions::default();
-        let Some(system) = self.system(rotation, translation) else { return out };
-        let Some((offset3, roots, [c, b, a])) = system.roots() else { return out };
+        let Some(system) = self.system(rotation, translation) else {
+            return out;
+        };
+        let Some((offset3, roots, [c, b, a])) = system.roots() else {
+            return out;
+        };
         out.resolved = !nearly_repeated(&roots);
         for x3 in roots {
             let t3 = offset3 + 2.0 * x3.atan();

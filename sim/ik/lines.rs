@@ -38,7 +38,6 @@ pub(crate) struct Chain {
     pub(crate) home_translation: Vector3<f64>,
 }
 
-
 impl Chain {
     /// Tool pose (rotation, translation) at `q`.
     pub(crate) fn forward(&self, q: &[f64; 6]) -> (Matrix3<f64>, Vector3<f64>) {

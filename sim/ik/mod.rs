@@ -4,19 +4,19 @@
 //! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
 pub mod analytic;
-mod certify;
-pub mod general;
-mod lines;
-mod selfmotion;
-pub mod solvers;
-pub mod wrist;
 mod branches;
+mod certify;
 mod dls;
 mod error;
+pub mod general;
+mod lines;
 mod loss;
 mod reach;
 mod refine;
+mod selfmotion;
+pub mod solvers;
 mod spd6;
+pub mod wrist;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
@@ -24,16 +24,16 @@ pub use reach::{reach_bound, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;
+use crate::collide::MotionBounds;
 use crate::model::{JointKind, KinematicsWorkspace, Model};
 use crate::scenario::{Goal, Scenario, Tolerance};
-use crate::collide::MotionBounds;
 use analytic::{AnalyticSolutions, UrArm};
-use solvers::AllSolutions;
 use dls::{Convergence, Solver};
 use nalgebra::{Isometry3, Translation3};
 use rand::SeedableRng;
 use refine::Checker;
 use serde::Serialize;
+use solvers::AllSolutions;
 use std::f64::consts::TAU;
 
 /// Position error below which a goal is reached (m): the paper's 1 mm.
@@ -133,6 +133,21 @@ impl GoalSolutions {
     }
 }
 
+/// The all-solutions methods of one model: the UR closed form, else another method for its
+/// geometry.
+struct Methods {
+    analytic: Option<UrArm>,
+    all: Option<(AllSolutions, Tolerance)>,
+}
+
+impl Methods {
+    fn of(model: &Model) -> Self {
+        let analytic = UrArm::detect(model);
+        let all = if analytic.is_none() { AllSolutions::of(model) } else { None };
+        Self { analytic, all }
+    }
+}
+
 /// Reusable IK state for one model (scratch space, no allocation per iteration).
 pub struct Ik<'a> {
     model: &'a Model,
@@ -161,41 +176,27 @@ const EXACT: f64 = 1e-9;
 impl<'a> Ik<'a> {
     /// A solver for `model` that ignores collisions.
     pub fn new(model: &'a Model, opts: IkOptions) -> Self {
-        Self {
-            model,
-            solver: Solver::new(model),
-            checker: None,
-            analytic: UrArm::detect(model),
-            all: None,
-            bounds: MotionBounds::of(model),
-            ws: model.workspace(),
-            opts,
-        }
-        .with_general()
+        Self::build(model, None, opts, &Methods::of(model))
     }
 
     /// A solver for `model` in a collision world built for the same model: solutions are checked
     /// with exact geometry, and colliding ones refined.
     pub fn with_collisions(model: &'a Model, world: &'a CollisionWorld, opts: IkOptions) -> Self {
+        Self::build(model, Some(world), opts, &Methods::of(model))
+    }
+
+    /// A solver with the model's methods already found (one detection for many solvers).
+    fn build(model: &'a Model, world: Option<&'a CollisionWorld>, opts: IkOptions, methods: &Methods) -> Self {
         Self {
             model,
             solver: Solver::new(model),
-            checker: Some(Checker::new(model, world)),
-            analytic: UrArm::detect(model),
-            all: None,
+            checker: world.map(|world| Checker::new(model, world)),
+            analytic: methods.analytic.clone(),
+            all: methods.all.clone(),
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
         }
-        .with_general()
-    }
-
-    /// The all-solutions method where no closed form applies.
-    fn with_general(mut self) -> Self {
-        if self.analytic.is_none() {
-            self.all = AllSolutions::of(self.model);
-        }
-        self
     }
 
     /// The all-solutions method, when the model has no UR closed form and one applies.
@@ -320,19 +321,7 @@ impl<'a> Ik<'a> {
             distinct.push(q.clone());
             if self.shift_into_limits(&mut q, first_seed) {
                 // The error at the whole-turn equivalent differs by rounding only.
-                let mut solution = self.judge(goal, q, Some(error), margin);
-                if solution.pose_reached && !solution.reached {
-                    match self.collision_certificate(goal, &solution, margin, 0.0) {
-                        Ok(pair) => collisions.push(pair),
-                        // Not proven: the tolerance may hold a free configuration of this
-                        // branch; it stands for the branch when found.
-                        Err(why) => match self.free_within_tolerance(goal, &solution.q, margin) {
-                            Some(free) => solution = free,
-                            None => open.push(why),
-                        },
-                    }
-                }
-                found.push(solution);
+                found.push(self.judge(goal, q, Some(error), margin));
             } else {
                 if let Err(why) = self.limits_certificate(goal, &q, 0.0) {
                     open.push(why);
@@ -355,6 +344,33 @@ impl<'a> Ik<'a> {
                     }
                 } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
                     closest = Some(solution);
+                }
+            }
+        }
+        if !found.iter().any(|s| s.reached) {
+            // Only a goal nothing reaches needs its colliding solutions certified.
+            for i in 0..found.len() {
+                if !found[i].pose_reached || found[i].reached {
+                    continue;
+                }
+                // The checker's closest pair must be this solution's.
+                if let Some(checker) = self.checker.as_mut() {
+                    checker.clearance(&found[i].q, true);
+                }
+                match self.collision_certificate(goal, &found[i], margin, 0.0) {
+                    Ok(pair) => collisions.push(pair),
+                    // Not proven: the tolerance may hold a free configuration of this branch;
+                    // it stands for the branch when found, and the goal is reached.
+                    Err(why) => {
+                        let q = found[i].q.clone();
+                        match self.free_within_tolerance(goal, &q, margin) {
+                            Some(free) => {
+                                found[i] = free;
+                                break;
+                            }
+                            None => open.push(why),
+                        }
+                    }
                 }
             }
         }
@@ -387,15 +403,22 @@ impl<'a> Ik<'a> {
                 "collide".to_string()
             };
             if poses == 0 {
-                format!("{method}: none of the pose's {total} solutions is within the joint limits, nor within the goal's tolerance of them")
+                format!(
+                    "{method}: none of the pose's {total} solutions is within the joint limits, nor within the goal's tolerance of them"
+                )
             } else {
-                format!("{method}: all {poses} solutions of the pose{limits} {what}, throughout the goal's tolerance ({})", summary(&collisions))
+                format!(
+                    "{method}: all {poses} solutions of the pose{limits} {what}, throughout the goal's tolerance ({})",
+                    summary(&collisions)
+                )
             }
         });
         let undecided = if reached {
             None
         } else if !complete {
-            Some(format!("{method}: the pose is singular or on the workspace boundary: its solutions are not isolated"))
+            Some(format!(
+                "{method}: the pose is singular or on the workspace boundary: its solutions are not isolated"
+            ))
         } else {
             (!open.is_empty()).then(|| format!("{method}: every solution is known, but {}", summary(&open)))
         };
@@ -768,10 +791,9 @@ pub fn solve_goals_counted(
     use rayon::prelude::*;
     // Each goal's starts are seeded by its index alone, so goals solve independently, on any
     // number of threads, with the same result.
-    let make = || match world {
-        Some(world) => Ik::with_collisions(model, world, opts.clone()),
-        None => Ik::new(model, opts.clone()),
-    };
+    // The methods are detected once; each thread's solver gets a copy.
+    let methods = Methods::of(model);
+    let make = || Ik::build(model, world, opts.clone(), &methods);
     scenario
         .goals
         .par_iter()

@@ -210,7 +210,9 @@ impl SphericalWrist {
     fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> WristSolutions {
         let mut out = WristSolutions::default();
         let chain = self.arm.chain(self.reversed);
-        let Some((offset3, roots, [s0, s1, s2])) = self.roots(rotation, translation) else { return out };
+        let Some((offset3, roots, [s0, s1, s2])) = self.roots(rotation, translation) else {
+            return out;
+        };
         out.resolved = true;
         let target = self.target(chain, rotation, translation);
         let [l1, l2, l3, ..] = &chain.lines;

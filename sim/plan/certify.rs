@@ -13,9 +13,9 @@
 //! the segment, or where a clearance falls within [`TOUCH_TOLERANCE_M`] of the threshold: a touch
 //! (or a collision), reported with the pair and where.
 
+pub use crate::collide::MotionBounds;
 use crate::collide::{self, CollisionWorld, Distances, QueryOptions};
 use crate::model::{KinematicsWorkspace, Model};
-pub use crate::collide::MotionBounds;
 use serde::Serialize;
 
 /// A clearance within this of the threshold ends the advancement as a touch (m): below it, the
