@@ -459,10 +459,10 @@ fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the
 fn an_undecided_design_exits_3_with_the_reasons_and_the_json_report_says_why() {
     let dir = tempfile::tempdir().expect("temp dir");
     let json = dir.path().join("report.json");
-    // The course's goals are z_symmetric: for a 6-joint arm a continuum of solutions, searched
-    // from IK starts; the ones not found are undecided, not failures.
+    // The course's goals are z_symmetric: for a 6-joint arm a continuum of solutions; the ones
+    // neither reached nor proven over the free turn are undecided, not failures.
     let output = validate_design()
-        .args(["designs/abb-irb-2600.json", "--engines", "none", "--json"])
+        .args(["designs/modular-compact.json", "--engines", "none", "--json"])
         .arg(&json)
         .output()
         .expect("runs");
@@ -487,7 +487,7 @@ fn an_undecided_design_exits_3_with_the_reasons_and_the_json_report_says_why() {
         .as_array()
         .is_some_and(|g| g.iter().any(|g| g["outcome"] == "undecided")));
     assert_eq!(report["criteria"]["position_m"], 0.001);
-    // The course's home is the 5-joint paper robot's: the ABB starts from its own.
+    // The course's home is the 5-joint paper robot's: the 6-joint arm starts from its own.
     assert!(
         report["findings"]
             .as_array()

@@ -93,7 +93,7 @@ fn fixed(value: Option<f64>, decimals: usize) -> String {
 /// The CSV: one row per record, canonical order, with its score and percentile.
 pub fn csv(records: &[Record], distributions: &BTreeMap<String, Distribution>) -> String {
     let mut out = String::from(
-        "design,scenario,goals,goals_solved,goals_proven_unreachable,goals_undecided,task_solved,position_error_mm,orientation_error_deg,hardware_cost_m,task_loss,score,percentile,verdict\n",
+        "design,scenario,goals,goals_solved,goals_proven_unreachable,task_solved,position_error_mm,orientation_error_deg,hardware_cost_m,task_loss,score,percentile,verdict,goals_undecided\n",
     );
     for r in records {
         let distribution = distributions.get(&r.scenario);
@@ -105,7 +105,6 @@ pub fn csv(records: &[Record], distributions: &BTreeMap<String, Distribution>) -
             r.goals,
             r.goals_solved,
             r.goals_proven_unreachable,
-            r.goals_undecided,
             r.task_solved,
             fixed(r.position_error_mm, 4),
             fixed(r.orientation_error_deg, 4),
@@ -114,6 +113,8 @@ pub fn csv(records: &[Record], distributions: &BTreeMap<String, Distribution>) -
             fixed(distribution.and_then(|d| d.score(r.task_loss)), 4),
             fixed(distribution.and_then(|d| d.percentile(r.task_loss)), 2),
             r.verdict.as_deref().unwrap_or(""),
+            // Last, so readers of the earlier columns by position keep working.
+            r.goals_undecided,
         );
     }
     out
