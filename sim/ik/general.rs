@@ -193,7 +193,7 @@ impl Elimination {
         let Some(system) = self.system(&pose.0, &pose.1) else {
             return false;
         };
-        let sigma = system.at(0.318).svd(false, false).singular_values;
+        let sigma = system.at(0.29).svd(false, false).singular_values;
         sigma.min() > SINGULAR * sigma.max()
     }
 
@@ -248,7 +248,7 @@ impl Elimination {
         let svd = products.svd(true, true);
         let sigma = svd.singular_values;
         let largest = sigma.max();
-        if !(largest > 0.0) || sigma.min() < SINGULAR * largest {
+        if largest.is_nan() || largest <= 0.0 || sigma.min() < SINGULAR * largest {
             return None;
         }
         let u = svd.u?;
@@ -260,9 +260,9 @@ impl Elimination {
         for (i, equation) in equations.iter_mut().enumerate() {
             for k in 0..14 {
                 let weight = complement[i][k];
-                for f3 in 0..3 {
-                    for (j, value) in equation[f3].iter_mut().enumerate() {
-                        *value += weight * self.left[k][f3][j];
+                for (by3, left) in equation.iter_mut().zip(&self.left[k]) {
+                    for (value, coefficient) in by3.iter_mut().zip(left) {
+                        *value += weight * coefficient;
                     }
                 }
                 equation[0][0] -= weight * right[k][0];

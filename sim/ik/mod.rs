@@ -349,23 +349,23 @@ impl<'a> Ik<'a> {
         }
         if !found.iter().any(|s| s.reached) {
             // Only a goal nothing reaches needs its colliding solutions certified.
-            for i in 0..found.len() {
-                if !found[i].pose_reached || found[i].reached {
+            for solution in found.iter_mut() {
+                if !solution.pose_reached || solution.reached {
                     continue;
                 }
                 // The checker's closest pair must be this solution's.
                 if let Some(checker) = self.checker.as_mut() {
-                    checker.clearance(&found[i].q, true);
+                    checker.clearance(&solution.q, true);
                 }
-                match self.collision_certificate(goal, &found[i], margin, 0.0) {
+                match self.collision_certificate(goal, solution, margin, 0.0) {
                     Ok(pair) => collisions.push(pair),
                     // Not proven: the tolerance may hold a free configuration of this branch;
                     // it stands for the branch when found, and the goal is reached.
                     Err(why) => {
-                        let q = found[i].q.clone();
+                        let q = solution.q.clone();
                         match self.free_within_tolerance(goal, &q, margin) {
                             Some(free) => {
-                                found[i] = free;
+                                *solution = free;
                                 break;
                             }
                             None => open.push(why),

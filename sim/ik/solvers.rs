@@ -18,10 +18,12 @@ const SAME_RAD: f64 = 1e-6;
 /// An all-solutions method of one model.
 #[derive(Debug, Clone)]
 pub enum AllSolutions {
-    /// Three consecutive axes meet at the wrist or at the base.
-    Wrist(SphericalWrist),
-    /// Any other 6R geometry the elimination holds for.
-    General(General6R),
+    /// Three consecutive axes meet at the wrist or at the base (boxed, like the other: both
+    /// carry the arm's lines and tables).
+    Wrist(Box<SphericalWrist>),
+    /// Any other 6R geometry the elimination holds for (boxed: its coefficient tables are
+    /// large).
+    General(Box<General6R>),
 }
 
 /// Every solution of one pose, unpolished, each with six angles (the sixth is the virtual
@@ -46,9 +48,9 @@ impl AllSolutions {
             _ => return None,
         };
         if let Some(wrist) = SphericalWrist::of_arm(arm.clone()) {
-            return Some((AllSolutions::Wrist(wrist), tolerance));
+            return Some((AllSolutions::Wrist(Box::new(wrist)), tolerance));
         }
-        General6R::of_arm(arm).map(|general| (AllSolutions::General(general), tolerance))
+        General6R::of_arm(arm).map(|general| (AllSolutions::General(Box::new(general)), tolerance))
     }
 
     /// The method's name, for proofs.

@@ -38,7 +38,7 @@ pub struct WristSolutions {
     /// pose (a continuum of solutions) or where a root could not be resolved.
     pub resolved: bool,
     /// Why no configuration reaches the pose within 1 mm and 1 degree, when the wrist centre
-    /// proves it (see [`SphericalWrist::out_of_reach`]); only looked for when no solution exists.
+    /// proves it (see [`SphericalWrist::out_of_reach_over_turn`]); only looked for when no solution exists.
     pub out_of_reach: Option<String>,
 }
 
@@ -281,7 +281,8 @@ impl SphericalWrist {
         for offset3 in OFFSETS3 {
             let [c, b, a] = self.resultant(rotation, translation, offset3);
             let Some(inverse) = a.try_inverse() else { continue };
-            if !(inverse.norm() * a.norm() < 1e8) {
+            let condition = inverse.norm() * a.norm();
+            if condition.is_nan() || condition >= 1e8 {
                 continue;
             }
             let (ac, ab) = (inverse * c, inverse * b);
