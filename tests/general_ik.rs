@@ -354,3 +354,21 @@ fn a_z_symmetric_goal_of_a_six_joint_arm_is_decided_over_the_free_turn() {
     };
     assert!(Ik::new(&free, opts).solve(&goal, 0, None).reached());
 }
+
+/// A pose near the workspace boundary: its 4 exact solutions all collide, but a configuration
+/// 0.8 mm off the pose (on a branch pair born within the tolerance) is free. The numeric
+/// cross-check before a proof finds it: the goal is reached, never "proven unreachable".
+#[test]
+fn solutions_born_within_the_tolerance_are_no_proof() {
+    use proving_ground::pipeline::{load, validate, ValidateOptions};
+    let path = common::repo().join("designs/economic-spherical-wrist.json");
+    let scenario = proving_ground::scenario::generate::cluttered(4, 7);
+    let opts = ValidateOptions {
+        reach_only: true,
+        ..Default::default()
+    };
+    let validation = validate(load(&path, &LoadOptions::default()).expect("loads"), scenario, &opts).expect("runs");
+    let report = proving_ground::report::build(&validation);
+    let goal = &report.goals[6];
+    assert_eq!(goal.outcome, "reached", "{:?}", goal.proven);
+}

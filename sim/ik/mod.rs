@@ -388,6 +388,27 @@ impl<'a> Ik<'a> {
         }
         let reached = found.first().is_some_and(|s| s.reached);
         let method = self.method();
+        if complete && open.is_empty() && !reached {
+            // Before a proof, the numeric search as a cross-check: near a workspace boundary a
+            // pose within the tolerance can have solutions the exact pose lacks (a branch pair
+            // born inside the tolerance), which no certificate around the exact ones covers.
+            let numeric = self.solve_numeric(goal, goal_index, first_seed, &[]);
+            if numeric.reached() {
+                return numeric;
+            }
+            let off_branch = numeric.solutions.iter().filter(|s| s.pose_reached).find(|s| {
+                !distinct
+                    .iter()
+                    .any(|d| d.iter().zip(&s.q).all(|(a, b)| wrap_angle(a - b).abs() <= OFF_BRANCH_RAD))
+            });
+            if let Some(stray) = off_branch {
+                open.push(format!(
+                    "the numeric search found a configuration within the tolerance ({:.2} mm, {:.3} deg) off every exact solution: solutions appear within the tolerance",
+                    stray.error.position_m * 1e3,
+                    stray.error.orientation_rad.to_degrees()
+                ));
+            }
+        }
         let decided = complete && open.is_empty();
         let proof = (decided && !reached).then(|| {
             let total = distinct.len();
@@ -744,6 +765,10 @@ fn summary(items: &[String]) -> String {
     }
     text
 }
+
+/// A configuration within the tolerance further than this (rad, every joint) from each exact
+/// solution is on another branch.
+const OFF_BRANCH_RAD: f64 = 0.1;
 
 /// Convergence of the numeric solver: far tighter than "reached" (1 mm, 1 degree).
 const CONVERGED: Convergence = Convergence {
