@@ -46,31 +46,40 @@ fn same(a: &[f64], b: &[f64], tolerance: f64) -> bool {
         .all(|(x, y)| proving_ground::ik::wrap_angle(x - y).abs() <= tolerance)
 }
 
-/// Solves 40 random poses of `model` (FK of random configurations): each pose's configuration is
-/// among the solutions, and every solution reaches the pose.
-fn check_model(name: &str, model: &Model, seed: u64) -> (usize, usize) {
-    let solver = General6R::new(model).unwrap_or_else(|| panic!("{name}: no general solver"));
+/// Solves 40 random poses of `model` (FK of random configurations) with `solve`: each pose's
+/// configuration is among the solutions, and every solution reaches the pose. Returns the
+/// solutions and unresolved poses counted.
+fn check_poses(name: &str, model: &Model, seed: u64, solve: impl Fn(&Isometry3<f64>) -> (Vec<[f64; 6]>, bool)) -> (usize, usize) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let (mut total, mut unresolved) = (0, 0);
     for _ in 0..40 {
         let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
         let goal = model.tool_pose(&q);
-        let found = solver.solve(&goal);
-        unresolved += usize::from(!found.resolved);
-        total += found.configurations.len();
-        let worst = found.configurations.iter().map(|c| fk_error(model, c, &goal)).fold(0.0, f64::max);
+        let (configurations, resolved) = solve(&goal);
+        unresolved += usize::from(!resolved);
+        total += configurations.len();
+        let worst = configurations.iter().map(|c| fk_error(model, c, &goal)).fold(0.0, f64::max);
         assert!(worst < 1e-6, "{name}: a solution misses the pose by {worst}");
         assert!(
-            found.configurations.iter().any(|c| same(c, &q, 1e-5)),
-            "{name}: the pose's own configuration {q:?} is missing from {:?}",
-            found.configurations
+            configurations.iter().any(|c| same(c, &q, 1e-5)),
+            "{name}: the pose's own configuration {q:?} is missing from {configurations:?}"
         );
     }
+    (total, unresolved)
+}
+
+/// [`check_poses`] with the general solver.
+fn check_model(name: &str, model: &Model, seed: u64) -> (usize, usize) {
+    let solver = General6R::new(model).unwrap_or_else(|| panic!("{name}: no general solver"));
+    let counts = check_poses(name, model, seed, |goal| {
+        let found = solver.solve(goal);
+        (found.configurations, found.resolved)
+    });
     println!(
-        "{name}: {total} solutions over 40 poses, {unresolved} unresolved, reversed {}",
+        "{name}: {counts:?} solutions and unresolved poses over 40, reversed {}",
         solver.is_reversed()
     );
-    (total, unresolved)
+    counts
 }
 
 #[test]
@@ -103,28 +112,16 @@ fn shipped_six_joint_designs() {
     }
 }
 
-/// Solves 40 random poses with the spherical-wrist solver.
+/// [`check_poses`] with the spherical-wrist solver.
 fn check_wrist(name: &str, model: &Model, seed: u64) {
     use proving_ground::ik::wrist::SphericalWrist;
     let solver = SphericalWrist::detect(model).unwrap_or_else(|| panic!("{name}: no spherical wrist"));
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let (mut total, mut unresolved) = (0, 0);
-    for _ in 0..40 {
-        let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
-        let goal = model.tool_pose(&q);
-        let found = solver.solve(&goal);
-        unresolved += usize::from(!found.resolved);
-        total += found.configurations.len();
-        let worst = found.configurations.iter().map(|c| fk_error(model, c, &goal)).fold(0.0, f64::max);
-        assert!(worst < 1e-6, "{name}: a solution misses the pose by {worst}");
-        assert!(
-            found.configurations.iter().any(|c| same(c, &q, 1e-5)),
-            "{name}: the pose's own configuration {q:?} is missing from {:?}",
-            found.configurations
-        );
-    }
+    let counts = check_poses(name, model, seed, |goal| {
+        let found = solver.solve(goal);
+        (found.configurations, found.resolved)
+    });
     println!(
-        "{name}: wrist: {total} solutions over 40 poses, {unresolved} unresolved, at base {}",
+        "{name}: wrist: {counts:?} solutions and unresolved poses over 40, at base {}",
         solver.at_base()
     );
 }
