@@ -21,10 +21,9 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use super::lines::{Arm, Chain};
+use super::lines::{half_angle, interpolate2, node_inverse, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
-use std::f64::consts::PI;
 
 /// The fourteen Raghavan–Roth quantities of a point `p` and a direction `l`.
 fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
@@ -35,28 +34,6 @@ fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
     [
         p.x, p.y, p.z, l.x, l.y, l.z, pp, pl, cross.x, cross.y, cross.z, last.x, last.y, last.z,
     ]
-}
-
-/// Interpolation nodes: three angles fix a combination of `{1, sin, cos}` exactly.
-const NODES: [f64; 3] = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
-
-/// The inverse of the `{1, sin, cos}` values at [`NODES`]: coefficients from node values.
-pub(super) fn node_inverse() -> Matrix3<f64> {
-    let v = Matrix3::from_fn(|i, f| match f {
-        0 => 1.0,
-        1 => NODES[i].sin(),
-        _ => NODES[i].cos(),
-    });
-    // The nodes are distinct angles: the matrix is regular.
-    v.try_inverse().unwrap_or_else(Matrix3::identity)
-}
-
-/// Half-angle form of `{1, sin theta, cos theta}` for `theta = offset + t`, times `1 + x^2`
-/// with `x = tan(t / 2)`: row `f`, column the power of `x`.
-pub(super) fn half_angle(offset: f64) -> Matrix3<f64> {
-    let (s, c) = offset.sin_cos();
-    // cos t (1 + x^2) = 1 - x^2, sin t (1 + x^2) = 2x.
-    Matrix3::new(1.0, 0.0, 1.0, s, 2.0 * c, -s, c, -2.0 * s, -c)
 }
 
 /// Offsets of the half-angle tangents (rad): a solution at `offset + pi` would be at infinity, so
@@ -82,7 +59,6 @@ struct Elimination {
     chain: Chain,
     /// Left side: `[quantity][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
     left: [[[f64; 9]; 3]; 14],
-    nodes: Matrix3<f64>,
 }
 
 /// Every solution of one pose, unpolished.
@@ -177,7 +153,7 @@ impl Elimination {
                 }
             }
         }
-        let elimination = Elimination { chain, left, nodes };
+        let elimination = Elimination { chain, left };
         let probe = [0.37, -1.91, 2.47];
         let exact = elimination.chain.left(probe[0], probe[1], probe[2]);
         let fitted = elimination.left_at(probe[0], probe[1], probe[2]);
@@ -230,20 +206,7 @@ impl Elimination {
             }
         }
         // right[k][f1 * 3 + f2]
-        let mut right = [[0.0; 9]; 14];
-        for (k, quantity) in right.iter_mut().enumerate() {
-            for f1 in 0..3 {
-                for f2 in 0..3 {
-                    let mut sum = 0.0;
-                    for (i1, row) in values.iter().enumerate() {
-                        for (i2, value) in row.iter().enumerate() {
-                            sum += self.nodes[(f1, i1)] * self.nodes[(f2, i2)] * value[k];
-                        }
-                    }
-                    quantity[f1 * 3 + f2] = sum;
-                }
-            }
-        }
+        let right = interpolate2(&values);
         let products = SMatrix::<f64, 14, 8>::from_fn(|k, j| right[k][j + 1]);
         let svd = products.svd(true, true);
         let sigma = svd.singular_values;

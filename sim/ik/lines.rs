@@ -7,6 +7,7 @@
 
 use crate::model::{JointKind, Model};
 use nalgebra::{Isometry3, Matrix3, Vector3};
+use std::f64::consts::PI;
 
 /// One joint's axis line: a point on it and its unit direction.
 #[derive(Debug, Clone, Copy)]
@@ -208,4 +209,48 @@ pub(crate) fn angle_about(axis: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3
         return None;
     }
     Some(axis.dot(&u.cross(&v)).atan2(u.dot(&v)))
+}
+
+/// Interpolation nodes: three angles fix a combination of `{1, sin, cos}` exactly.
+pub(crate) const NODES: [f64; 3] = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
+
+/// The inverse of the `{1, sin, cos}` values at [`NODES`]: coefficients from node values.
+pub(crate) fn node_inverse() -> Matrix3<f64> {
+    let v = Matrix3::from_fn(|i, f| match f {
+        0 => 1.0,
+        1 => NODES[i].sin(),
+        _ => NODES[i].cos(),
+    });
+    // The nodes are distinct angles: the matrix is regular.
+    v.try_inverse().unwrap_or_else(Matrix3::identity)
+}
+
+/// Half-angle form of `{1, sin theta, cos theta}` for `theta = offset + t`, times `1 + x^2`
+/// with `x = tan(t / 2)`: row `f`, column the power of `x`.
+pub(crate) fn half_angle(offset: f64) -> Matrix3<f64> {
+    let (s, c) = offset.sin_cos();
+    // cos t (1 + x^2) = 1 - x^2, sin t (1 + x^2) = 2x.
+    Matrix3::new(1.0, 0.0, 1.0, s, 2.0 * c, -s, c, -2.0 * s, -c)
+}
+
+/// The coefficients over `{1, sin a, cos a} x {1, sin b, cos b}` (index `fa * 3 + fb`) of `N`
+/// quantities, from their values on the [`NODES`] grid (`values[ia][ib]`): exact when each is
+/// such a combination.
+pub(crate) fn interpolate2<const N: usize>(values: &[[[f64; N]; 3]; 3]) -> [[f64; 9]; N] {
+    let nodes = node_inverse();
+    let mut out = [[0.0; 9]; N];
+    for (k, quantity) in out.iter_mut().enumerate() {
+        for fa in 0..3 {
+            for fb in 0..3 {
+                let mut sum = 0.0;
+                for (ia, row) in values.iter().enumerate() {
+                    for (ib, value) in row.iter().enumerate() {
+                        sum += nodes[(fa, ia)] * nodes[(fb, ib)] * value[k];
+                    }
+                }
+                quantity[fa * 3 + fb] = sum;
+            }
+        }
+    }
+    out
 }

@@ -12,7 +12,7 @@
 //! goal direction (the two-rotation subproblem, up to two ways, for any twist between the wrist
 //! axes); joint 6 is the rest.
 
-use super::lines::{angle_about, Arm, Chain};
+use super::lines::{angle_about, half_angle, interpolate2, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Complex, Isometry3, Matrix3, Matrix4, SMatrix, Vector3};
 use std::f64::consts::PI;
@@ -168,7 +168,7 @@ impl SphericalWrist {
         let axis1 = &chain.lines[0];
         let relative = target - axis1.point;
         let goals = [relative.norm_squared(), axis1.axis.dot(&relative)];
-        let (h2, h3) = (super::general::half_angle(OFFSET2), super::general::half_angle(offset3));
+        let (h2, h3) = (half_angle(OFFSET2), half_angle(offset3));
         // poly[equation][power of x2][power of x3]
         let mut poly = [[[0.0; 3]; 3]; 2];
         for (e, coefficients) in self.position.iter().enumerate() {
@@ -395,29 +395,13 @@ fn crossing(p: Vector3<f64>, u: Vector3<f64>, q: Vector3<f64>, v: Vector3<f64>) 
 
 /// The two positioning equations' coefficients, interpolated at three angles per joint.
 fn position_coefficients(chain: &Chain, centre: &Vector3<f64>) -> [[f64; 9]; 2] {
-    let nodes = super::general::node_inverse();
-    let angles = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
     let [l1, l2, l3, ..] = &chain.lines;
     let mut values = [[[0.0; 2]; 3]; 3];
     for (i2, row) in values.iter_mut().enumerate() {
         for (i3, value) in row.iter_mut().enumerate() {
-            let point = l2.turn(angles[i2], &l3.turn(angles[i3], centre)) - l1.point;
+            let point = l2.turn(NODES[i2], &l3.turn(NODES[i3], centre)) - l1.point;
             *value = [point.norm_squared(), l1.axis.dot(&point)];
         }
     }
-    let mut out = [[0.0; 9]; 2];
-    for (e, equation) in out.iter_mut().enumerate() {
-        for f2 in 0..3 {
-            for f3 in 0..3 {
-                let mut sum = 0.0;
-                for (i2, row) in values.iter().enumerate() {
-                    for (i3, value) in row.iter().enumerate() {
-                        sum += nodes[(f2, i2)] * nodes[(f3, i3)] * value[e];
-                    }
-                }
-                equation[f2 * 3 + f3] = sum;
-            }
-        }
-    }
-    out
+    interpolate2(&values)
 }
