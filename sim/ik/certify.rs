@@ -26,44 +26,76 @@ impl Ik<'_> {
     }
 
     /// The inverse of the Jacobian's constrained rows at `q` (joints by 6, the unconstrained
-    /// rows' columns zero); `None` as in [`Self::newton_step`].
+    /// rows' columns zero, and the held joint's row, see [`Ik::held`]); `None` as in
+    /// [`Self::newton_step`]. Leaves the Jacobian at `q` in the workspace.
     fn constrained_inverse(&mut self, goal: &Goal, q: &[f64]) -> Option<nalgebra::DMatrix<f64>> {
         self.model.tool_jacobian(q, &mut self.ws);
         let dof = q.len();
+        let held = self.held.filter(|&h| h < dof);
+        let moving: Vec<usize> = (0..dof).filter(|&i| Some(i) != held).collect();
         let rows = constrained_rows(goal);
         let constrained = match goal.tolerance {
             Tolerance::Pose => 6,
             Tolerance::ZSymmetric => 5,
             Tolerance::Position => 3,
         };
-        if constrained != dof {
+        if constrained != moving.len() {
             return None;
         }
         let projected = rows * &self.ws.jacobian;
-        let square = projected.rows(0, dof).into_owned();
+        let square = nalgebra::DMatrix::from_fn(constrained, constrained, |r, c| projected[(r, moving[c])]);
         let inverse = square.try_inverse()?;
         let mut out = nalgebra::DMatrix::zeros(dof, 6);
-        out.view_mut((0, 0), (dof, dof)).copy_from(&inverse);
+        for (k, &i) in moving.iter().enumerate() {
+            for r in 0..constrained {
+                out[(i, r)] = inverse[(k, r)];
+            }
+        }
         Some(out)
+    }
+
+    /// The joints' rates along the self-motion through `q` per unit of its parameter: the held
+    /// joint's turn (the others follow to keep the pose), else the free turn about goal z.
+    /// `inverse` is [`Self::constrained_inverse`] at `q`, whose Jacobian the workspace holds.
+    fn branch_rate(&self, goal: &Goal, inverse: &nalgebra::DMatrix<f64>) -> Vec<f64> {
+        let dof = inverse.nrows();
+        match self.held.filter(|&h| h < dof) {
+            Some(h) => {
+                let rows = constrained_rows(goal);
+                let column: Vec<f64> = (0..6)
+                    .map(|r| (0..6).map(|k| rows[(r, k)] * self.ws.jacobian[(k, h)]).sum())
+                    .collect();
+                (0..dof)
+                    .map(|i| {
+                        if i == h {
+                            1.0
+                        } else {
+                            -(0..6).map(|k| inverse[(i, k)] * column[k]).sum::<f64>()
+                        }
+                    })
+                    .collect()
+            }
+            None => {
+                let z = goal.rotation * nalgebra::Vector3::z();
+                (0..dof).map(|i| (0..3).map(|k| inverse[(i, 3 + k)] * z[k]).sum()).collect()
+            }
+        }
     }
 
     /// How far each joint may be from solution `q` while the tool stays within the goal's
     /// tolerance: the inverse Jacobian's rows against 1 mm and 1 degree, doubled for the
-    /// curvature; with `turn` > 0 also the branch's motion over that much of the free turn about
-    /// tool z; `None` near a singularity, where that is no bound.
+    /// curvature; with `turn` > 0 also the branch's motion over that much of the self-motion's
+    /// parameter (see [`Self::branch_rate`]); `None` near a singularity, where that is no bound.
     fn neighbourhood(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Option<Vec<f64>> {
         // Columns: constrained rows (position first); the rotation rows' error is at most the
         // tolerance angle in whichever directions are constrained.
         let inverse = self.constrained_inverse(goal, q)?;
-        let z = goal.rotation * nalgebra::Vector3::z();
+        let along = self.branch_rate(goal, &inverse);
         let reach: Vec<f64> = (0..q.len())
             .map(|i| {
                 let position = inverse.view((i, 0), (1, 3)).norm();
                 let rotation = inverse.view((i, 3), (1, 3)).norm();
-                // The branch's joint rate along the free turn: the inverse applied to a turn
-                // about tool z.
-                let along = (0..3).map(|k| inverse[(i, 3 + k)] * z[k]).sum::<f64>().abs();
-                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD + along * turn)
+                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD + along[i].abs() * turn)
             })
             .collect();
         reach.iter().all(|r| r.is_finite() && *r <= LINEAR_REACH_RAD).then_some(reach)
@@ -91,9 +123,8 @@ impl Ik<'_> {
         // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
         // doubled for the curvature like the reach): the smaller.
         let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
-        let z = goal.rotation * nalgebra::Vector3::z();
-        let first_order = self.distance_gradient(goal, &solution.q, &pair).map_or(f64::INFINITY, |h| {
-            TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + h.fixed_rows::<3>(3).dot(&z).abs() * turn)
+        let first_order = self.distance_gradient(goal, &solution.q, &pair).map_or(f64::INFINITY, |(h, along)| {
+            TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + along.abs() * turn)
         });
         let motion = whole.min(first_order);
         if clearance + motion <= margin {
@@ -109,11 +140,14 @@ impl Ik<'_> {
 
     /// The pair's distance gradient at `q` in task space: `h` with `d(q + dq) ~ d(q) + h . J dq`
     /// over the goal's constrained directions (position first), from the witness points'
-    /// velocities along the normal; `None` where the Jacobian is singular.
-    fn distance_gradient(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair) -> Option<nalgebra::Vector6<f64>> {
+    /// velocities along the normal, and the distance's rate along the self-motion (see
+    /// [`Self::branch_rate`]); `None` where the Jacobian is singular.
+    fn distance_gradient(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair) -> Option<(nalgebra::Vector6<f64>, f64)> {
         let inverse = self.constrained_inverse(goal, q)?;
+        let branch = self.branch_rate(goal, &inverse);
         self.model.forward(q, &mut self.ws);
         let mut h = nalgebra::Vector6::zeros();
+        let mut along = 0.0;
         for (i, joint) in self.model.joints.iter().enumerate() {
             let frame = &self.ws.link_in_world[i + 1];
             let axis = frame.rotation * joint.axis.into_inner();
@@ -131,8 +165,9 @@ impl Ik<'_> {
             for k in 0..6 {
                 h[k] += inverse[(i, k)] * rate;
             }
+            along += branch[i] * rate;
         }
-        Some(h)
+        Some((h, along))
     }
 
     /// The most the pair's distance can grow over the goal's tolerance to first order (the
@@ -154,7 +189,7 @@ impl Ik<'_> {
                 c.clearance(&current, true);
                 c.closest_pair()
             })??;
-            let h = self.distance_gradient(goal, &current, &pair)?;
+            let (h, _) = self.distance_gradient(goal, &current, &pair)?;
             let (position, rotation) = (h.fixed_rows::<3>(0).into_owned(), h.fixed_rows::<3>(3).into_owned());
             let towards = |v: nalgebra::Vector3<f64>, size: f64| {
                 let norm = v.norm();

@@ -5,8 +5,8 @@
 //! chain (`T^-1 = M^-1 e6(-q6) .. e1(-q1)`) is a 6R arm too: a method that needs special
 //! structure at the wrist applies it at the base by solving the reversed chain.
 
-use crate::model::{JointKind, Model};
-use nalgebra::{Isometry3, Matrix3, Vector3};
+use crate::model::{JointKind, KinematicsWorkspace, Model};
+use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// One joint's axis line: a point on it and its unit direction.
@@ -87,6 +87,10 @@ pub(crate) struct Arm {
     pub(crate) reversed: Chain,
     origin: Vector3<f64>,
     scale: f64,
+    /// How far the real tool is from the chain's tool frame (m): 0, except with a joint held
+    /// (see [`Arm::holding_last_joint`]), where a tolerance on the real tool lets the chain's
+    /// tool frame move by this much times the angle on top.
+    pub(crate) tool_lever: f64,
 }
 
 impl Arm {
@@ -108,6 +112,30 @@ impl Arm {
         Self::with_lines(model)
     }
 
+    /// The chains of joints 1 to 6 of a 7R `model`, joint 7 held: their tool is a virtual frame
+    /// on joint 7's axis (its origin joint 7's, its z the axis), and `offset` is the real tool
+    /// in that frame at `q7 = 0`. A turn of joint 7 by `t` turns the virtual frame about its own
+    /// z, so the tool is at `V(q1..q6) Rz(t) offset`, and a pose `G` with joint 7 at `t` is the
+    /// pose `G offset^-1 Rz(-t)` of the six.
+    pub(crate) fn holding_last_joint(model: &Model) -> Option<(Arm, Isometry3<f64>)> {
+        if model.dof() != 7 || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+            return None;
+        }
+        let mut ws = model.workspace();
+        model.forward(&[0.0; 7], &mut ws);
+        let frame = &ws.link_in_world[7];
+        let axis = (frame.rotation * model.joints[6].axis.into_inner()).normalize();
+        // Any frame with z along the axis will do; antiparallel has no shortest arc.
+        let rotation = UnitQuaternion::rotation_between(&Vector3::z(), &axis)
+            .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI));
+        let virtual_tool = Isometry3::from_parts(frame.translation, rotation);
+        let offset = virtual_tool.inverse() * ws.tool_in_world;
+        let lever = offset.translation.vector.norm();
+        let mut arm = Self::from_frames(model, &ws, virtual_tool)?;
+        arm.tool_lever = lever;
+        Some((arm, offset))
+    }
+
     /// The axis lines of every joint, and of a virtual one about tool z where only five exist.
     fn with_lines(model: &Model) -> Option<Arm> {
         if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
@@ -116,6 +144,12 @@ impl Arm {
         let mut ws = model.workspace();
         model.forward(&vec![0.0; model.dof()], &mut ws);
         let home = ws.tool_in_world;
+        Self::from_frames(model, &ws, home)
+    }
+
+    /// The lines of joints 1 to 6 in `ws` (FK at `q = 0`), the virtual joint about `home`'s z
+    /// where only five exist, with `home` as the tool.
+    fn from_frames(model: &Model, ws: &KinematicsWorkspace, home: Isometry3<f64>) -> Option<Arm> {
         let raw: [Line; 6] = std::array::from_fn(|i| match model.joints.get(i) {
             Some(joint) => {
                 let frame = &ws.link_in_world[i + 1];
@@ -169,6 +203,7 @@ impl Arm {
             reversed,
             origin,
             scale,
+            tool_lever: 0.0,
         })
     }
 

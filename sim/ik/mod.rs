@@ -33,7 +33,7 @@ use nalgebra::{Isometry3, Translation3};
 use rand::SeedableRng;
 use refine::Checker;
 use serde::Serialize;
-use solvers::AllSolutions;
+use solvers::{AllSolutions, HeldJoint};
 use std::f64::consts::TAU;
 
 /// Position error below which a goal is reached (m): the paper's 1 mm.
@@ -138,13 +138,15 @@ impl GoalSolutions {
 struct Methods {
     analytic: Option<UrArm>,
     all: Option<(AllSolutions, Tolerance)>,
+    redundant: Option<HeldJoint>,
 }
 
 impl Methods {
     fn of(model: &Model) -> Self {
         let analytic = UrArm::detect(model);
         let all = if analytic.is_none() { AllSolutions::of(model) } else { None };
-        Self { analytic, all }
+        let redundant = HeldJoint::of(model);
+        Self { analytic, all, redundant }
     }
 }
 
@@ -159,6 +161,12 @@ pub struct Ik<'a> {
     /// Every solution of any other 6R arm (5R on `z_symmetric` goals), when a method holds for
     /// its geometry, and the goal mode it decides.
     all: Option<(AllSolutions, Tolerance)>,
+    /// Every solution of a 7R arm's pose with joint 7 held, when a method holds for the six
+    /// others.
+    redundant: Option<HeldJoint>,
+    /// The joint held still by Newton steps and certificates while a self-motion is swept by
+    /// it (see [`selfmotion`]).
+    held: Option<usize>,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
@@ -193,6 +201,8 @@ impl<'a> Ik<'a> {
             checker: world.map(|world| Checker::new(model, world)),
             analytic: methods.analytic.clone(),
             all: methods.all.clone(),
+            redundant: methods.redundant.clone(),
+            held: None,
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -236,6 +246,13 @@ impl<'a> Ik<'a> {
                 let mut result = self.solve_numeric(goal, goal_index, first_seed, &starts);
                 if !result.reached() {
                     self.sweep_free_turn(goal, &mut result);
+                }
+                return result;
+            }
+            (None, None) if self.redundant.is_some() && self.opts.analytic && finite && goal.tolerance == Tolerance::Pose => {
+                let mut result = self.solve_numeric(goal, goal_index, first_seed, &[]);
+                if !result.reached() {
+                    self.sweep_held_joint(goal, &mut result);
                 }
                 return result;
             }
@@ -485,7 +502,10 @@ impl<'a> Ik<'a> {
         match (&self.analytic, &self.all) {
             (Some(_), _) => "closed-form IK",
             (None, Some((method, _))) => method.name(),
-            (None, None) => "numeric IK",
+            (None, None) => match &self.redundant {
+                Some(held) => held.method.name(),
+                None => "numeric IK",
+            },
         }
     }
 

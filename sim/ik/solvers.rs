@@ -10,7 +10,7 @@ use super::lines::Arm;
 use super::wrist::SphericalWrist;
 use crate::model::Model;
 use crate::scenario::Tolerance;
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 
 /// Configurations closer than this in every joint (rad) are one root found twice.
 const SAME_RAD: f64 = 1e-6;
@@ -47,10 +47,15 @@ impl AllSolutions {
             5 => (Arm::with_virtual_tool_joint(model)?, Tolerance::ZSymmetric),
             _ => return None,
         };
+        Self::of_arm(arm).map(|method| (method, tolerance))
+    }
+
+    /// The method for a chain's lines: the wrist where it holds, else the elimination.
+    fn of_arm(arm: Arm) -> Option<AllSolutions> {
         if let Some(wrist) = SphericalWrist::of_arm(arm.clone()) {
-            return Some((AllSolutions::Wrist(Box::new(wrist)), tolerance));
+            return Some(AllSolutions::Wrist(Box::new(wrist)));
         }
-        General6R::of_arm(arm).map(|general| (AllSolutions::General(Box::new(general)), tolerance))
+        General6R::of_arm(arm).map(|general| AllSolutions::General(Box::new(general)))
     }
 
     /// The method's name, for proofs.
@@ -106,5 +111,28 @@ impl AllSolutions {
                 }
             }
         }
+    }
+}
+
+/// A 7R arm's pose goals with joint 7 held at each angle in turn: the six others are a 6R arm
+/// with the method for their lines (see [`Arm::holding_last_joint`]).
+#[derive(Debug, Clone)]
+pub struct HeldJoint {
+    /// The six others' method; its tool is the virtual frame on joint 7's axis.
+    pub method: AllSolutions,
+    /// The real tool in the virtual frame at `q7 = 0`.
+    offset: Isometry3<f64>,
+}
+
+impl HeldJoint {
+    /// The method of a 7R `model` with its last joint held, when one holds for the six others.
+    pub fn of(model: &Model) -> Option<HeldJoint> {
+        let (arm, offset) = Arm::holding_last_joint(model)?;
+        AllSolutions::of_arm(arm).map(|method| HeldJoint { method, offset })
+    }
+
+    /// The pose the six others must reach to put the tool at `goal` with joint 7 at `angle`.
+    pub fn pose_of_six(&self, goal: &Isometry3<f64>, angle: f64) -> Isometry3<f64> {
+        goal * self.offset.inverse() * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), -angle)
     }
 }

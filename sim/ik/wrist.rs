@@ -53,6 +53,19 @@ pub struct SphericalWrist {
     /// `[equation][{1, s2, c2} x {1, s3, c3}]`: squared distance from axis 1's point, height
     /// along axis 1.
     position: [[f64; 9]; 2],
+    /// Axes 1 and 2 meet or are parallel: one equation holds joint 3 alone.
+    decoupled: Option<Decoupled>,
+}
+
+/// Positioning chains whose first two axes meet or are parallel (a shoulder like most arms'):
+/// the resultant then vanishes doubly at every root (one equation lacks joint 2), so joint 3 is
+/// solved from its own equation and joint 2 from the other.
+#[derive(Debug, Clone, Copy)]
+enum Decoupled {
+    /// Axes 1 and 2 meet here: the distance from it does not depend on joint 2.
+    Meet(Vector3<f64>),
+    /// Parallel: the height along axis 1 does not depend on joint 2.
+    Parallel,
 }
 
 impl SphericalWrist {
@@ -68,13 +81,20 @@ impl SphericalWrist {
             let chain = arm.chain(reversed);
             let Some(centre) = meeting_point(chain) else { continue };
             let position = position_coefficients(chain, &centre);
+            let [l1, l2, ..] = &chain.lines;
+            let decoupled = if l1.axis.cross(&l2.axis).norm() < PARALLEL {
+                Some(Decoupled::Parallel)
+            } else {
+                crossing(l1.point, l1.axis, l2.point, l2.axis).map(Decoupled::Meet)
+            };
             let wrist = SphericalWrist {
                 arm: arm.clone(),
                 reversed,
                 centre,
                 position,
+                decoupled,
             };
-            if wrist.regular() {
+            if wrist.decoupled.is_some() || wrist.regular() {
                 return Some(wrist);
             }
         }
@@ -101,24 +121,21 @@ impl SphericalWrist {
     pub fn solve(&self, goal: &Isometry3<f64>) -> WristSolutions {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.solve_chain(&rotation, &translation);
+        if out.resolved && out.configurations.is_empty() {
+            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0);
+        }
         if self.reversed {
             for q in &mut out.configurations {
                 q.reverse();
             }
-        } else if out.resolved && out.configurations.is_empty() {
-            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0);
         }
         out
     }
 
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within the
-    /// tolerance: the wrist-centre proof with the turn added to the slack (wrist at the tool
-    /// only).
+    /// tolerance: the wrist-centre proof with the turn added to the slack.
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
-        if self.reversed {
-            return None;
-        }
-        let (rotation, translation) = self.arm.goal(goal, false);
+        let (rotation, translation) = self.arm.goal(goal, self.reversed);
         self.out_of_reach(&rotation, &translation, turn)
     }
 
@@ -132,12 +149,23 @@ impl SphericalWrist {
     ///
     /// With `turn` > 0 the pose may also turn that much about tool z: the centre moves by at
     /// most `L * turn` more.
+    ///
+    /// A wrist at the base is the same on the reversed chain: its centre (where axes 1 to 3
+    /// meet) is fixed in the world, and must be where joints 6 to 4 put it in the tool frame;
+    /// the tolerance moves that target by the same `1 mm + L * 1 deg`.
     fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, turn: f64) -> Option<String> {
-        let chain = self.arm.chain(false);
+        let chain = self.arm.chain(self.reversed);
         let scale = self.arm.scale();
         let target = self.target(chain, rotation, translation);
-        let lever = (self.centre - chain.home_translation).norm() * scale;
-        let slack = (super::REACHED_POSITION_M + lever * (super::REACHED_ORIENTATION_RAD + turn)) / scale;
+        // The centre's distance from the tool: fixed in the tool frame, or (at the base) the
+        // target itself, which the reversed chain gives in tool coordinates.
+        let lever = if self.reversed {
+            target.norm()
+        } else {
+            (self.centre - chain.home_translation).norm()
+        } * scale;
+        // The real tool may sit off the chain's tool (a held joint): the angle acts over both.
+        let slack = (super::REACHED_POSITION_M + (lever + self.arm.tool_lever) * super::REACHED_ORIENTATION_RAD + lever * turn) / scale;
         let [l1, l2, l3, ..] = &chain.lines;
         let cylindrical = |p: &Vector3<f64>| {
             let v = p - l1.point;
@@ -154,8 +182,13 @@ impl SphericalWrist {
         let lipschitz3 = (self.centre - l3.point).cross(&l3.axis).norm();
         let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (self.centre - l3.point).norm();
         let closest = lower_bound_above(&gap, [lipschitz2, lipschitz3], slack)?;
+        let centre = if self.reversed {
+            "the point where axes 1 to 3 meet (a wrist at the base) is never closer than"
+        } else {
+            "its wrist centre comes no closer than"
+        };
         Some(format!(
-            "all-solutions IK (spherical wrist): pose out of reach: its wrist centre comes no closer than {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
+            "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
             closest * scale * 1e3,
             slack * scale * 1e3
         ))
@@ -207,16 +240,78 @@ impl SphericalWrist {
         rotation * (chain.home_rotation.transpose() * (self.centre - chain.home_translation)) + translation
     }
 
+    /// Joints 1 to 3 putting the wrist centre on `target` when axes 1 and 2 meet or are
+    /// parallel; `None` where a joint is free (a continuum).
+    fn decoupled_positions(&self, chain: &Chain, target: &Vector3<f64>, decoupled: Decoupled) -> Option<Vec<[f64; 3]>> {
+        let [l1, l2, l3, ..] = &chain.lines;
+        // Joint 3 from the quantity joint 2 keeps, then joint 2 from the other.
+        let (kept, other): (Box<dyn Fn(&Vector3<f64>) -> f64>, Box<dyn Fn(&Vector3<f64>) -> f64>) = match decoupled {
+            Decoupled::Meet(m) => (
+                Box::new(move |p: &Vector3<f64>| (p - m).norm_squared()),
+                Box::new(move |p: &Vector3<f64>| l1.axis.dot(&(p - m))),
+            ),
+            Decoupled::Parallel => (
+                Box::new(move |p: &Vector3<f64>| l1.axis.dot(&(p - l1.point))),
+                Box::new(move |p: &Vector3<f64>| {
+                    let v = p - l1.point;
+                    (v - l1.axis * l1.axis.dot(&v)).norm_squared()
+                }),
+            ),
+        };
+        let mut out = Vec::with_capacity(4);
+        for t3 in trig_roots(|t| kept(&l3.turn(t, &self.centre)), kept(target))? {
+            let moved = l3.turn(t3, &self.centre);
+            for t2 in trig_roots(|t| other(&l2.turn(t, &moved)), other(target))? {
+                let point = l2.turn(t2, &moved);
+                let t1 = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
+                out.push([t1, t2, t3]);
+            }
+        }
+        Some(out)
+    }
+
     fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> WristSolutions {
         let mut out = WristSolutions::default();
         let chain = self.arm.chain(self.reversed);
-        let Some((offset3, roots, [s0, s1, s2])) = self.roots(rotation, translation) else {
-            return out;
-        };
-        out.resolved = true;
         let target = self.target(chain, rotation, translation);
-        let [l1, l2, l3, ..] = &chain.lines;
         let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
+        let roots = match self.decoupled {
+            Some(decoupled) => {
+                match self.decoupled_positions(chain, &target, decoupled) {
+                    Some(found) => {
+                        out.resolved = true;
+                        positions = found;
+                    }
+                    // A continuum: listed nowhere, and not resolved.
+                    None => return out,
+                }
+                None
+            }
+            None => Some(self.roots(rotation, translation)),
+        };
+        if let Some(roots) = roots {
+            let Some((offset3, roots, [s0, s1, s2])) = roots else {
+                return out;
+            };
+            out.resolved = true;
+            self.resultant_positions(chain, &target, offset3, roots, [s0, s1, s2], &mut positions, &mut out);
+        }
+        self.finish(chain, rotation, positions, out)
+    }
+
+    /// Joints 1 to 3 from the resultant's roots in `x3`.
+    #[allow(clippy::too_many_arguments)]
+    fn resultant_positions(
+        &self,
+        chain: &Chain,
+        target: &Vector3<f64>,
+        offset3: f64,
+        roots: Vec<f64>,
+        [s0, s1, s2]: [Matrix4<f64>; 3],
+        positions: &mut Vec<[f64; 3]>,
+        out: &mut WristSolutions,
+    ) {
+        let [l1, l2, l3, ..] = &chain.lines;
         for x3 in roots {
             let matrix = s0 + s1 * x3 + s2 * (x3 * x3);
             let t3 = offset3 + 2.0 * x3.atan();
@@ -235,7 +330,7 @@ impl SphericalWrist {
             };
             for t2 in t2s {
                 let point = l2.turn(t2, &l3.turn(t3, &self.centre));
-                let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS) else {
+                let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
                     // The wrist centre on axis 1: joint 1 is free.
                     out.resolved = false;
                     continue;
@@ -243,6 +338,11 @@ impl SphericalWrist {
                 positions.push([t1, t2, t3]);
             }
         }
+    }
+
+    /// The wrist joints for each position of joints 1 to 3.
+    fn finish(&self, chain: &Chain, rotation: &Matrix3<f64>, positions: Vec<[f64; 3]>, mut out: WristSolutions) -> WristSolutions {
+        let [l1, l2, l3, ..] = &chain.lines;
         for [t1, t2, t3] in positions {
             let before = l1.rotation(t1) * l2.rotation(t2) * l3.rotation(t3);
             let wrist = before.transpose() * rotation * chain.home_rotation.transpose();
@@ -321,6 +421,32 @@ fn shared_roots(m: &Matrix4<f64>) -> Vec<f64> {
         }
     }
     out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
+}
+
+/// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`; `None` when `f` is
+/// constant and equal to it (every angle).
+fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<Vec<f64>> {
+    let samples = NODES.map(&f);
+    let inverse = super::lines::node_inverse();
+    let [a, b, c] = [0, 1, 2].map(|row| (0..3).map(|k| inverse[(row, k)] * samples[k]).sum::<f64>());
+    // b sin t + c cos t = r cos(t - phi) = value - a.
+    let r = b.hypot(c);
+    let size = a.abs().max(value.abs()).max(r).max(1e-300);
+    let rest = value - a;
+    if r <= 1e-12 * size {
+        return if rest.abs() <= 1e-12 * size { None } else { Some(Vec::new()) };
+    }
+    let ratio = rest / r;
+    if ratio.abs() > 1.0 + 1e-12 {
+        return Some(Vec::new());
+    }
+    let phi = b.atan2(c);
+    let spread = ratio.clamp(-1.0, 1.0).acos();
+    Some(if spread == 0.0 {
+        vec![phi]
+    } else {
+        vec![phi + spread, phi - spread]
+    })
 }
 
 /// Boxes the branch and bound may evaluate before it gives up.

@@ -1,0 +1,132 @@
+//! 7R arms on `pose` goals: joint 7 held, the six others solved exactly (every solution), the
+//! self-motion swept over joint 7's range. Checked against the model's own FK and, for the
+//! proofs, against a much denser sampling of the self-motion than the certificate used.
+
+mod common;
+
+use nalgebra::Isometry3;
+use proving_ground::ik::solvers::HeldJoint;
+use proving_ground::model::Model;
+use proving_ground::pipeline::{load_model, LoadOptions};
+use rand::{Rng, SeedableRng};
+
+fn panda() -> Model {
+    let opts = LoadOptions {
+        tip_link: Some("panda_hand".into()),
+        ..Default::default()
+    };
+    load_model(&common::panda_urdf(), &opts).expect("panda loads")
+}
+
+fn redundant_design() -> Model {
+    load_model(&common::repo().join("designs/free-redundant-7dof.json"), &LoadOptions::default()).expect("design loads")
+}
+
+fn fk_error(model: &Model, q: &[f64], goal: &Isometry3<f64>) -> f64 {
+    let (p, a) = proving_ground::frames::pose_difference(&model.tool_pose(q), goal);
+    p.max(a)
+}
+
+/// Random configurations' poses, joint 7 held at its own angle: every solution of the six
+/// others reaches the pose with joint 7 there, and the configuration itself is among them.
+fn check_held(name: &str, model: &Model) {
+    let held = HeldJoint::of(model).unwrap_or_else(|| panic!("{name}: no held-joint method"));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let mut total = 0;
+    for _ in 0..40 {
+        let q: Vec<f64> = (0..7).map(|_| rng.random_range(-3.0..3.0)).collect();
+        let goal = model.tool_pose(&q);
+        let found = held.method.solve(&held.pose_of_six(&goal, q[6]));
+        total += found.configurations.len();
+        let errors: Vec<f64> = found
+            .configurations
+            .iter()
+            .map(|c| fk_error(model, &c.iter().copied().chain([q[6]]).collect::<Vec<_>>(), &goal))
+            .collect();
+        assert!(
+            errors.iter().all(|e| *e < 1e-6),
+            "{name}: solutions miss the pose by {errors:?}; q {q:?}, found {:?}",
+            found.configurations
+        );
+        let own = found
+            .configurations
+            .iter()
+            .any(|c| c.iter().zip(&q).all(|(a, b)| proving_ground::ik::wrap_angle(a - b).abs() < 1e-5));
+        assert!(own, "{name}: the pose's own configuration {q:?} is missing");
+    }
+    println!("{name}: {total} solutions over 40 poses ({})", held.method.name());
+}
+
+#[test]
+fn held_joint_solutions_reach_the_pose() {
+    check_held("panda", &panda());
+    check_held("free-redundant-7dof", &redundant_design());
+}
+
+/// A unit vector in a random direction.
+fn direction(rng: &mut impl Rng) -> nalgebra::Vector3<f64> {
+    loop {
+        let v = nalgebra::Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        if v.norm() > 0.1 && v.norm() <= 1.0 {
+            return v.normalize();
+        }
+    }
+}
+
+/// The out-of-reach proof with joint 7 held (a wrist at the base for both arms) is never
+/// claimed where the tolerance reaches a solution: poses of random configurations (half of them
+/// stretched to the edge of the workspace) moved by 0.95 mm and turned by 0.95 degrees about
+/// the tool point, joint 7 off the sample by up to the half step the proof adds, are never
+/// called out of reach; the stretched poses pushed 300 mm out mostly are.
+#[test]
+fn held_joint_out_of_reach_is_sound_at_the_workspace_edge() {
+    for (name, model) in [("panda", panda()), ("free-redundant-7dof", redundant_design())] {
+        let held = HeldJoint::of(&model).expect("a held-joint method");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let half_step = 2.5f64.to_radians();
+        let mut pushed_proven = 0;
+        for k in 0..200 {
+            let mut q: Vec<f64> = (0..7).map(|_| rng.random_range(-3.0..3.0)).collect();
+            if k % 2 == 0 {
+                // Joint 4 straight: the wrist as far from the shoulder as it gets.
+                q[3] = rng.random_range(-0.05..0.05);
+            }
+            let goal = model.tool_pose(&q);
+            let moved = nalgebra::Isometry3::from_parts(
+                nalgebra::Translation3::from(goal.translation.vector + direction(&mut rng) * 0.95e-3),
+                nalgebra::UnitQuaternion::from_scaled_axis(direction(&mut rng) * 0.95f64.to_radians()) * goal.rotation,
+            );
+            let sample = q[6] + rng.random_range(-half_step..half_step);
+            let proof = held.method.out_of_reach_over_turn(&held.pose_of_six(&moved, sample), half_step);
+            assert!(
+                proof.is_none(),
+                "{name}: a pose within the tolerance of {q:?} called out of reach: {proof:?}"
+            );
+            // Pushed 300 mm further from the shoulder: mostly out of reach when stretched.
+            if k % 2 == 0 {
+                let shoulder = {
+                    let mut ws = model.workspace();
+                    model.forward(&q, &mut ws);
+                    ws.link_in_world[2].translation.vector
+                };
+                let out = (goal.translation.vector - shoulder).normalize();
+                let far = nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(goal.translation.vector + out * 0.3), goal.rotation);
+                let proven = (0..8).all(|j| {
+                    let angle = -3.0 + j as f64 * 0.75;
+                    held.method.solve(&held.pose_of_six(&far, angle)).configurations.is_empty()
+                        && held
+                            .method
+                            .out_of_reach_over_turn(&held.pose_of_six(&far, angle), half_step)
+                            .is_some()
+                });
+                pushed_proven += usize::from(proven);
+            }
+        }
+        println!("{name}: {pushed_proven} of 100 stretched poses pushed 300 mm out proven out of reach at 8 angles of joint 7");
+        assert!(pushed_proven > 50, "{name}: only {pushed_proven} pushed poses proven out of reach");
+    }
+}
