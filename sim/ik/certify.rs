@@ -123,9 +123,11 @@ impl Ik<'_> {
         // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
         // doubled for the curvature like the reach): the smaller.
         let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
-        let first_order = self.distance_gradient(goal, &solution.q, &pair).map_or(f64::INFINITY, |(h, along)| {
-            TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + along.abs() * turn)
-        });
+        let first_order = self
+            .distance_gradient(goal, &solution.q, &pair)
+            .map_or(f64::INFINITY, |(h, along)| {
+                TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + along.abs() * turn)
+            });
         let motion = whole.min(first_order);
         if clearance + motion <= margin {
             Ok(format!("{name} {:.1} mm", clearance * 1e3))
@@ -216,6 +218,28 @@ impl Ik<'_> {
             current = next;
         }
         None
+    }
+
+    /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, proves
+    /// nothing reachable throughout the goal's tolerance (and `turn` of a self-motion): it stays
+    /// outside the limits (`Ok(None)`), or where the limits certificate fails it collides
+    /// throughout, so any neighbour within the limits collides too (`Ok(Some(pair))`); else why
+    /// not.
+    pub(super) fn outside_limits_certificate(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Result<Option<String>, String> {
+        let why = match self.limits_certificate(goal, q, turn) {
+            Ok(()) => return Ok(None),
+            Err(why) => why,
+        };
+        if self.checker.is_none() {
+            return Err(why);
+        }
+        // Collision geometry repeats with every whole turn: the configuration as it is will do.
+        let margin = self.margin();
+        let solution = self.judge(goal, q.to_vec(), None, margin);
+        if solution.clearance.is_none_or(|c| c.exact_m > margin) {
+            return Err(why);
+        }
+        self.collision_certificate(goal, &solution, margin, turn).map(Some).map_err(|_| why)
     }
 
     /// Whether solution `q`, none of whose whole-turn equivalents is within the limits, stays

@@ -340,8 +340,9 @@ impl<'a> Ik<'a> {
                 // The error at the whole-turn equivalent differs by rounding only.
                 found.push(self.judge(goal, q, Some(error), margin));
             } else {
-                if let Err(why) = self.limits_certificate(goal, &q, 0.0) {
-                    open.push(why);
+                match self.outside_limits_certificate(goal, &q, 0.0) {
+                    Ok(pair) => collisions.extend(pair),
+                    Err(why) => open.push(why),
                 }
                 outside.push(q);
             }
@@ -440,9 +441,14 @@ impl<'a> Ik<'a> {
             } else {
                 "collide".to_string()
             };
-            if poses == 0 {
+            if poses == 0 && collisions.is_empty() {
                 format!(
                     "{method}: none of the pose's {total} solutions is within the joint limits, nor within the goal's tolerance of them"
+                )
+            } else if poses == 0 {
+                format!(
+                    "{method}: none of the pose's {total} solutions is within the joint limits, and those the goal's tolerance may bring within them collide throughout it ({})",
+                    summary(&collisions)
                 )
             } else {
                 format!(

@@ -15,6 +15,7 @@ use super::analytic::AnalyticSolutions;
 use super::{summary, GoalSolutions, Ik, EXACT};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use std::collections::HashMap;
 use std::f64::consts::TAU;
 
 /// Samples per whole turn of the parameter (5 degrees apart).
@@ -133,109 +134,170 @@ impl Ik<'_> {
         }
     }
 
-    fn sweep(&mut self, goal: &Goal, result: &mut GoalSolutions, parameter: Parameter) {
+    /// The sample at `value` judged over `half` of the parameter either side: its solutions
+    /// counted and certified, or reached; `None` when no exact method applies.
+    fn judge_sample(&mut self, goal: &Goal, parameter: Parameter, value: f64, half: f64, words: &Words) -> Option<Judged> {
         let margin = self.margin();
-        let samples = self.samples(parameter);
-        let step = samples.step;
-        let method = self.method();
-        let at = |value: f64| match parameter {
-            Parameter::Turn => format!("the turn of {:.0} deg", value.to_degrees()),
-            Parameter::Held => format!("joint 7 at {:.1} deg", value.to_degrees()),
+        let (sample, exact, configurations) = self.sample(goal, parameter, value)?;
+        let mut judged = Judged {
+            count: 0,
+            reached: None,
+            collisions: Vec::new(),
+            failure: None,
+            refinable: true,
         };
-        // Words for the parameter: its samples (one, many), its pairs of values, its step.
-        let (one, many, values, of_step) = match parameter {
-            Parameter::Turn => ("turn", "turns", "the turns", "of the turn"),
-            Parameter::Held => ("angle of joint 7", "angles", "joint 7's angles", "of joint 7"),
-        };
-        let n = samples.values.len();
-        // What was swept, and what its samples are called.
-        let (over, sampled) = match parameter {
-            Parameter::Turn => ("over the free turn about tool z".to_string(), "turns sampled"),
-            Parameter::Held => (
-                format!("with joint 7 held, over its range ({:.1} deg apart)", step.to_degrees()),
-                "angles of joint 7 sampled",
-            ),
-        };
-        let mut counts: Vec<usize> = Vec::with_capacity(samples.values.len());
-        let mut collisions: Vec<String> = Vec::new();
-        let mut open: Option<String> = None;
-        for &value in &samples.values {
-            let Some((sample, exact, configurations)) = self.sample(goal, parameter, value) else {
-                return;
-            };
-            if !exact.finite {
-                let place = if parameter == Parameter::Turn { " about tool z" } else { "" };
-                open.get_or_insert_with(|| format!("{}{place} is a singular pose", at(value)));
+        if !exact.finite {
+            judged.fail(format!("{}{} is a singular pose", words.at(value), words.place), false);
+        }
+        let mut distinct: Vec<Vec<f64>> = Vec::with_capacity(configurations.len());
+        for mut q in configurations {
+            let (_, size, _) = self.polish(&sample, &mut q);
+            if size > EXACT {
+                judged.fail(format!("a solution at {} does not verify", words.at(value)), false);
+                continue;
             }
-            let mut distinct: Vec<Vec<f64>> = Vec::with_capacity(configurations.len());
-            for mut q in configurations {
-                let (_, size, _) = self.polish(&sample, &mut q);
-                if size > EXACT {
-                    open.get_or_insert_with(|| format!("a solution at {} does not verify", at(value)));
-                    continue;
+            if distinct.iter().any(|d| self.same_configuration(d, &q)) {
+                continue;
+            }
+            distinct.push(q.clone());
+            if self.shift_into_limits(&mut q, None) {
+                let solution = self.judge(goal, q, None, margin);
+                if solution.reached {
+                    judged.reached = Some(solution);
+                    return Some(judged);
                 }
-                if distinct.iter().any(|d| self.same_configuration(d, &q)) {
-                    continue;
+                match self.collision_certificate(&sample, &solution, margin, half) {
+                    Ok(pair) => judged.collisions.push(pair),
+                    Err(why) => judged.fail(why, true),
                 }
-                distinct.push(q.clone());
-                if self.shift_into_limits(&mut q, None) {
-                    let solution = self.judge(goal, q, None, margin);
-                    if solution.reached {
+            } else {
+                match self.outside_limits_certificate(&sample, &q, half) {
+                    Ok(pair) => judged.collisions.extend(pair),
+                    Err(why) => judged.fail(why, true),
+                }
+            }
+        }
+        judged.count = distinct.len();
+        Some(judged)
+    }
+
+    /// Sweeps the parameter interval by interval: an interval is decided when its two ends are
+    /// certified over half its length with the same count of solutions, or both have none and
+    /// are proven out of reach; one whose certificates fail is halved (down to a sixteenth of
+    /// the first step, within a budget of samples), since the branch's motion over a shorter
+    /// step is smaller.
+    fn sweep(&mut self, goal: &Goal, result: &mut GoalSolutions, parameter: Parameter) {
+        let samples = self.samples(parameter);
+        let method = self.method();
+        let words = Words::of(parameter, samples.step);
+        let mut grid = samples.values.clone();
+        if samples.periodic {
+            grid.extend(samples.values.first().map(|first| first + TAU));
+        }
+        let mut intervals: Vec<(f64, f64)> = grid.windows(2).rev().map(|w| (w[0], w[1])).collect();
+        let shortest = samples.step / REFINEMENTS as f64;
+        let budget = REFINEMENT_BUDGET * samples.values.len();
+        let mut judged: HashMap<(u64, u64), Judged> = HashMap::new();
+        let mut proofs: HashMap<(u64, u64), Option<String>> = HashMap::new();
+        let mut seen: Vec<f64> = Vec::new();
+        let mut finest = samples.step;
+        let mut collisions: Vec<String> = Vec::new();
+        let mut out_of_reach: Option<String> = None;
+        let mut open: Option<String> = None;
+        let mut each: Option<usize> = None;
+        while let Some((a, b)) = intervals.pop() {
+            let half = (b - a) / 2.0;
+            let mut ends = Vec::with_capacity(2);
+            for value in [a, b] {
+                let key = (value.to_bits(), half.to_bits());
+                if !judged.contains_key(&key) {
+                    let Some(sample) = self.judge_sample(goal, parameter, value, half, &words) else {
+                        return;
+                    };
+                    if let Some(solution) = sample.reached {
                         result.solutions.insert(0, solution);
                         result.undecided = None;
                         return;
                     }
-                    match self.collision_certificate(&sample, &solution, margin, step / 2.0) {
-                        Ok(pair) => collisions.push(pair),
-                        Err(why) => {
-                            open.get_or_insert(why);
+                    if !seen.iter().any(|v| words.same(*v, value)) {
+                        seen.push(value);
+                    }
+                    judged.insert(key, sample);
+                }
+                ends.push(judged[&key].clone());
+            }
+            if open.is_some() {
+                // Undecided already: only a reached sample can change that.
+                continue;
+            }
+            let (first, second) = (&ends[0], &ends[1]);
+            each.get_or_insert(first.count);
+            let mut failure = first.failure.clone().or_else(|| second.failure.clone());
+            let mut refinable = first.refinable && second.refinable && first.count == second.count;
+            if failure.is_none() && first.count != second.count {
+                failure = Some(format!(
+                    "the number of solutions changes between {} of {:.1} and {:.1} deg (a branch turns there)",
+                    words.values,
+                    a.to_degrees(),
+                    b.to_degrees()
+                ));
+            }
+            if failure.is_none() && first.count == 0 {
+                // No solution at either end: proven when both are out of reach with half the
+                // interval added to their slack.
+                for value in [a, b] {
+                    let key = (value.to_bits(), half.to_bits());
+                    if !proofs.contains_key(&key) {
+                        let proof = self.sample_out_of_reach(goal, parameter, value, half);
+                        proofs.insert(key, proof);
+                    }
+                    match &proofs[&key] {
+                        Some(proof) => {
+                            out_of_reach.get_or_insert_with(|| proof.clone());
+                        }
+                        None => {
+                            failure = Some(format!(
+                                "no {} sampled has an exact solution, but {} is not proven out of reach, so a configuration within the goal's tolerance is not ruled out",
+                                words.one,
+                                words.at(value)
+                            ));
+                            break;
                         }
                     }
-                } else if let Err(why) = self.limits_certificate(&sample, &q, step / 2.0) {
-                    open.get_or_insert(why);
                 }
+                // The slack grows with the interval: a shorter one may prove it.
+                refinable = true;
             }
-            counts.push(distinct.len());
-        }
-        let pairs = if samples.periodic {
-            counts.len()
-        } else {
-            counts.len().saturating_sub(1)
-        };
-        if let Some(k) = (1..=pairs).find(|&k| counts[k % counts.len()] != counts[k - 1]) {
-            open.get_or_insert_with(|| {
-                format!(
-                    "the number of solutions changes between {values} of {:.0} and {:.0} deg (a branch turns there)",
-                    samples.values[k - 1].to_degrees(),
-                    samples.values[k % counts.len()].to_degrees()
-                )
-            });
-        }
-        let mut out_of_reach: Option<String> = None;
-        if counts.iter().all(|&c| c == 0) && open.is_none() {
-            // No solution at any sample: proven when every sample is out of reach with half a
-            // step of the parameter added to its slack.
-            for &value in &samples.values {
-                match self.sample_out_of_reach(goal, parameter, value, step / 2.0) {
-                    Some(proof) => {
-                        out_of_reach.get_or_insert(proof);
+            match failure {
+                None if first.count == 0 => {}
+                None => {
+                    for pair in first.collisions.iter().chain(&second.collisions) {
+                        if !collisions.contains(pair) {
+                            collisions.push(pair.clone());
+                        }
                     }
-                    None => {
-                        open = Some(format!(
-                            "no {one} sampled has an exact solution, but {} is not proven out of reach, so a configuration within the goal's tolerance is not ruled out",
-                            at(value)
-                        ));
-                        break;
+                }
+                Some(why) => {
+                    if refinable && half > shortest && judged.len() < budget {
+                        let middle = a + half;
+                        finest = finest.min(half);
+                        intervals.push((middle, b));
+                        intervals.push((a, middle));
+                    } else {
+                        open = Some(why);
                     }
                 }
             }
         }
+        let n = seen.len();
+        let over = words.over(finest);
         match open {
             Some(why) => {
-                result.undecided = Some(format!("{method} {over} ({n} {many}): {why}"));
+                result.undecided = Some(format!("{method} {over} ({n} {}): {why}", words.many));
             }
             None => {
-                let each = counts.first().copied().unwrap_or(0);
+                let (sampled, of_step) = (words.sampled, words.of_step);
+                let each = each.unwrap_or(0);
                 result.complete = true;
                 result.undecided = None;
                 result.proof = Some(if let Some(proof) = out_of_reach {
@@ -250,5 +312,102 @@ impl Ik<'_> {
                 });
             }
         }
+    }
+}
+
+/// A sweep's intervals are halved where certificates fail down to its first step over this.
+const REFINEMENTS: usize = 16;
+/// Samples a sweep may judge, per sample of its first grid.
+const REFINEMENT_BUDGET: usize = 4;
+
+/// One sample judged over half an interval either side.
+#[derive(Debug, Clone)]
+struct Judged {
+    /// Distinct solutions of the sample's pose.
+    count: usize,
+    /// A solution within the limits and collision-free: the goal is reached.
+    reached: Option<super::IkSolution>,
+    /// The colliding pairs certified.
+    collisions: Vec<String>,
+    /// The first reason the sample proves nothing.
+    failure: Option<String>,
+    /// Every failure is a certificate a shorter interval may pass.
+    refinable: bool,
+}
+
+impl Judged {
+    fn fail(&mut self, why: String, refinable: bool) {
+        self.failure.get_or_insert(why);
+        self.refinable &= refinable;
+    }
+}
+
+/// How a sweep's parameter reads in proofs and reasons.
+struct Words {
+    parameter: Parameter,
+    step: f64,
+    /// One sample, many samples, pairs of values, a step of it, its samples, where it turns.
+    one: &'static str,
+    many: &'static str,
+    values: &'static str,
+    of_step: &'static str,
+    sampled: &'static str,
+    place: &'static str,
+}
+
+impl Words {
+    fn of(parameter: Parameter, step: f64) -> Self {
+        match parameter {
+            Parameter::Turn => Words {
+                parameter,
+                step,
+                one: "turn",
+                many: "turns",
+                values: "the turns",
+                of_step: "of the turn",
+                sampled: "turns sampled",
+                place: " about tool z",
+            },
+            Parameter::Held => Words {
+                parameter,
+                step,
+                one: "angle of joint 7",
+                many: "angles",
+                values: "joint 7's angles",
+                of_step: "of joint 7",
+                sampled: "angles of joint 7 sampled",
+                place: "",
+            },
+        }
+    }
+
+    /// The sample at `value`.
+    fn at(&self, value: f64) -> String {
+        match self.parameter {
+            Parameter::Turn => format!("the turn of {:.0} deg", value.to_degrees()),
+            Parameter::Held => format!("joint 7 at {:.1} deg", value.to_degrees()),
+        }
+    }
+
+    /// What was swept, with the finest step used where it was refined.
+    fn over(&self, finest: f64) -> String {
+        let refined = if finest < self.step * 0.99 {
+            format!(", down to {:.2} deg where needed", finest.to_degrees())
+        } else {
+            String::new()
+        };
+        match self.parameter {
+            Parameter::Turn if refined.is_empty() => "over the free turn about tool z".into(),
+            Parameter::Turn => format!("over the free turn about tool z ({:.0} deg apart{refined})", self.step.to_degrees()),
+            Parameter::Held => format!(
+                "with joint 7 held, over its range ({:.1} deg apart{refined})",
+                self.step.to_degrees()
+            ),
+        }
+    }
+
+    /// Whether two values are one sample (a whole turn apart).
+    fn same(&self, a: f64, b: f64) -> bool {
+        super::wrap_angle(a - b).abs() < 1e-12
     }
 }
