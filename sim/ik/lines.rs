@@ -71,6 +71,11 @@ impl Chain {
         for (line, angle) in self.lines.iter().zip(q).take(5) {
             before *= line.rotation(*angle);
         }
+        self.last_angle_after(&before, goal)
+    }
+
+    /// Joint 6's angle given the rotation of joints 1 to 5 and the goal rotation.
+    pub(crate) fn last_angle_after(&self, before: &Matrix3<f64>, goal: &Matrix3<f64>) -> f64 {
         let turn = before.transpose() * goal * self.home_rotation.transpose();
         let w = self.lines[5].axis;
         let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };

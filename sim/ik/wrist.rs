@@ -53,19 +53,29 @@ pub struct SphericalWrist {
     /// `[equation][{1, s2, c2} x {1, s3, c3}]`: squared distance from axis 1's point, height
     /// along axis 1.
     position: [[f64; 9]; 2],
-    /// Axes 1 and 2 meet or are parallel: one equation holds joint 3 alone.
+    /// Two consecutive positioning axes meet or are parallel: one joint has an equation of its
+    /// own, and the positioning is closed form.
     decoupled: Option<Decoupled>,
 }
 
-/// Positioning chains whose first two axes meet or are parallel (a shoulder like most arms'):
-/// the resultant then vanishes doubly at every root (one equation lacks joint 2), so joint 3 is
-/// solved from its own equation and joint 2 from the other.
+/// How two consecutive axes relate when the positioning decouples.
+#[derive(Debug, Clone, Copy)]
+enum Pair {
+    /// They meet here: turning about either keeps the distance from it.
+    Meet(Vector3<f64>),
+    /// Parallel: turning about either keeps the height along them.
+    Parallel,
+}
+
+/// Positioning chains with a closed form. Axes 1 and 2 meet or are parallel (a shoulder like
+/// most arms'): the resultant would vanish doubly at every root (one equation lacks joint 2), so
+/// joint 3 comes from what joints 1 and 2 keep, joint 2 from what joint 1 keeps, joint 1 last.
+/// Axes 2 and 3 meet or are parallel (an elbow in one plane, like the ABB's): what joints 2 and 3
+/// keep fixes joint 1 first, then joint 3 from what joint 2 keeps, then joint 2.
 #[derive(Debug, Clone, Copy)]
 enum Decoupled {
-    /// Axes 1 and 2 meet here: the distance from it does not depend on joint 2.
-    Meet(Vector3<f64>),
-    /// Parallel: the height along axis 1 does not depend on joint 2.
-    Parallel,
+    Shoulder(Pair),
+    Elbow(Pair),
 }
 
 impl SphericalWrist {
@@ -81,12 +91,8 @@ impl SphericalWrist {
             let chain = arm.chain(reversed);
             let Some(centre) = meeting_point(chain) else { continue };
             let position = position_coefficients(chain, &centre);
-            let [l1, l2, ..] = &chain.lines;
-            let decoupled = if l1.axis.cross(&l2.axis).norm() < PARALLEL {
-                Some(Decoupled::Parallel)
-            } else {
-                crossing(l1.point, l1.axis, l2.point, l2.axis).map(Decoupled::Meet)
-            };
+            let [l1, l2, l3, ..] = &chain.lines;
+            let decoupled = pair(l1, l2).map(Decoupled::Shoulder).or_else(|| pair(l2, l3).map(Decoupled::Elbow));
             let wrist = SphericalWrist {
                 arm: arm.clone(),
                 reversed,
@@ -240,31 +246,35 @@ impl SphericalWrist {
         rotation * (chain.home_rotation.transpose() * (self.centre - chain.home_translation)) + translation
     }
 
-    /// Joints 1 to 3 putting the wrist centre on `target` when axes 1 and 2 meet or are
-    /// parallel; `None` where a joint is free (a continuum).
+    /// Joints 1 to 3 putting the wrist centre on `target` when the positioning decouples;
+    /// `None` where a joint is free (a continuum).
     fn decoupled_positions(&self, chain: &Chain, target: &Vector3<f64>, decoupled: Decoupled) -> Option<Vec<[f64; 3]>> {
         let [l1, l2, l3, ..] = &chain.lines;
-        // Joint 3 from the quantity joint 2 keeps, then joint 2 from the other.
-        let (kept, other): (Box<dyn Fn(&Vector3<f64>) -> f64>, Box<dyn Fn(&Vector3<f64>) -> f64>) = match decoupled {
-            Decoupled::Meet(m) => (
-                Box::new(move |p: &Vector3<f64>| (p - m).norm_squared()),
-                Box::new(move |p: &Vector3<f64>| l1.axis.dot(&(p - m))),
-            ),
-            Decoupled::Parallel => (
-                Box::new(move |p: &Vector3<f64>| l1.axis.dot(&(p - l1.point))),
-                Box::new(move |p: &Vector3<f64>| {
-                    let v = p - l1.point;
-                    (v - l1.axis * l1.axis.dot(&v)).norm_squared()
-                }),
-            ),
-        };
+        let c = &self.centre;
         let mut out = Vec::with_capacity(4);
-        for t3 in trig_roots(|t| kept(&l3.turn(t, &self.centre)), kept(target))? {
-            let moved = l3.turn(t3, &self.centre);
-            for t2 in trig_roots(|t| other(&l2.turn(t, &moved)), other(target))? {
-                let point = l2.turn(t2, &moved);
-                let t1 = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
-                out.push([t1, t2, t3]);
+        match decoupled {
+            Decoupled::Shoulder(relation) => {
+                let (kept, other) = invariants(relation, l1);
+                for t3 in trig_roots(|t| kept(&l3.turn(t, c)), kept(target))? {
+                    let moved = l3.turn(t3, c);
+                    for t2 in trig_roots(|t| other(&l2.turn(t, &moved)), other(target))? {
+                        let point = l2.turn(t2, &moved);
+                        let t1 = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
+                        out.push([t1, t2, t3]);
+                    }
+                }
+            }
+            Decoupled::Elbow(relation) => {
+                let (kept, other) = invariants(relation, l2);
+                // Joint 1 turned back, the target is where joints 2 and 3 must put the centre.
+                for t1 in trig_roots(|t| kept(&l1.turn(-t, target)), kept(c))? {
+                    let goal = l1.turn(-t1, target);
+                    for t3 in trig_roots(|t| other(&l3.turn(t, c)), other(&goal))? {
+                        let point = l3.turn(t3, c);
+                        let t2 = angle_about(&l2.axis, &(point - l2.point), &(goal - l2.point), ON_AXIS)?;
+                        out.push([t1, t2, t3]);
+                    }
+                }
             }
         }
         Some(out)
@@ -367,9 +377,9 @@ impl SphericalWrist {
                     out.resolved = false;
                     continue;
                 };
-                let mut q = [t1, t2, t3, t4, t5, 0.0];
-                q[5] = chain.last_angle(&q, rotation);
-                out.configurations.push(q.map(super::wrap_angle));
+                let turned = before * l4.rotation(t4) * l5.rotation(t5);
+                let t6 = chain.last_angle_after(&turned, rotation);
+                out.configurations.push([t1, t2, t3, t4, t5, t6].map(super::wrap_angle));
             }
         }
         out
@@ -421,6 +431,35 @@ fn shared_roots(m: &Matrix4<f64>) -> Vec<f64> {
         }
     }
     out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
+}
+
+/// How two consecutive axes relate, when they meet or are parallel.
+fn pair(a: &super::lines::Line, b: &super::lines::Line) -> Option<Pair> {
+    if a.axis.cross(&b.axis).norm() < PARALLEL {
+        Some(Pair::Parallel)
+    } else {
+        crossing(a.point, a.axis, b.point, b.axis).map(Pair::Meet)
+    }
+}
+
+/// For two axes so related (`a` the first): what turning about either keeps (distance from the
+/// meeting point, or height along the axes), and what turning about `a` alone keeps besides
+/// (height along `a` from the meeting point, or the distance from `a`).
+type Invariant<'a> = Box<dyn Fn(&Vector3<f64>) -> f64 + 'a>;
+fn invariants(relation: Pair, a: &super::lines::Line) -> (Invariant<'_>, Invariant<'_>) {
+    match relation {
+        Pair::Meet(m) => (
+            Box::new(move |p: &Vector3<f64>| (p - m).norm_squared()),
+            Box::new(move |p: &Vector3<f64>| a.axis.dot(&(p - m))),
+        ),
+        Pair::Parallel => (
+            Box::new(move |p: &Vector3<f64>| a.axis.dot(&(p - a.point))),
+            Box::new(move |p: &Vector3<f64>| {
+                let v = p - a.point;
+                (v - a.axis * a.axis.dot(&v)).norm_squared()
+            }),
+        ),
+    }
 }
 
 /// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`; `None` when `f` is
