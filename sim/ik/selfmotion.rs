@@ -15,7 +15,7 @@ use super::analytic::AnalyticSolutions;
 use super::{summary, GoalSolutions, Ik, EXACT};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use std::collections::HashMap;
+use std::collections::hash_map::{Entry, HashMap};
 use std::f64::consts::TAU;
 
 /// Samples per whole turn of the parameter (5 degrees apart).
@@ -210,7 +210,7 @@ impl Ik<'_> {
             let mut ends = Vec::with_capacity(2);
             for value in [a, b] {
                 let key = (value.to_bits(), half.to_bits());
-                if !judged.contains_key(&key) {
+                if let Entry::Vacant(slot) = judged.entry(key) {
                     let Some(sample) = self.judge_sample(goal, parameter, value, half, &words) else {
                         return;
                     };
@@ -222,7 +222,7 @@ impl Ik<'_> {
                     if !seen.iter().any(|v| words.same(*v, value)) {
                         seen.push(value);
                     }
-                    judged.insert(key, sample);
+                    slot.insert(sample);
                 }
                 ends.push(judged[&key].clone());
             }
@@ -247,9 +247,8 @@ impl Ik<'_> {
                 // interval added to their slack.
                 for value in [a, b] {
                     let key = (value.to_bits(), half.to_bits());
-                    if !proofs.contains_key(&key) {
-                        let proof = self.sample_out_of_reach(goal, parameter, value, half);
-                        proofs.insert(key, proof);
+                    if let Entry::Vacant(slot) = proofs.entry(key) {
+                        slot.insert(self.sample_out_of_reach(goal, parameter, value, half));
                     }
                     match &proofs[&key] {
                         Some(proof) => {
