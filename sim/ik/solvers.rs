@@ -115,7 +115,8 @@ impl AllSolutions {
 }
 
 /// A 7R arm's pose goals with joint 7 held at each angle in turn: the six others are a 6R arm
-/// with the method for their lines (see [`Arm::holding_last_joint`]).
+/// with the method for their lines, its tool a virtual frame on joint 7's axis (its z the axis),
+/// so turning joint 7 turns that frame about its own z.
 #[derive(Debug, Clone)]
 pub struct HeldJoint {
     /// The six others' method; its tool is the virtual frame on joint 7's axis.
