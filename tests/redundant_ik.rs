@@ -57,10 +57,48 @@ fn check_held(name: &str, model: &Model) {
     println!("{name}: {total} solutions over 40 poses ({})", held.method.name());
 }
 
+/// A free-mode 7R design from DH rows `(d, a, alpha)`.
+fn dh_design(name: &str, rows: &[[f64; 3]]) -> Model {
+    let joints: Vec<String> = rows
+        .iter()
+        .map(|[d, a, alpha]| format!("{{\"d\": {d}, \"a\": {a}, \"alpha\": {alpha}}}"))
+        .collect();
+    let text = format!("{{\"name\": \"{name}\", \"mode\": \"free\", \"joints\": [{}]}}", joints.join(","));
+    let design = proving_ground::design::parse(&text, std::path::Path::new("arm.json")).expect("design parses");
+    proving_ground::model::from_design(&design)
+}
+
 #[test]
 fn held_joint_solutions_reach_the_pose() {
     check_held("panda", &panda());
     check_held("free-redundant-7dof", &redundant_design());
+    // An S-R-S arm with KUKA iiwa 14 proportions (shoulder and wrist spherical).
+    let half = std::f64::consts::FRAC_PI_2;
+    let srs = [
+        [0.36, 0.0, -half],
+        [0.0, 0.0, half],
+        [0.42, 0.0, half],
+        [0.0, 0.0, -half],
+        [0.4, 0.0, -half],
+        [0.0, 0.0, half],
+        [0.126, 0.0, 0.0],
+    ];
+    check_held("iiwa-like", &dh_design("iiwa-like", &srs));
+    // Random general 7R arms: the six others have no wrist, so the general elimination.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    for index in 0..4 {
+        let rows: Vec<[f64; 3]> = (0..7)
+            .map(|_| {
+                [
+                    rng.random_range(-0.3..0.3),
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+                ]
+            })
+            .collect();
+        let name = format!("random-7r-{index}");
+        check_held(&name, &dh_design(&name, &rows));
+    }
 }
 
 /// A unit vector in a random direction.

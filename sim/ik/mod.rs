@@ -272,6 +272,13 @@ impl<'a> Ik<'a> {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
         let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+        if !result.reached() && exact.finite && exact.out_of_reach.is_none() && goal.tolerance == Tolerance::Pose {
+            // No exact solution, not ruled out: poses just off it may have some.
+            if let Some(solution) = self.reach_nearby(goal, selfmotion::Parameter::Turn, 0.0) {
+                result.solutions.insert(0, solution);
+                return result;
+            }
+        }
         if !result.reached() {
             let miss = result.solutions.first().map_or(String::new(), |s| {
                 format!(

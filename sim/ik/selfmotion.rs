@@ -23,8 +23,8 @@ pub(super) const TURNS: usize = 72;
 
 /// What a self-motion is swept by.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Parameter {
-    /// The free turn about tool z of a `z_symmetric` goal.
+pub(super) enum Parameter {
+    /// The free turn about tool z of a `z_symmetric` goal (0 for a plain `pose` goal).
     Turn,
     /// The last joint's angle of a 7R arm, over its range.
     Held,
@@ -115,6 +115,47 @@ impl Ik<'_> {
                 Some((goal.clone(), exact, configurations))
             }
         }
+    }
+
+    /// A configuration reaching the goal found by solving exactly the poses up to 0.9 mm and
+    /// 0.9 degrees off the sample's (the tool moved along and turned about each axis, alone and
+    /// combined): where the sample has no exact solution but the tolerance is not ruled out,
+    /// one of these may have solutions, and a free one within the limits reaches the goal.
+    pub(super) fn reach_nearby(&mut self, goal: &Goal, parameter: Parameter, value: f64) -> Option<super::IkSolution> {
+        let margin = self.margin();
+        let axes = [
+            Vector3::zeros(),
+            Vector3::x(),
+            -Vector3::x(),
+            Vector3::y(),
+            -Vector3::y(),
+            Vector3::z(),
+            -Vector3::z(),
+        ];
+        for shift in &axes {
+            for turn in &axes {
+                if shift.norm() == 0.0 && turn.norm() == 0.0 {
+                    continue;
+                }
+                let nearby = Goal {
+                    position: goal.position + shift * (NEARBY * super::REACHED_POSITION_M),
+                    rotation: UnitQuaternion::from_scaled_axis(turn * (NEARBY * super::REACHED_ORIENTATION_RAD)) * goal.rotation,
+                    ..goal.clone()
+                };
+                let (sample, _, configurations) = self.sample(&nearby, parameter, value)?;
+                for mut q in configurations {
+                    let (_, size, _) = self.polish(&sample, &mut q);
+                    if size > EXACT || !self.shift_into_limits(&mut q, None) {
+                        continue;
+                    }
+                    let solution = self.judge(goal, q, None, margin);
+                    if solution.reached {
+                        return Some(solution);
+                    }
+                }
+            }
+        }
+        None
     }
 
     /// Why no configuration reaches the goal with the parameter within `slack` of `value`,
@@ -255,6 +296,11 @@ impl Ik<'_> {
                             out_of_reach.get_or_insert_with(|| proof.clone());
                         }
                         None => {
+                            if let Some(solution) = self.reach_nearby(goal, parameter, value) {
+                                result.solutions.insert(0, solution);
+                                result.undecided = None;
+                                return;
+                            }
                             failure = Some(format!(
                                 "no {} sampled has an exact solution, but {} is not proven out of reach, so a configuration within the goal's tolerance is not ruled out",
                                 words.one,
@@ -314,6 +360,8 @@ impl Ik<'_> {
     }
 }
 
+/// How much of the tolerance the poses tried around a sample use.
+const NEARBY: f64 = 0.9;
 /// A sweep's intervals are halved where certificates fail down to its first step over this.
 const REFINEMENTS: usize = 16;
 /// Samples a sweep may judge, per sample of its first grid.
