@@ -2,14 +2,14 @@
 //! parameter: a 6R arm on a `z_symmetric` goal (any turn about tool z is allowed), or a 7R arm
 //! on a `pose` goal (joint 7 held at each angle of its range, the six others solved exactly).
 //! Sampled [`TURNS`] to the turn, each sample solved exactly by the closed form or the
-//! all-solutions method: a sample that is collision-free within the limits reaches the goal;
-//! otherwise the goal is proven unreachable when every sample solution is certified over its
-//! neighbourhood (the goal's tolerance plus half a sample step of its branch, from the inverse
-//! Jacobian applied to the parameter's motion, doubled like the tolerance's), the count of
-//! solutions is the same at every sample (no branch starts or ends between samples), and no
-//! branch moves a joint by more than the linear bound between samples; or when every sample is
-//! proven out of reach with half a step of the parameter added to its slack. What falls short
-//! stays `undecided`, with the first reason.
+//! all-solutions method: a sample that is collision-free within the limits reaches the goal.
+//! Otherwise the goal is proven unreachable interval by interval: both ends' solutions certified
+//! over their neighbourhood (the goal's tolerance plus half the interval of their branch, from
+//! the inverse Jacobian applied to the parameter's motion, doubled like the tolerance's, within
+//! the linear bound) with the same count at both ends (no branch starts or ends inside), or both
+//! ends without solutions and proven out of reach with half the interval added to the slack. An
+//! interval that fails is halved while that may help; what still falls short stays `undecided`,
+//! with the first reason.
 
 use super::analytic::AnalyticSolutions;
 use super::{summary, GoalSolutions, Ik, EXACT};
