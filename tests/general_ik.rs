@@ -13,22 +13,15 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 fn random_free_design(rng: &mut impl Rng, index: usize) -> Model {
-    let joints: Vec<String> = (0..6)
-        .map(|_| {
-            format!(
-                "{{\"d\": {:.4}, \"a\": {:.4}, \"alpha\": {:.4}}}",
-                rng.random_range(-0.3..0.3),
-                rng.random_range(-0.5..0.5),
-                rng.random_range(-PI..PI)
-            )
-        })
+    let rows: Vec<[f64; 3]> = (0..6)
+        .map(|_| [rng.random_range(-0.3..0.3), rng.random_range(-0.5..0.5), rng.random_range(-PI..PI)].map(four_places))
         .collect();
-    let text = format!(
-        "{{\"name\": \"random-{index}\", \"mode\": \"free\", \"joints\": [{}]}}",
-        joints.join(",")
-    );
-    let design = design::parse(&text, Path::new("random.json")).expect("random design parses");
-    from_design(&design)
+    common::dh_design(&format!("random-{index}"), &rows)
+}
+
+/// `x` to four decimal places, as the random designs are written.
+fn four_places(x: f64) -> f64 {
+    (x * 1e4).round() / 1e4
 }
 
 fn shipped(path: &str) -> Model {
@@ -105,16 +98,8 @@ fn random_wrist_design(rng: &mut impl Rng, index: usize, kind: usize) -> Model {
         4 => rows[1][2] = 0.0,
         _ => {}
     }
-    let joints: Vec<String> = rows
-        .iter()
-        .map(|[d, a, alpha]| format!("{{\"d\": {d:.4}, \"a\": {a:.4}, \"alpha\": {alpha:.4}}}"))
-        .collect();
-    let text = format!(
-        "{{\"name\": \"wrist-{kind}-{index}\", \"mode\": \"free\", \"joints\": [{}]}}",
-        joints.join(",")
-    );
-    let design = design::parse(&text, Path::new("random.json")).expect("random design parses");
-    from_design(&design)
+    let rows: Vec<[f64; 3]> = rows.iter().map(|row| row.map(four_places)).collect();
+    common::dh_design(&format!("wrist-{kind}-{index}"), &rows)
 }
 
 /// Random spherical-wrist arms, the general positioning (the resultant) and each closed-form

@@ -57,17 +57,6 @@ fn check_held(name: &str, model: &Model) {
     println!("{name}: {total} solutions over 40 poses ({})", held.method.name());
 }
 
-/// A free-mode 7R design from DH rows `(d, a, alpha)`.
-fn dh_design(name: &str, rows: &[[f64; 3]]) -> Model {
-    let joints: Vec<String> = rows
-        .iter()
-        .map(|[d, a, alpha]| format!("{{\"d\": {d}, \"a\": {a}, \"alpha\": {alpha}}}"))
-        .collect();
-    let text = format!("{{\"name\": \"{name}\", \"mode\": \"free\", \"joints\": [{}]}}", joints.join(","));
-    let design = proving_ground::design::parse(&text, std::path::Path::new("arm.json")).expect("design parses");
-    proving_ground::model::from_design(&design)
-}
-
 #[test]
 fn held_joint_solutions_reach_the_pose() {
     check_held("panda", &panda());
@@ -83,7 +72,7 @@ fn held_joint_solutions_reach_the_pose() {
         [0.0, 0.0, half],
         [0.126, 0.0, 0.0],
     ];
-    check_held("iiwa-like", &dh_design("iiwa-like", &srs));
+    check_held("iiwa-like", &common::dh_design("iiwa-like", &srs));
     // Random general 7R arms: the six others have no wrist, so the general elimination.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     for index in 0..4 {
@@ -97,7 +86,7 @@ fn held_joint_solutions_reach_the_pose() {
             })
             .collect();
         let name = format!("random-7r-{index}");
-        check_held(&name, &dh_design(&name, &rows));
+        check_held(&name, &common::dh_design(&name, &rows));
     }
 }
 

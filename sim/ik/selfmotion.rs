@@ -11,7 +11,6 @@
 //! interval that fails is halved while that may help; what still falls short stays `undecided`,
 //! with the first reason.
 
-use super::analytic::AnalyticSolutions;
 use super::{summary, GoalSolutions, Ik, EXACT};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -57,11 +56,6 @@ impl Ik<'_> {
     /// The values of `parameter` sampled: a whole turn, or the held joint's limits when they
     /// span less (both ends sampled).
     fn samples(&self, parameter: Parameter) -> Samples {
-        let whole = || Samples {
-            values: (0..TURNS).map(|k| k as f64 * TAU / TURNS as f64).collect(),
-            step: TAU / TURNS as f64,
-            periodic: true,
-        };
         let limits = match parameter {
             Parameter::Turn => None,
             Parameter::Held => self.model.joints.last().and_then(|j| j.limits),
@@ -79,13 +73,18 @@ impl Ik<'_> {
                     periodic: false,
                 }
             }
-            _ => whole(),
+            _ => Samples {
+                values: (0..TURNS).map(|k| k as f64 * TAU / TURNS as f64).collect(),
+                step: TAU / TURNS as f64,
+                periodic: true,
+            },
         }
     }
 
-    /// The goal as one pose problem at parameter value `value`, and every solution of it (as
-    /// many joints as the model has); `None` when no exact method applies.
-    fn sample(&self, goal: &Goal, parameter: Parameter, value: f64) -> Option<(Goal, AnalyticSolutions, Vec<Vec<f64>>)> {
+    /// The goal as one pose problem at parameter value `value`, every solution of it (as many
+    /// joints as the model has), and whether they are all listed (no continuum); `None` when no
+    /// exact method applies.
+    fn sample(&self, goal: &Goal, parameter: Parameter, value: f64) -> Option<(Goal, Vec<Vec<f64>>, bool)> {
         match parameter {
             Parameter::Turn => {
                 let rotation = goal.rotation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), value);
@@ -96,7 +95,7 @@ impl Ik<'_> {
                 };
                 let exact = self.exact_pose(&Isometry3::from_parts(Translation3::from(goal.position), rotation))?;
                 let configurations = exact.configurations.iter().map(|q| q.to_vec()).collect();
-                Some((sample, exact, configurations))
+                Some((sample, configurations, exact.finite))
             }
             Parameter::Held => {
                 let held = self.redundant.as_ref()?;
@@ -107,12 +106,7 @@ impl Ik<'_> {
                     .iter()
                     .map(|q| q.iter().copied().chain([value]).collect())
                     .collect();
-                let exact = AnalyticSolutions {
-                    configurations: found.configurations,
-                    finite: found.resolved,
-                    out_of_reach: found.out_of_reach,
-                };
-                Some((goal.clone(), exact, configurations))
+                Some((goal.clone(), configurations, found.resolved))
             }
         }
     }
@@ -142,7 +136,7 @@ impl Ik<'_> {
                     rotation: UnitQuaternion::from_scaled_axis(turn * (NEARBY * super::REACHED_ORIENTATION_RAD)) * goal.rotation,
                     ..goal.clone()
                 };
-                let (sample, _, configurations) = self.sample(&nearby, parameter, value)?;
+                let (sample, configurations, _) = self.sample(&nearby, parameter, value)?;
                 for mut q in configurations {
                     let (_, size, _) = self.polish(&sample, &mut q);
                     if size > EXACT || !self.shift_into_limits(&mut q, None) {
@@ -179,7 +173,7 @@ impl Ik<'_> {
     /// counted and certified, or reached; `None` when no exact method applies.
     fn judge_sample(&mut self, goal: &Goal, parameter: Parameter, value: f64, half: f64, words: &Words) -> Option<Judged> {
         let margin = self.margin();
-        let (sample, exact, configurations) = self.sample(goal, parameter, value)?;
+        let (sample, configurations, finite) = self.sample(goal, parameter, value)?;
         let mut judged = Judged {
             count: 0,
             reached: None,
@@ -187,7 +181,7 @@ impl Ik<'_> {
             failure: None,
             refinable: true,
         };
-        if !exact.finite {
+        if !finite {
             judged.fail(format!("{}{} is a singular pose", words.at(value), words.place), false);
         }
         let mut distinct: Vec<Vec<f64>> = Vec::with_capacity(configurations.len());
@@ -248,9 +242,8 @@ impl Ik<'_> {
         let mut each: Option<usize> = None;
         while let Some((a, b)) = intervals.pop() {
             let half = (b - a) / 2.0;
-            let mut ends = Vec::with_capacity(2);
-            for value in [a, b] {
-                let key = (value.to_bits(), half.to_bits());
+            let keys = [a, b].map(|value| (value.to_bits(), half.to_bits()));
+            for (value, key) in [a, b].into_iter().zip(keys) {
                 if let Entry::Vacant(slot) = judged.entry(key) {
                     let Some(sample) = self.judge_sample(goal, parameter, value, half, &words) else {
                         return;
@@ -265,13 +258,12 @@ impl Ik<'_> {
                     }
                     slot.insert(sample);
                 }
-                ends.push(judged[&key].clone());
             }
             if open.is_some() {
                 // Undecided already: only a reached sample can change that.
                 continue;
             }
-            let (first, second) = (&ends[0], &ends[1]);
+            let (first, second) = (&judged[&keys[0]], &judged[&keys[1]]);
             each.get_or_insert(first.count);
             let mut failure = first.failure.clone().or_else(|| second.failure.clone());
             let mut refinable = first.refinable && second.refinable && first.count == second.count;
@@ -286,8 +278,7 @@ impl Ik<'_> {
             if failure.is_none() && first.count == 0 {
                 // No solution at either end: proven when both are out of reach with half the
                 // interval added to their slack.
-                for value in [a, b] {
-                    let key = (value.to_bits(), half.to_bits());
+                for (value, key) in [a, b].into_iter().zip(keys) {
                     if let Entry::Vacant(slot) = proofs.entry(key) {
                         slot.insert(self.sample_out_of_reach(goal, parameter, value, half));
                     }

@@ -281,47 +281,38 @@ impl SphericalWrist {
     }
 
     fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> WristSolutions {
-        let mut out = WristSolutions::default();
         let chain = self.arm.chain(self.reversed);
         let target = self.target(chain, rotation, translation);
-        let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
-        let roots = match self.decoupled {
-            Some(decoupled) => {
-                match self.decoupled_positions(chain, &target, decoupled) {
-                    Some(found) => {
-                        out.resolved = true;
-                        positions = found;
-                    }
-                    // A continuum: listed nowhere, and not resolved.
-                    None => return out,
-                }
-                None
-            }
-            None => Some(self.roots(rotation, translation)),
+        let found = match self.decoupled {
+            Some(decoupled) => self
+                .decoupled_positions(chain, &target, decoupled)
+                .map(|positions| (positions, true)),
+            None => self.resultant_positions(chain, &target, rotation, translation),
         };
-        if let Some(roots) = roots {
-            let Some((offset3, roots, [s0, s1, s2])) = roots else {
-                return out;
-            };
-            out.resolved = true;
-            self.resultant_positions(chain, &target, offset3, roots, [s0, s1, s2], &mut positions, &mut out);
-        }
+        // None: a continuum, or no offset regular: nothing listed, and not resolved.
+        let Some((positions, resolved)) = found else {
+            return WristSolutions::default();
+        };
+        let out = WristSolutions {
+            resolved,
+            ..WristSolutions::default()
+        };
         self.finish(chain, rotation, positions, out)
     }
 
-    /// Joints 1 to 3 from the resultant's roots in `x3`.
-    #[allow(clippy::too_many_arguments)]
+    /// Joints 1 to 3 from the resultant's roots in `x3`, and whether each root gave them (not
+    /// where the wrist centre lies on axis 1, joint 1 free); `None` where no offset is regular.
     fn resultant_positions(
         &self,
         chain: &Chain,
         target: &Vector3<f64>,
-        offset3: f64,
-        roots: Vec<f64>,
-        [s0, s1, s2]: [Matrix4<f64>; 3],
-        positions: &mut Vec<[f64; 3]>,
-        out: &mut WristSolutions,
-    ) {
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+    ) -> Option<(Vec<[f64; 3]>, bool)> {
+        let (offset3, roots, [s0, s1, s2]) = self.roots(rotation, translation)?;
         let [l1, l2, l3, ..] = &chain.lines;
+        let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
+        let mut resolved = true;
         for x3 in roots {
             let matrix = s0 + s1 * x3 + s2 * (x3 * x3);
             let t3 = offset3 + 2.0 * x3.atan();
@@ -342,12 +333,13 @@ impl SphericalWrist {
                 let point = l2.turn(t2, &l3.turn(t3, &self.centre));
                 let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
                     // The wrist centre on axis 1: joint 1 is free.
-                    out.resolved = false;
+                    resolved = false;
                     continue;
                 };
                 positions.push([t1, t2, t3]);
             }
         }
+        Some((positions, resolved))
     }
 
     /// The wrist joints for each position of joints 1 to 3.

@@ -14,6 +14,17 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A free-mode design from standard DH rows `(d, a, alpha)`, one per joint.
+pub fn dh_design(name: &str, rows: &[[f64; 3]]) -> Model {
+    let joints: Vec<String> = rows
+        .iter()
+        .map(|[d, a, alpha]| format!("{{\"d\": {d}, \"a\": {a}, \"alpha\": {alpha}}}"))
+        .collect();
+    let text = format!("{{\"name\": \"{name}\", \"mode\": \"free\", \"joints\": [{}]}}", joints.join(","));
+    let design = proving_ground::design::parse(&text, Path::new("arm.json")).expect("design parses");
+    proving_ground::model::from_design(&design)
+}
+
 /// The real-world URDF shipped in designs/ (Franka Panda, STL collision meshes).
 pub fn panda_urdf() -> PathBuf {
     repo().join("designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf")
