@@ -409,3 +409,72 @@ fn solutions_born_within_the_tolerance_are_no_proof() {
     let goal = &report.goals[6];
     assert_eq!(goal.outcome, "reached", "{:?}", goal.proven);
 }
+
+/// Modular catalog arms: every pair of consecutive axes meets or is parallel, which makes
+/// Raghavan and Roth's own choice of kept joints degenerate for all of them; another choice
+/// holds for most. Through the pipeline (roots polished by Newton on the model's FK), each
+/// pose's own configuration is among the solutions, and no root is left unpolished.
+#[test]
+fn modular_catalog_arms_every_pose_its_configuration() {
+    use proving_ground::ik::solvers::AllSolutions;
+    use proving_ground::ik::{Ik, IkOptions};
+    use proving_ground::scenario::{Goal, Tolerance};
+    use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
+    let mut variants = std::collections::BTreeMap::new();
+    for index in (0..15_625).step_by(97) {
+        let model = catalog_entry(&modular6_slots(index)).load().model;
+        let Some((AllSolutions::General(general), _)) = AllSolutions::of(&model) else {
+            continue;
+        };
+        *variants.entry(general.variant()).or_insert(0) += 1;
+        let mut ik = Ik::new(&model, IkOptions::default());
+        for k in 0..5 {
+            let q = model.random_configuration(&mut rng);
+            let pose = model.tool_pose(&q);
+            let goal = Goal {
+                name: format!("g{k}"),
+                position: pose.translation.vector,
+                rotation: pose.rotation,
+                tolerance: Tolerance::Pose,
+            };
+            let found = ik.solve(&goal, k, None);
+            assert!(found.reached(), "{}: pose {k} not reached", model.name);
+            assert!(
+                found.solutions.iter().any(|s| same(&s.q, &q, 1e-6)),
+                "{}: pose {k}: its own configuration {q:?} is not among the {} solutions ({})",
+                model.name,
+                found.solutions.len(),
+                general.variant()
+            );
+        }
+    }
+    println!("catalog arms by elimination: {variants:?}");
+    assert!(variants.values().sum::<usize>() >= 100, "{variants:?}");
+}
+
+/// Companion matrices on which nalgebra's unbounded QR iteration cycles forever (the kept
+/// joints' choices that degenerate for the catalog arms `D-D-D-Ls-Ls-D` and `D-D-D-Ls-Ls-Is`,
+/// met while choosing their method, and a pose of `Ls-Ls-D-D-Il-Ls` before the probes rejected
+/// its choice): choosing the method and solving return.
+#[test]
+fn a_cycling_eigenvalue_iteration_does_not_hang_the_solver() {
+    use proving_ground::ik::solvers::AllSolutions;
+    use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+    let q = [
+        0.772_627_362_709_411_8,
+        -2.630_759_024_212_576_7,
+        -1.113_344_855_679_505_6,
+        -2.616_081_095_828_868_7,
+        0.603_127_571_734_481_7,
+        1.945_940_612_879_750_7,
+    ];
+    for index in [90, 91, 11_263] {
+        let model = catalog_entry(&modular6_slots(index)).load().model;
+        if let Some((method, _)) = AllSolutions::of(&model) {
+            let pose = model.tool_pose(&q);
+            let found = method.solve(&pose);
+            assert!(found.configurations.iter().all(|c| fk_error(&model, c, &pose) < 1e-4));
+        }
+    }
+}

@@ -21,7 +21,7 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use super::lines::{half_angle, interpolate2, node_inverse, Arm, Chain, NODES};
+use super::lines::{eigenvalues, half_angle, interpolate2, node_inverse, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
 
@@ -53,10 +53,30 @@ const SINGULAR: f64 = 1e-10;
 /// (a pose on a workspace boundary) splits into a pair about `sqrt(eps)` off the real line.
 const NEAR_REAL: f64 = 1e-4;
 
+/// The first joints (0-based) of the three consecutive joints an elimination keeps, in the
+/// order tried: 2 is Raghavan and Roth's own (joints 3 to 5 kept, joint 6's line carried, joints
+/// 1 and 2 eliminated); 1 keeps joints 2 to 4, carries joint 5's line and eliminates 1 and 6; 0
+/// keeps joints 1 to 3, carries joint 4's line and eliminates 5 and 6. The goal only ever enters
+/// the eliminated side, so the kept side's table is the arm's own. Arms whose special geometry
+/// (parallel or meeting axes, as in most modular arms) makes one choice degenerate often suit
+/// another.
+const BLOCKS: [usize; 3] = [2, 1, 0];
+
+/// The two joints eliminated by the products for a block, in increasing order.
+fn eliminated(block: usize) -> [usize; 2] {
+    match block {
+        2 => [0, 1],
+        1 => [0, 5],
+        _ => [4, 5],
+    }
+}
+
 /// The elimination of one chain, with what does not depend on the pose.
 #[derive(Debug, Clone)]
 struct Elimination {
     chain: Chain,
+    /// The first of the three kept joints (see [`BLOCKS`]).
+    block: usize,
     /// Left side: `[quantity][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
     left: [[[f64; 9]; 3]; 14],
 }
@@ -91,8 +111,10 @@ impl General6R {
 
     /// The solver of a chain's lines (see [`super::lines`]).
     pub(crate) fn of_arm(arm: Arm) -> Option<General6R> {
-        for reversed in [false, true] {
-            let elimination = Elimination::new(arm.chain(reversed).clone())?;
+        // Raghavan and Roth's choice in both orders first, then the other blocks.
+        let order = BLOCKS.iter().flat_map(|block| [(false, *block), (true, *block)]);
+        for (reversed, block) in order {
+            let elimination = Elimination::new(arm.chain(reversed).clone(), block)?;
             if elimination.regular() {
                 return Some(General6R {
                     elimination,
@@ -104,9 +126,17 @@ impl General6R {
         None
     }
 
-    /// Whether the reversed chain is solved (joint 1 eliminated instead of joint 6).
+    /// Whether the reversed chain is solved.
     pub fn is_reversed(&self) -> bool {
         self.reversed
+    }
+
+    /// The elimination used, for reports and tests: `joints 3-5 kept` with `, reversed` when
+    /// the reversed chain's joints are meant.
+    pub fn variant(&self) -> String {
+        let first = self.elimination.block + 1;
+        let order = if self.reversed { ", reversed chain" } else { "" };
+        format!("joints {first}-{} kept{order}", first + 2)
     }
 
     /// Every configuration whose tool frame is at world pose `goal`, unpolished.
@@ -125,13 +155,13 @@ impl General6R {
 impl Elimination {
     /// The left side's coefficients of `chain`: interpolated at 27 nodes and checked at a point
     /// off them (`None` when the check fails: the lines are not a 6R chain, e.g. NaN).
-    fn new(chain: Chain) -> Option<Elimination> {
+    fn new(chain: Chain, block: usize) -> Option<Elimination> {
         let nodes = node_inverse();
         let mut values = [[[[0.0; 14]; 3]; 3]; 3];
         for (i3, plane) in values.iter_mut().enumerate() {
             for (i4, row) in plane.iter_mut().enumerate() {
                 for (i5, value) in row.iter_mut().enumerate() {
-                    *value = chain.left(NODES[i3], NODES[i4], NODES[i5]);
+                    *value = chain.left(block, [NODES[i3], NODES[i4], NODES[i5]]);
                 }
             }
         }
@@ -153,24 +183,35 @@ impl Elimination {
                 }
             }
         }
-        let elimination = Elimination { chain, left };
+        let elimination = Elimination { chain, block, left };
         let probe = [0.37, -1.91, 2.47];
-        let exact = elimination.chain.left(probe[0], probe[1], probe[2]);
+        let exact = elimination.chain.left(block, probe);
         let fitted = elimination.left_at(probe[0], probe[1], probe[2]);
         let agrees = exact.iter().zip(&fitted).all(|(a, b)| (a - b).abs() <= 1e-9 * (1.0 + a.abs()));
         agrees.then_some(elimination)
     }
 
-    /// Whether the elimination holds for this chain at a generic pose: the products of joints 1
-    /// and 2 independent and the determinant not identically zero.
+    /// Whether the elimination holds for this chain at generic poses: the eliminated products
+    /// independent, the determinant not identically zero, and each root resolved into one
+    /// configuration that reaches the pose, the probe's own among them. Special geometry can
+    /// pass the first two and still fail the last (the null vector leaves a kept joint free, as
+    /// where the carried line meets the last kept axis); the probes catch it.
     fn regular(&self) -> bool {
-        let probe = [0.9, -0.4, 1.3, 2.1, -0.7, 0.5];
-        let pose = self.chain.forward(&probe);
-        let Some(system) = self.system(&pose.0, &pose.1) else {
-            return false;
-        };
-        let sigma = system.at(0.29).svd(false, false).singular_values;
-        sigma.min() > SINGULAR * sigma.max()
+        let probes = [[0.9, -0.4, 1.3, 2.1, -0.7, 0.5], [-2.3, 1.7, -0.6, -1.2, 2.6, -1.9]];
+        probes.iter().all(|probe| {
+            let (rotation, translation) = self.chain.forward(probe);
+            let Some(system) = self.system(&rotation, &translation) else {
+                return false;
+            };
+            let sigma = system.at(0.29).svd(false, false).singular_values;
+            if sigma.min() <= SINGULAR * sigma.max() {
+                return false;
+            }
+            let found = self.solve(&rotation, &translation);
+            let reaches = |q: &[f64; 6]| self.chain.misses(q, &rotation, &translation) < CANDIDATE;
+            let own = |q: &[f64; 6]| q.iter().zip(probe).all(|(a, b)| super::wrap_angle(a - b).abs() < 1e-6);
+            found.resolved && found.configurations.iter().all(reaches) && found.configurations.iter().any(own)
+        })
     }
 
     /// The left side's fitted quantities at joint angles 3, 4, 5.
@@ -195,14 +236,11 @@ impl Elimination {
     /// dependent at this pose.
     fn system(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<System> {
         let chain = &self.chain;
-        // The point and direction of axis 6 carried by T M^-1.
         let relative = rotation * chain.home_rotation.transpose();
-        let point = relative * (chain.lines[5].point - chain.home_translation) + translation;
-        let direction = relative * chain.lines[5].axis;
         let mut values = [[[0.0; 14]; 3]; 3];
         for (i1, row) in values.iter_mut().enumerate() {
             for (i2, value) in row.iter_mut().enumerate() {
-                *value = chain.right(NODES[i1], NODES[i2], &point, &direction);
+                *value = chain.right(self.block, [NODES[i1], NODES[i2]], &relative, translation);
             }
         }
         // right[k][f1 * 3 + f2]
@@ -275,9 +313,14 @@ impl Elimination {
     /// eliminated products, 6 from the pose.
     fn configuration(&self, system: &System, null: &[f64; 12], t3: f64, rotation: &Matrix3<f64>) -> Option<[f64; 6]> {
         let (t4, t5) = angles_of_null_vector(null);
-        let (t1, t2) = system.first_two(&self.left_at(t3, t4, t5))?;
-        let mut q = [t1, t2, t3, t4, t5, 0.0];
-        q[5] = self.chain.last_angle(&q, rotation);
+        let (ta, tb) = system.first_two(&self.left_at(t3, t4, t5))?;
+        let block = self.block;
+        let [a, b] = eliminated(block);
+        let mut q = [0.0; 6];
+        q[block..block + 3].copy_from_slice(&[t3, t4, t5]);
+        q[a] = ta;
+        q[b] = tb;
+        q[block + 3] = self.chain.angle_of(block + 3, &q, rotation);
         Some(q.map(super::wrap_angle))
     }
 }
@@ -412,7 +455,8 @@ impl System {
     }
 
     /// The offset of joint 3's tangent used and the near-real roots of the determinant; `None`
-    /// when the leading matrix is singular at every offset tried.
+    /// when the leading matrix is singular, or its eigenvalues do not converge, at every offset
+    /// tried.
     fn roots(&self) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
         for offset3 in [OFFSETS[0]].into_iter().chain(RETRY_OFFSETS) {
             let [c, b, a] = self.quadratic(offset3);
@@ -426,7 +470,7 @@ impl System {
             companion.fixed_view_mut::<12, 12>(0, 12).fill_with_identity();
             companion.fixed_view_mut::<12, 12>(12, 0).copy_from(&(-ac));
             companion.fixed_view_mut::<12, 12>(12, 12).copy_from(&(-ab));
-            let eigenvalues = companion.complex_eigenvalues();
+            let Some(eigenvalues) = eigenvalues(&companion) else { continue };
             let roots = eigenvalues
                 .iter()
                 .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
@@ -457,19 +501,39 @@ impl System {
 }
 
 impl Chain {
-    /// The fourteen quantities of `e3 e4 e5` at angles 3, 4, 5.
-    fn left(&self, t3: f64, t4: f64, t5: f64) -> [f64; 14] {
-        let [_, _, l3, l4, l5, l6] = &self.lines;
-        let point = l3.turn(t3, &l4.turn(t4, &l5.turn(t5, &l6.point)));
-        let direction = l3.rotation(t3) * l4.rotation(t4) * l5.rotation(t5) * l6.axis;
-        fourteen(&(point - l3.point), &direction)
+    /// The fourteen quantities of the kept joints' turns (`e3 e4 e5` for block 2) at `angles`
+    /// applied to the carried line (joint 6's for block 2), about a point of the first kept
+    /// joint's line.
+    fn left(&self, block: usize, angles: [f64; 3]) -> [f64; 14] {
+        let carried = &self.lines[block + 3];
+        let (mut point, mut direction) = (carried.point, carried.axis);
+        for (line, angle) in self.lines[block..block + 3].iter().zip(angles).rev() {
+            point = line.turn(angle, &point);
+            direction = line.rotation(angle) * direction;
+        }
+        fourteen(&(point - self.lines[block].point), &direction)
     }
 
-    /// The fourteen quantities of `e2^-1 e1^-1` applied to `point` and `direction`.
-    fn right(&self, t1: f64, t2: f64, point: &Vector3<f64>, direction: &Vector3<f64>) -> [f64; 14] {
-        let [l1, l2, l3, ..] = &self.lines;
-        let moved = l2.turn(-t2, &l1.turn(-t1, point));
-        let turned = l2.rotation(-t2) * l1.rotation(-t1) * direction;
-        fourteen(&(moved - l3.point), &turned)
+    /// The fourteen quantities of the other side applied to the carried line, with the
+    /// eliminated joints at `angles`: `e2^-1 e1^-1 D` for block 2, `e1^-1 D e6^-1` for 1 and
+    /// `D e6^-1 e5^-1` for 0, where `D = T M^-1` maps `x` to `relative (x - M) + translation`.
+    fn right(&self, block: usize, angles: [f64; 2], relative: &Matrix3<f64>, translation: &Vector3<f64>) -> [f64; 14] {
+        let [a, _] = eliminated(block);
+        let angle = |joint: usize| if joint == a { angles[0] } else { angles[1] };
+        let carried = &self.lines[block + 3];
+        let (mut point, mut direction) = (carried.point, carried.axis);
+        for joint in block + 4..6 {
+            let line = &self.lines[joint];
+            point = line.turn(-angle(joint), &point);
+            direction = line.rotation(-angle(joint)) * direction;
+        }
+        point = relative * (point - self.home_translation) + translation;
+        direction = relative * direction;
+        for joint in 0..block {
+            let line = &self.lines[joint];
+            point = line.turn(-angle(joint), &point);
+            direction = line.rotation(-angle(joint)) * direction;
+        }
+        fourteen(&(point - self.lines[block].point), &direction)
     }
 }

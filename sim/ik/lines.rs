@@ -6,7 +6,7 @@
 //! structure at the wrist applies it at the base by solving the reversed chain.
 
 use crate::model::{JointKind, KinematicsWorkspace, Model};
-use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Complex, DMatrix, Isometry3, Matrix3, SMatrix, Schur, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// One joint's axis line: a point on it and its unit direction.
@@ -65,24 +65,33 @@ impl Chain {
         }
     }
 
-    /// Joint 6's angle given joints 1 to 5 and the goal rotation.
-    pub(crate) fn last_angle(&self, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
+    /// Joint `joint`'s angle (0-based) given the other five in `q` and the goal rotation.
+    pub(crate) fn angle_of(&self, joint: usize, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
         let mut before = Matrix3::identity();
-        for (line, angle) in self.lines.iter().zip(q).take(5) {
+        for (line, angle) in self.lines.iter().zip(q).take(joint) {
             before *= line.rotation(*angle);
         }
-        self.last_angle_after(&before, goal)
+        let mut after = Matrix3::identity();
+        for (line, angle) in self.lines.iter().zip(q).skip(joint + 1) {
+            after *= line.rotation(*angle);
+        }
+        let turn = before.transpose() * goal * self.home_rotation.transpose() * after.transpose();
+        axis_angle_of(&self.lines[joint].axis, &turn)
     }
 
     /// Joint 6's angle given the rotation of joints 1 to 5 and the goal rotation.
     pub(crate) fn last_angle_after(&self, before: &Matrix3<f64>, goal: &Matrix3<f64>) -> f64 {
         let turn = before.transpose() * goal * self.home_rotation.transpose();
-        let w = self.lines[5].axis;
-        let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-        let v = w.cross(&helper).normalize();
-        let moved = turn * v;
-        w.dot(&v.cross(&moved)).atan2(v.dot(&moved))
+        axis_angle_of(&self.lines[5].axis, &turn)
     }
+}
+
+/// The angle of `turn` about unit axis `w`, for a rotation that is one about `w`.
+fn axis_angle_of(w: &Vector3<f64>, turn: &Matrix3<f64>) -> f64 {
+    let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let v = w.cross(&helper).normalize();
+    let moved = turn * v;
+    w.dot(&v.cross(&moved)).atan2(v.dot(&moved))
 }
 
 /// An arm's chain in both orders, with the scaling that made it.
@@ -293,4 +302,17 @@ pub(crate) fn interpolate2<const N: usize>(values: &[[[f64; N]; 3]; 3]) -> [[f64
         }
     }
     out
+}
+
+/// The eigenvalues of a companion matrix, `None` when the QR iteration has not converged
+/// within `40 N` steps: nalgebra's unbounded form can cycle forever on some finite matrices
+/// (found on a modular catalog arm), and a caller that gets `None` tries another matrix.
+pub(crate) fn eigenvalues<const N: usize>(matrix: &SMatrix<f64, N, N>) -> Option<Vec<Complex<f64>>> {
+    if !matrix.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    // Dynamic: the static form needs type-level arithmetic bounds for any N.
+    let matrix = DMatrix::from_column_slice(N, N, matrix.as_slice());
+    let schur = Schur::try_new(matrix, f64::EPSILON, 40 * N)?;
+    Some(schur.complex_eigenvalues().iter().copied().collect())
 }

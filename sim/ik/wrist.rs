@@ -12,7 +12,7 @@
 //! goal direction (the two-rotation subproblem, up to two ways, for any twist between the wrist
 //! axes); joint 6 is the rest.
 
-use super::lines::{angle_about, half_angle, interpolate2, Arm, Chain, NODES};
+use super::lines::{angle_about, eigenvalues, half_angle, interpolate2, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Complex, Isometry3, Matrix3, Matrix4, SMatrix, Vector3};
 use std::f64::consts::PI;
@@ -392,7 +392,8 @@ impl SphericalWrist {
             companion.fixed_view_mut::<4, 4>(0, 4).fill_with_identity();
             companion.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-ac));
             companion.fixed_view_mut::<4, 4>(4, 4).copy_from(&(-ab));
-            let roots = near_real(companion.complex_eigenvalues().iter());
+            let Some(eigenvalues) = eigenvalues(&companion) else { continue };
+            let roots = near_real(eigenvalues.iter());
             // A root near infinity is imprecise: another offset moves it.
             if roots.iter().any(|x| x.abs() > 50.0) && offset3 != OFFSETS3[OFFSETS3.len() - 1] {
                 continue;
