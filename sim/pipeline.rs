@@ -371,9 +371,16 @@ pub fn validate_with_progress(
         .iter()
         .zip(&solutions)
         .map(|(goal, found)| {
-            (!found.reached())
-                .then(|| crate::ik::unreachable_proof(&model, &world, goal))
-                .flatten()
+            if found.reached() {
+                return None;
+            }
+            crate::ik::unreachable_proof(&model, &world, goal).or_else(|| {
+                found
+                    .proof
+                    .is_none()
+                    .then(|| crate::ik::last_joints_beyond_reach(&model, goal))
+                    .flatten()
+            })
         })
         .collect();
     let settings = crate::report::Settings {

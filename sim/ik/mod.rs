@@ -20,7 +20,7 @@ pub mod wrist;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
-pub use reach::{reach_bound, unreachable_proof};
+pub use reach::{beyond_reach, last_joints_beyond_reach, reach_bound, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;
@@ -40,6 +40,10 @@ use std::f64::consts::TAU;
 pub const REACHED_POSITION_M: f64 = 1e-3;
 /// Orientation error below which a goal is reached (rad): the paper's 1 degree.
 pub const REACHED_ORIENTATION_RAD: f64 = std::f64::consts::PI / 180.0;
+/// Closest numeric miss (m, rad) within which poses around an exactly unreachable goal are
+/// tried: ten times the tolerance in position, about six in orientation.
+const NEARBY_MISS_M: f64 = 0.01;
+const NEARBY_MISS_RAD: f64 = 0.1;
 
 /// Solver settings.
 #[derive(Debug, Clone)]
@@ -272,7 +276,15 @@ impl<'a> Ik<'a> {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
         let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
-        if !result.reached() && exact.finite && exact.out_of_reach.is_none() && goal.tolerance == Tolerance::Pose {
+        let ruled_out = exact.out_of_reach.is_some() || reach::beyond_reach(self.model, goal).is_some();
+        // A pose within the tolerance has solutions only where the workspace's boundary passes
+        // within it; the numeric search then ends close to the goal. Far misses skip the
+        // nearby poses (48 exact solves, the brute force's largest cost), undecided all the same.
+        let close = result
+            .solutions
+            .first()
+            .is_some_and(|s| s.error.position_m < NEARBY_MISS_M && s.error.orientation_rad < NEARBY_MISS_RAD);
+        if !result.reached() && exact.finite && !ruled_out && close && goal.tolerance == Tolerance::Pose {
             // No exact solution, not ruled out: poses just off it may have some.
             if let Some(solution) = self.reach_nearby(goal, selfmotion::Parameter::Turn, 0.0) {
                 result.solutions.insert(0, solution);
@@ -634,7 +646,8 @@ impl<'a> Ik<'a> {
         let mut starts = self.opts.seeds + extra.len();
         for start in 0..starts {
             let q = match (start, first_seed) {
-                _ if start >= self.opts.seeds => extra[start - self.opts.seeds].to_vec(),
+                // A 5R arm's exact configurations carry the virtual joint's angle last.
+                _ if start >= self.opts.seeds => extra[start - self.opts.seeds].iter().take(self.model.dof()).copied().collect(),
                 (0, Some(seed)) if seed.len() == self.model.dof() => seed.to_vec(),
                 _ => self.model.random_configuration(&mut rng),
             };

@@ -36,8 +36,9 @@ pub struct Validation {
     /// IK solutions per goal.
     pub solutions: Vec<crate::ik::GoalSolutions>,
     /// Per goal, why no configuration can reach it, where the model and world prove it (see
-    /// [`crate::ik::unreachable_proof`]); `None` for goals IK reached or could not prove. Read
-    /// through [`Validation::proof`], which adds IK's own proofs.
+    /// [`crate::ik::unreachable_proof`], and [`crate::ik::last_joints_beyond_reach`] where IK
+    /// has no proof of its own); `None` for goals IK reached or could not prove. Read through
+    /// [`Validation::proof`], which adds IK's own proofs.
     pub proofs: Vec<Option<String>>,
     /// The trajectory through the goals; `None` in a reach-only run.
     pub trajectory: Option<crate::plan::Trajectory>,
