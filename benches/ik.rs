@@ -7,7 +7,8 @@
 //! Issue 22: every solution of a pose, bare (`all-solutions-bare`: the general 6R elimination on
 //! `free-offset-6dof`, target median <= 20 us; the spherical wrist on `abb-irb-2600` and
 //! `economic-spherical-wrist`, target <= 3 us) and polished, deduplicated and judged
-//! (`ik-all-solutions`).
+//! (`ik-all-solutions`); the same bare on catalog arms (`all-solutions-bare/modular6/...`: the
+//! elimination keeping joints 2 to 4, and three parallel axes).
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -98,6 +99,27 @@ fn ik(c: &mut Criterion) {
     }
 }
 
+/// The all-solutions methods of modular catalog arms, bare: the elimination keeping joints 2 to
+/// 4 (catalog index 12 019) and three parallel axes (index 370, `D-D-Il-Ll-Ll-D`).
+fn catalog(c: &mut Criterion) {
+    use proving_ground::ik::solvers::AllSolutions;
+    use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+    for index in [12_019, 370] {
+        let entry = catalog_entry(&modular6_slots(index));
+        let model = entry.load().model;
+        let Some((method, _)) = AllSolutions::of(&model) else { continue };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let poses: Vec<nalgebra::Isometry3<f64>> = (0..256).map(|_| model.tool_pose(&model.random_configuration(&mut rng))).collect();
+        let mut i = 0;
+        c.bench_function(&format!("all-solutions-bare/{}", entry.id), |b| {
+            b.iter(|| {
+                i = (i + 1) % poses.len();
+                black_box(method.solve(black_box(&poses[i])).configurations.len())
+            })
+        });
+    }
+}
+
 /// Every goal of a scenario, collision-aware, with exact verification of each solution; the
 /// scenarios come from the same generators as the committed files.
 fn scenarios(c: &mut Criterion) {
@@ -131,5 +153,5 @@ fn scenarios(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, ik, scenarios);
+criterion_group!(benches, ik, catalog, scenarios);
 criterion_main!(benches);

@@ -92,3 +92,22 @@ fn the_last_joints_origin_beyond_reach_proves_a_goal_the_tool_reach_does_not() {
     let proof = beyond_reach(&model, goal).expect("proven out of reach");
     assert!(proof.contains("joint 6's origin"), "{proof}");
 }
+
+/// The circles: on catalog arms and the first cluttered task, some goals are proven only from
+/// joint 2's circle about joint 1's axis, or from the circle of joint 5's origin about joint 6's
+/// axis (each also checked never to be claimed for nearby reachable poses above).
+#[test]
+fn the_circles_prove_goals_the_points_do_not() {
+    let scenario = proving_ground::scenario::load(&common::repo().join("scenarios/cluttered/task-00.json")).expect("the task loads");
+    let (mut second, mut before_last) = (0, 0);
+    for index in (0..15_625).step_by(31) {
+        let model = catalog_entry(&modular6_slots(index)).load().model.placed(&scenario.world_from_base);
+        for goal in &scenario.goals {
+            let Some(proof) = beyond_reach(&model, goal) else { continue };
+            second += usize::from(proof.contains("joint 2's origin"));
+            before_last += usize::from(proof.contains("joint 5's origin"));
+        }
+    }
+    println!("proofs from joint 2's circle: {second}, from joint 5's circle: {before_last}");
+    assert!(second > 0 && before_last > 0);
+}

@@ -4,6 +4,7 @@
 //! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
 pub mod analytic;
+mod bilinear;
 mod branches;
 mod certify;
 mod dls;
@@ -11,6 +12,7 @@ mod error;
 pub mod general;
 mod lines;
 mod loss;
+pub mod parallel;
 mod reach;
 mod refine;
 mod selfmotion;

@@ -9,8 +9,10 @@
 //! - the last joints beyond reach: a `pose` goal fixes where the last joint's origin is (and
 //!   puts the one before on a circle about the last axis; a `z_symmetric` goal puts the last
 //!   joint's origin on a circle about tool z), each within 1 mm plus its lever times 1 degree.
-//!   Further from joint 1's origin than the offsets up to that joint reach, the goal is out of
-//!   reach: the tool offset no longer counts, nor does the last offset for the circle;
+//!   Joint 1's origin is fixed and joint 2's turns on a circle about joint 1's axis. Further
+//!   apart than the joint offsets between the two reach, the goal is out of reach: the tool
+//!   offset no longer counts, nor do the offsets outside the pair (circle to circle, a lower
+//!   bound from 64 samples less the arc between them);
 //! - inside an obstacle: when the tool point lies on the last link's geometry (a DH tube ends at
 //!   the tool frame), a goal more than 1 mm inside a checked obstacle or below the floor puts
 //!   that link into it at every configuration that reaches the goal within 1 mm.
@@ -75,7 +77,7 @@ pub fn unreachable_proof(model: &Model, world: &CollisionWorld, goal: &Goal) -> 
 pub fn beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
     let first = model.joints.first()?;
     let origin = (model.world_from_base * first.parent_from_joint).translation.vector;
-    tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_proof(model, goal, &origin))
+    tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_proof(model, goal))
 }
 
 /// The beyond-reach proof of the tool point.
@@ -92,77 +94,165 @@ fn tool_beyond_reach(model: &Model, goal: &Goal, origin: &Vector3<f64>) -> Optio
 /// The last-joints proof (see the module doc), for a revolute arm of two joints or more: the
 /// pipeline's fallback where IK's own methods prove nothing (theirs say more where they do).
 pub fn last_joints_beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
-    let first = model.joints.first()?;
-    let origin = (model.world_from_base * first.parent_from_joint).translation.vector;
-    last_joints_proof(model, goal, &origin)
+    last_joints_proof(model, goal)
 }
 
-/// The distance from `point` to the nearest point of the circle about the line through
-/// `center` along unit `normal`, of `radius`.
-fn to_circle(point: &Vector3<f64>, center: &Vector3<f64>, normal: &Vector3<f64>, radius: f64) -> f64 {
-    let d = point - center;
-    let along = normal.dot(&d);
-    let across = (d - normal * along).norm();
-    along.hypot(across - radius)
+/// A circle (a point where `radius` is 0): where a joint's origin can be as one joint turns.
+#[derive(Debug, Clone, Copy)]
+struct Circle {
+    center: Vector3<f64>,
+    normal: Vector3<f64>,
+    radius: f64,
 }
 
-fn last_joints_proof(model: &Model, goal: &Goal, origin: &Vector3<f64>) -> Option<String> {
+/// Samples along a circle when bounding its distance from another.
+const CIRCLE_SAMPLES: usize = 64;
+
+impl Circle {
+    fn point(center: Vector3<f64>) -> Circle {
+        Circle {
+            center,
+            normal: Vector3::z(),
+            radius: 0.0,
+        }
+    }
+
+    /// `point` turned about the line through `on` along unit `axis`.
+    fn turning(point: &Vector3<f64>, on: &Vector3<f64>, axis: &Vector3<f64>) -> Circle {
+        let center = on + axis * axis.dot(&(point - on));
+        Circle {
+            center,
+            normal: *axis,
+            radius: (point - center).norm(),
+        }
+    }
+
+    /// The distance from `point` to the nearest point of the circle.
+    fn distance_to(&self, point: &Vector3<f64>) -> f64 {
+        let d = point - self.center;
+        let along = self.normal.dot(&d);
+        let across = (d - self.normal * along).norm();
+        along.hypot(across - self.radius)
+    }
+
+    /// A lower bound on the distance between the two circles: `other`'s distance from samples
+    /// of this one, less the arc to the nearest sample (moving along an arc changes a distance
+    /// by no more than its length).
+    fn lower_distance(&self, other: &Circle) -> f64 {
+        if self.radius == 0.0 {
+            return other.distance_to(&self.center);
+        }
+        if other.radius == 0.0 {
+            return self.distance_to(&other.center);
+        }
+        let helper = if self.normal.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let e1 = self.normal.cross(&helper).normalize();
+        let e2 = self.normal.cross(&e1);
+        let nearest = (0..CIRCLE_SAMPLES)
+            .map(|k| {
+                let angle = 2.0 * std::f64::consts::PI * k as f64 / CIRCLE_SAMPLES as f64;
+                let point = self.center + (e1 * angle.cos() + e2 * angle.sin()) * self.radius;
+                other.distance_to(&point)
+            })
+            .fold(f64::INFINITY, f64::min);
+        nearest - self.radius * std::f64::consts::PI / CIRCLE_SAMPLES as f64
+    }
+}
+
+/// Where a `pose` or `z_symmetric` goal puts the last joints' origins (see the module doc):
+/// `(joint index, where, slack, words)`, the slack 1 mm plus the lever times 1 degree.
+fn tool_side(model: &Model, goal: &Goal) -> Vec<(usize, Circle, f64, String)> {
+    let n = model.dof();
+    let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
+    // The last joint's origin in tool coordinates: the last link's origin.
+    let tool_from_last = model.last_from_tool.inverse();
+    let last_in_tool = tool_from_last.translation.vector;
+    let slack = |lever: f64| REACHED_POSITION_M + lever * REACHED_ORIENTATION_RAD;
+    let mut out = Vec::with_capacity(2);
+    if goal.tolerance == Tolerance::ZSymmetric {
+        // Any turn about tool z: a circle about the goal's z axis.
+        let z = goal.rotation * Vector3::z();
+        let at = (pose * Point3::from(last_in_tool)).coords;
+        out.push((
+            n - 1,
+            Circle::turning(&at, &goal.position, &z),
+            slack(last_in_tool.norm()),
+            format!("joint {n}'s origin, on a circle about tool z,"),
+        ));
+        return out;
+    }
+    out.push((
+        n - 1,
+        Circle::point((pose * Point3::from(last_in_tool)).coords),
+        slack(last_in_tool.norm()),
+        format!("joint {n}'s origin"),
+    ));
+    if n >= 3 {
+        // The origin of joint n - 1 in the last link's frame turns about joint n's axis.
+        let last = &model.joints[n - 1];
+        let before_in_last = -(last.parent_from_joint.rotation.inverse() * last.parent_from_joint.translation.vector);
+        let axis = last.axis.into_inner();
+        let local = Circle::turning(&before_in_last, &Vector3::zeros(), &axis);
+        let last_to_world = pose * tool_from_last;
+        let lever = (tool_from_last * Point3::from(local.center)).coords.norm() + local.radius;
+        out.push((
+            n - 2,
+            Circle {
+                center: (last_to_world * Point3::from(local.center)).coords,
+                normal: last_to_world.rotation * axis,
+                radius: local.radius,
+            },
+            slack(lever),
+            format!("joint {}'s origin, on a circle about joint {n}'s axis,", n - 1),
+        ));
+    }
+    out
+}
+
+/// Where the first joints' origins are whatever the configuration: joint 1's (fixed) and
+/// joint 2's (on a circle about joint 1's axis), as `(joint index, where, words)`.
+fn base_side(model: &Model) -> Vec<(usize, Circle, &'static str)> {
+    let mut ws = model.workspace();
+    model.forward(&vec![0.0; model.dof()], &mut ws);
+    let first = ws.link_in_world[1];
+    let origin = first.translation.vector;
+    let axis = (first.rotation * model.joints[0].axis.into_inner()).normalize();
+    let mut out = vec![(0, Circle::point(origin), "joint 1's origin")];
+    if model.dof() >= 3 {
+        out.push((
+            1,
+            Circle::turning(&ws.link_in_world[2].translation.vector, &origin, &axis),
+            "joint 2's origin (on a circle about joint 1's axis)",
+        ));
+    }
+    out
+}
+
+/// The last-joints proof (see the module doc), for a revolute arm of two joints or more: each
+/// place the goal puts a last joint's origin against each place of a first joint's origin, the
+/// offsets between them the most they can be apart.
+fn last_joints_proof(model: &Model, goal: &Goal) -> Option<String> {
     let n = model.dof();
     let revolute = model.joints.iter().all(|j| j.kind != JointKind::Prismatic);
     if n < 2 || !revolute || goal.tolerance == Tolerance::Position {
         return None;
     }
     let offsets: Vec<f64> = model.joints.iter().map(|j| j.parent_from_joint.translation.vector.norm()).collect();
-    let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-    // The last joint's origin in tool coordinates: the last link's origin.
-    let tool_from_last = model.last_from_tool.inverse();
-    let last_in_tool = tool_from_last.translation.vector;
-    let reach: f64 = offsets[1..].iter().sum();
-    let (nearest, lever, what) = match goal.tolerance {
-        Tolerance::Pose => (
-            ((pose * Point3::from(last_in_tool)).coords - origin).norm(),
-            last_in_tool.norm(),
-            "is",
-        ),
-        _ => {
-            // Any turn about tool z: a circle about the goal's z axis.
-            let z = goal.rotation * Vector3::z();
-            let center = goal.position + z * last_in_tool.z;
-            (
-                to_circle(origin, &center, &z, last_in_tool.xy().norm()),
-                last_in_tool.norm(),
-                "comes no closer than",
-            )
+    let bases = base_side(model);
+    for (k, far, slack, far_words) in tool_side(model, goal) {
+        for (i, near, near_words) in &bases {
+            if *i >= k {
+                continue;
+            }
+            let reach: f64 = offsets[i + 1..=k].iter().sum();
+            let apart = far.lower_distance(near);
+            if apart - reach >= slack {
+                return Some(format!(
+                    "with the tool within 1 mm and 1 deg of the goal, {far_words} is at least {apart:.3} m from {near_words} (to within {:.1} mm); the joint offsets between them reach {reach:.3} m",
+                    slack * 1e3
+                ));
+            }
         }
-    };
-    let slack = REACHED_POSITION_M + lever * REACHED_ORIENTATION_RAD;
-    if nearest - reach >= slack {
-        return Some(format!(
-            "with the tool within 1 mm and 1 deg of the goal, joint {n}'s origin {what} {nearest:.3} m from joint 1's origin (to within {:.1} mm); the joint offsets up to it reach {reach:.3} m",
-            slack * 1e3
-        ));
     }
-    if goal.tolerance != Tolerance::Pose || n < 3 {
-        return None;
-    }
-    // The origin of joint n - 1 in the last link's frame turns about joint n's axis.
-    let last = &model.joints[n - 1];
-    let before_in_last = -(last.parent_from_joint.rotation.inverse() * last.parent_from_joint.translation.vector);
-    let axis = last.axis.into_inner();
-    let center = axis * axis.dot(&before_in_last);
-    let radius = (before_in_last - center).norm();
-    let last_to_world = pose * tool_from_last;
-    let center_world = (last_to_world * Point3::from(center)).coords;
-    let normal_world = last_to_world.rotation * axis;
-    let nearest = to_circle(origin, &center_world, &normal_world, radius);
-    let lever = (tool_from_last * Point3::from(center)).coords.norm() + radius;
-    let slack = REACHED_POSITION_M + lever * REACHED_ORIENTATION_RAD;
-    let reach: f64 = offsets[1..n - 1].iter().sum();
-    (nearest - reach >= slack).then(|| {
-        format!(
-            "with the tool within 1 mm and 1 deg of the goal, joint {}'s origin is on a circle about joint {n}'s axis that comes no closer than {nearest:.3} m to joint 1's origin (to within {:.1} mm); the joint offsets up to it reach {reach:.3} m",
-            n - 1,
-            slack * 1e3
-        )
-    })
+    None
 }

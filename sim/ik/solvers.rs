@@ -3,10 +3,12 @@
 //! UR-type arms have their own closed form ([`super::analytic`]). Otherwise, for a 6R arm on
 //! `pose` goals or a 5R arm on `z_symmetric` goals (a virtual sixth joint about tool z): Pieper's
 //! decomposition where three consecutive axes meet at either end ([`super::wrist`]), else the
-//! general elimination ([`super::general`]) where it holds for the geometry.
+//! general elimination ([`super::general`]) where it holds for the geometry, else three
+//! consecutive parallel axes ([`super::parallel`]).
 
 use super::general::General6R;
 use super::lines::Arm;
+use super::parallel::ParallelTriple;
 use super::wrist::SphericalWrist;
 use crate::model::Model;
 use crate::scenario::Tolerance;
@@ -24,6 +26,8 @@ pub enum AllSolutions {
     /// Any other 6R geometry the elimination holds for (boxed: its coefficient tables are
     /// large).
     General(Box<General6R>),
+    /// Three consecutive parallel axes where the elimination degenerates.
+    Parallel(Box<ParallelTriple>),
 }
 
 /// Every solution of one pose, unpolished, each with six angles (the sixth is the virtual
@@ -55,7 +59,10 @@ impl AllSolutions {
         if let Some(wrist) = SphericalWrist::of_arm(arm.clone()) {
             return Some(AllSolutions::Wrist(Box::new(wrist)));
         }
-        General6R::of_arm(arm).map(|general| AllSolutions::General(Box::new(general)))
+        if let Some(general) = General6R::of_arm(arm.clone()) {
+            return Some(AllSolutions::General(Box::new(general)));
+        }
+        ParallelTriple::of_arm(arm).map(|parallel| AllSolutions::Parallel(Box::new(parallel)))
     }
 
     /// The method's name, for proofs.
@@ -63,6 +70,7 @@ impl AllSolutions {
         match self {
             AllSolutions::Wrist(_) => "all-solutions IK (spherical wrist)",
             AllSolutions::General(_) => "all-solutions IK (general 6R)",
+            AllSolutions::Parallel(_) => "all-solutions IK (three parallel axes)",
         }
     }
 
@@ -88,7 +96,7 @@ impl AllSolutions {
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
         match self {
             AllSolutions::Wrist(wrist) => wrist.out_of_reach_over_turn(goal, turn),
-            AllSolutions::General(_) => None,
+            AllSolutions::General(_) | AllSolutions::Parallel(_) => None,
         }
     }
 
@@ -104,6 +112,14 @@ impl AllSolutions {
             }
             AllSolutions::General(general) => {
                 let found = general.solve(goal);
+                Solutions {
+                    configurations: found.configurations,
+                    resolved: found.resolved,
+                    out_of_reach: None,
+                }
+            }
+            AllSolutions::Parallel(parallel) => {
+                let found = parallel.solve(goal);
                 Solutions {
                     configurations: found.configurations,
                     resolved: found.resolved,

@@ -457,7 +457,7 @@ fn invariants(relation: Pair, a: &super::lines::Line) -> (Invariant<'_>, Invaria
 
 /// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`; `None` when `f` is
 /// constant and equal to it (every angle).
-fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<Vec<f64>> {
+pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<Vec<f64>> {
     let samples = NODES.map(&f);
     let inverse = super::lines::node_inverse();
     let [a, b, c] = [0, 1, 2].map(|row| (0..3).map(|k| inverse[(row, k)] * samples[k]).sum::<f64>());
