@@ -8,7 +8,7 @@
 //! along `u`; with the lone joint's turn (joint 1, resp. 6) carrying one direction onto another,
 //! both conditions become two equations in the pair of joints left (5 and 6, resp. 4 and 5),
 //! each a combination of `{1, sin, cos} x {1, sin, cos}` (read off exactly by interpolation):
-//! their common roots ([`super::bilinear`]), the lone joint from the direction it must carry,
+//! their common roots (an 8 x 8 resultant, `ik::bilinear`), the lone joint from the direction it must carry,
 //! then the planar three joints (two ways at most) from `P`.
 
 use super::bilinear::common_roots;
