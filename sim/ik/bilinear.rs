@@ -7,15 +7,17 @@
 use super::lines::{eigenvalues, half_angle};
 use nalgebra::{Matrix4, SMatrix};
 
-/// Offsets of the half-angle tangents (rad): a root at `offset + pi` would be at infinity.
-const OFFSET_A: f64 = 0.641_337_9;
-const OFFSETS_B: [f64; 4] = [-1.071_266_3, 0.412_904_7, 2.315_557_1, -2.734_018_9];
-/// Largest imaginary part (relative) of an eigenvalue still tried as a real root.
+/// Offsets of the half-angle tangents (rad): a root at `offset + pi` would be at infinity, so
+/// they are angles no design chooses on purpose; `b` is retried at the others.
+const OFFSET_A: f64 = 0.583_117_2;
+pub(crate) const OFFSETS_B: [f64; 4] = [-1.193_406_1, 0.377_212_9, 2.441_730_5, -2.806_102_3];
+/// Largest imaginary part (relative) of an eigenvalue still tried as a real root: a double
+/// root splits into a pair about `sqrt(eps)` off the real line.
 const NEAR_REAL: f64 = 1e-4;
 
 /// The real common roots `(a, b)` of `equations` (coefficients indexed `fa * 3 + fb`), and
-/// whether each root in `b` gave its `a` uniquely (false where both quadratics in `x_a`
-/// coincide and have no real root, or are degenerate); `None` when the resultant's leading
+/// whether every root in `b` gave its `a` (false where the quadratics in `x_a` vanish for every
+/// `x_a`, a continuum); `None` when the resultant's leading
 /// matrix is singular at every offset tried (the equations share a factor, or are degenerate).
 pub(crate) fn common_roots(equations: &[[f64; 9]; 2]) -> Option<(Vec<(f64, f64)>, bool)> {
     let (offset_b, roots, [c, b, a]) = roots(equations)?;
@@ -35,18 +37,15 @@ pub(crate) fn common_roots(equations: &[[f64; 9]; 2]) -> Option<(Vec<(f64, f64)>
             continue;
         }
         // Both quadratics share both roots: solve the larger.
-        let (qa, qb, qc) = if a1.abs() + b1.abs() + c1.abs() >= a2.abs() + b2.abs() + c2.abs() {
-            (a1, b1, c1)
-        } else {
-            (a2, b2, c2)
-        };
-        let size = qa.abs() + qb.abs() + qc.abs();
-        if qa.abs() <= 1e-12 * size {
-            if qb.abs() <= 1e-12 * size {
+        let row = if matrix.row(0).norm() >= matrix.row(2).norm() { 0 } else { 2 };
+        let (qa, qb, qc) = (matrix[(row, 1)], matrix[(row, 2)], matrix[(row, 3)]);
+        if qa.abs() < 1e-14 {
+            if qb.abs() > 1e-14 {
+                out.push((OFFSET_A + 2.0 * (-qc / qb).atan(), t_b));
+            } else if qc.abs() <= 1e-14 {
+                // Every x_a: a continuum.
                 resolved = false;
-                continue;
             }
-            out.push((OFFSET_A + 2.0 * (-qc / qb).atan(), t_b));
             continue;
         }
         let disc = qb * qb - 4.0 * qa * qc;
@@ -92,7 +91,7 @@ fn roots(equations: &[[f64; 9]; 2]) -> Option<(f64, Vec<f64>, [Matrix4<f64>; 3])
 
 /// The Sylvester matrix's coefficients of `x_b^0, x_b^1, x_b^2`: each quadratic in `x_a` times
 /// `x_a` and times 1, against `(x_a^3, x_a^2, x_a, 1)`.
-fn resultant(equations: &[[f64; 9]; 2], offset_b: f64) -> [Matrix4<f64>; 3] {
+pub(crate) fn resultant(equations: &[[f64; 9]; 2], offset_b: f64) -> [Matrix4<f64>; 3] {
     let (ha, hb) = (half_angle(OFFSET_A), half_angle(offset_b));
     // poly[equation][power of x_a][power of x_b]
     let mut poly = [[[0.0; 3]; 3]; 2];

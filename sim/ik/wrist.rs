@@ -12,9 +12,10 @@
 //! goal direction (the two-rotation subproblem, up to two ways, for any twist between the wrist
 //! axes); joint 6 is the rest.
 
-use super::lines::{angle_about, eigenvalues, half_angle, interpolate2, Arm, Chain, NODES};
+use super::bilinear;
+use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
 use crate::model::Model;
-use nalgebra::{Complex, Isometry3, Matrix3, Matrix4, SMatrix, Vector3};
+use nalgebra::{Isometry3, Matrix3, Vector3};
 use std::f64::consts::PI;
 
 /// Lines closer than this (scaled lengths) meet.
@@ -23,11 +24,6 @@ const MEET: f64 = 1e-9;
 const PARALLEL: f64 = 1e-6;
 /// A point closer than this (scaled) to an axis leaves that joint's angle free: a continuum.
 const ON_AXIS: f64 = 1e-9;
-/// Largest imaginary part (relative) of a root still tried as real (see `general`).
-const NEAR_REAL: f64 = 1e-4;
-/// Offsets of the half-angle tangents of joints 2 and 3 (rad), and retries for joint 3.
-const OFFSET2: f64 = 0.583_117_2;
-const OFFSETS3: [f64; 4] = [-1.193_406_1, 0.377_212_9, 2.441_730_5, -2.806_102_3];
 
 /// Every solution of one pose, unpolished.
 #[derive(Debug, Clone, Default)]
@@ -117,7 +113,7 @@ impl SphericalWrist {
         let chain = self.arm.chain(self.reversed);
         let q = [0.7, -0.9, 1.2, 0.4, -1.1, 0.3];
         let (rotation, translation) = chain.forward(&q);
-        let [s0, s1, s2] = self.resultant(&rotation, &translation, OFFSETS3[0]);
+        let [s0, s1, s2] = bilinear::resultant(&self.equations(&rotation, &translation), bilinear::OFFSETS_B[0]);
         let probe = s0 + s1 * 0.41 + s2 * (0.41 * 0.41);
         let sigma = probe.svd(false, false).singular_values;
         sigma.min() > 1e-10 * sigma.max()
@@ -200,43 +196,18 @@ impl SphericalWrist {
         ))
     }
 
-    /// The resultant's matrix coefficients of `x3^0, x3^1, x3^2` at a pose.
-    fn resultant(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, offset3: f64) -> [Matrix4<f64>; 3] {
+    /// The two positioning equations in joints 2 and 3 at a pose (`[{1, s2, c2} x {1, s3,
+    /// c3}]`): the wrist centre's squared distance from axis 1's point and height along it, less
+    /// the target's.
+    fn equations(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> [[f64; 9]; 2] {
         let chain = self.arm.chain(self.reversed);
         let target = self.target(chain, rotation, translation);
         let axis1 = &chain.lines[0];
         let relative = target - axis1.point;
         let goals = [relative.norm_squared(), axis1.axis.dot(&relative)];
-        let (h2, h3) = (half_angle(OFFSET2), half_angle(offset3));
-        // poly[equation][power of x2][power of x3]
-        let mut poly = [[[0.0; 3]; 3]; 2];
-        for (e, coefficients) in self.position.iter().enumerate() {
-            for f2 in 0..3 {
-                for f3 in 0..3 {
-                    let mut c = coefficients[f2 * 3 + f3];
-                    if f2 == 0 && f3 == 0 {
-                        c -= goals[e];
-                    }
-                    for p2 in 0..3 {
-                        for p3 in 0..3 {
-                            poly[e][p2][p3] += c * h2[(f2, p2)] * h3[(f3, p3)];
-                        }
-                    }
-                }
-            }
-        }
-        // Sylvester rows: each quadratic in x2 times x2 and times 1, against (x2^3, x2^2, x2, 1).
-        let mut out = [Matrix4::zeros(); 3];
-        for (e, equation) in poly.iter().enumerate() {
-            for shift in 0..2 {
-                let row = 2 * e + shift;
-                for (p2, by3) in equation.iter().enumerate() {
-                    let column = 3 - (p2 + shift);
-                    for (p3, value) in by3.iter().enumerate() {
-                        out[p3][(row, column)] = *value;
-                    }
-                }
-            }
+        let mut out = self.position;
+        for (equation, goal) in out.iter_mut().zip(goals) {
+            equation[0] -= goal;
         }
         out
     }
@@ -300,8 +271,9 @@ impl SphericalWrist {
         self.finish(chain, rotation, positions, out)
     }
 
-    /// Joints 1 to 3 from the resultant's roots in `x3`, and whether each root gave them (not
-    /// where the wrist centre lies on axis 1, joint 1 free); `None` where no offset is regular.
+    /// Joints 1 to 3 from the resultant's common roots in joints 2 and 3, and whether each gave
+    /// them (not where the wrist centre lies on axis 1, joint 1 free); `None` where no offset is
+    /// regular.
     fn resultant_positions(
         &self,
         chain: &Chain,
@@ -309,35 +281,17 @@ impl SphericalWrist {
         rotation: &Matrix3<f64>,
         translation: &Vector3<f64>,
     ) -> Option<(Vec<[f64; 3]>, bool)> {
-        let (offset3, roots, [s0, s1, s2]) = self.roots(rotation, translation)?;
+        let (roots, mut resolved) = bilinear::common_roots(&self.equations(rotation, translation))?;
         let [l1, l2, l3, ..] = &chain.lines;
         let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
-        let mut resolved = true;
-        for x3 in roots {
-            let matrix = s0 + s1 * x3 + s2 * (x3 * x3);
-            let t3 = offset3 + 2.0 * x3.atan();
-            // Rows 0 and 2: (0, a, b, c) of the two quadratics a x2^2 + b x2 + c at this x3.
-            let (a1, b1, c1) = (matrix[(0, 1)], matrix[(0, 2)], matrix[(0, 3)]);
-            let (a2, b2, c2) = (matrix[(2, 1)], matrix[(2, 2)], matrix[(2, 3)]);
-            let denominator = b1 * a2 - b2 * a1;
-            let scale = (a1.abs() + b1.abs() + c1.abs()) * (a2.abs() + b2.abs() + c2.abs());
-            let t2s: Vec<f64> = if denominator.abs() <= 1e-9 * scale {
-                // Both quadratics share both roots in x2: solve one of them.
-                shared_roots(&matrix)
-            } else {
-                // Their common root: a2 (first) - a1 (second) removes x2^2.
-                let x2 = (c2 * a1 - c1 * a2) / denominator;
-                vec![OFFSET2 + 2.0 * x2.atan()]
+        for (t2, t3) in roots {
+            let point = l2.turn(t2, &l3.turn(t3, &self.centre));
+            let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
+                // The wrist centre on axis 1: joint 1 is free.
+                resolved = false;
+                continue;
             };
-            for t2 in t2s {
-                let point = l2.turn(t2, &l3.turn(t3, &self.centre));
-                let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
-                    // The wrist centre on axis 1: joint 1 is free.
-                    resolved = false;
-                    continue;
-                };
-                positions.push([t1, t2, t3]);
-            }
+            positions.push([t1, t2, t3]);
         }
         Some((positions, resolved))
     }
@@ -376,54 +330,6 @@ impl SphericalWrist {
         }
         out
     }
-
-    /// The offset used and the near-real roots in `x3`; `None` when the leading matrix is
-    /// singular at every offset tried.
-    fn roots(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Option<(f64, Vec<f64>, [Matrix4<f64>; 3])> {
-        for offset3 in OFFSETS3 {
-            let [c, b, a] = self.resultant(rotation, translation, offset3);
-            let Some(inverse) = a.try_inverse() else { continue };
-            let condition = inverse.norm() * a.norm();
-            if condition.is_nan() || condition >= 1e8 {
-                continue;
-            }
-            let (ac, ab) = (inverse * c, inverse * b);
-            let mut companion = SMatrix::<f64, 8, 8>::zeros();
-            companion.fixed_view_mut::<4, 4>(0, 4).fill_with_identity();
-            companion.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-ac));
-            companion.fixed_view_mut::<4, 4>(4, 4).copy_from(&(-ab));
-            let Some(eigenvalues) = eigenvalues(&companion) else { continue };
-            let roots = near_real(eigenvalues.iter());
-            // A root near infinity is imprecise: another offset moves it.
-            if roots.iter().any(|x| x.abs() > 50.0) && offset3 != OFFSETS3[OFFSETS3.len() - 1] {
-                continue;
-            }
-            return Some((offset3, roots, [c, b, a]));
-        }
-        None
-    }
-}
-
-/// The real roots in `x2` (as angles) of the larger of the two quadratics in a resultant matrix
-/// at some `x3`, when both share their roots.
-fn shared_roots(m: &Matrix4<f64>) -> Vec<f64> {
-    // Rows 0 and 2: (0, a, b, c) of a x2^2 + b x2 + c, one per equation: take the larger.
-    let row = if m.row(0).norm() >= m.row(2).norm() { 0 } else { 2 };
-    let (a, b, c) = (m[(row, 1)], m[(row, 2)], m[(row, 3)]);
-    let mut out = Vec::new();
-    if a.abs() < 1e-14 {
-        if b.abs() > 1e-14 {
-            out.push(-c / b);
-        }
-    } else {
-        let disc = b * b - 4.0 * a * c;
-        if disc >= 0.0 {
-            let root = disc.sqrt();
-            out.push((-b + root) / (2.0 * a));
-            out.push((-b - root) / (2.0 * a));
-        }
-    }
-    out.into_iter().map(|x2| OFFSET2 + 2.0 * f64::atan(x2)).collect()
 }
 
 /// How two consecutive axes relate, when they meet or are parallel.
@@ -518,14 +424,6 @@ fn lower_bound_above(f: &dyn Fn(f64, f64) -> f64, lipschitz: [f64; 2], floor: f6
         }
     }
     Some(bound)
-}
-
-/// The real parts of the eigenvalues within [`NEAR_REAL`] of the real line.
-fn near_real<'a>(values: impl Iterator<Item = &'a Complex<f64>>) -> Vec<f64> {
-    values
-        .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
-        .map(|z| z.re)
-        .collect()
 }
 
 /// Where the chain's last three axes meet, when they do and no two are parallel.
