@@ -175,7 +175,7 @@ fn spherical_wrist_designs() {
 fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
     use proving_ground::ik::solvers::AllSolutions;
     use proving_ground::ik::{Ik, IkOptions};
-    use proving_ground::scenario::{Goal, Tolerance};
+    use proving_ground::scenario::Tolerance;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     let mut models: Vec<Model> = (0..3).map(|i| random_free_design(&mut rng, 100 + i)).collect();
     // The wrist's resultant, and its closed forms for a shoulder and an elbow whose axes meet
@@ -207,12 +207,7 @@ fn a_dense_numeric_search_finds_nothing_the_all_solutions_methods_miss() {
         for k in 0..4 {
             let q = model.random_configuration(&mut rng);
             let pose = model.tool_pose(&q);
-            let goal = Goal {
-                name: format!("g{k}"),
-                position: pose.translation.vector,
-                rotation: pose.rotation,
-                tolerance: Tolerance::Pose,
-            };
+            let goal = common::pose_goal(format!("g{k}"), &pose, Tolerance::Pose);
             let all = method.solve(&pose);
             assert!(all.resolved, "{}: pose {k} unresolved", model.name);
             let found = numeric.solve(&goal, k, None);
@@ -427,7 +422,7 @@ fn solutions_born_within_the_tolerance_are_no_proof() {
 fn modular_catalog_arms_every_pose_its_configuration() {
     use proving_ground::ik::solvers::AllSolutions;
     use proving_ground::ik::{Ik, IkOptions};
-    use proving_ground::scenario::{Goal, Tolerance};
+    use proving_ground::scenario::Tolerance;
     use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
     let mut variants = std::collections::BTreeMap::new();
@@ -447,12 +442,7 @@ fn modular_catalog_arms_every_pose_its_configuration() {
         for k in 0..5 {
             let q = model.random_configuration(&mut rng);
             let pose = model.tool_pose(&q);
-            let goal = Goal {
-                name: format!("g{k}"),
-                position: pose.translation.vector,
-                rotation: pose.rotation,
-                tolerance: Tolerance::Pose,
-            };
+            let goal = common::pose_goal(format!("g{k}"), &pose, Tolerance::Pose);
             poses += 1;
             if !method.solve(&pose).resolved {
                 // Left to the numeric search, never claimed complete.

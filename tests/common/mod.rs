@@ -182,3 +182,17 @@ pub fn u_mesh(unit: f64) -> proving_ground::model::TriMesh {
         triangles,
     }
 }
+
+/// A goal at `pose` (FK of some configuration, usually) with `tolerance`.
+pub fn pose_goal(
+    name: String,
+    pose: &nalgebra::Isometry3<f64>,
+    tolerance: proving_ground::scenario::Tolerance,
+) -> proving_ground::scenario::Goal {
+    proving_ground::scenario::Goal {
+        name,
+        position: pose.translation.vector,
+        rotation: pose.rotation,
+        tolerance,
+    }
+}
