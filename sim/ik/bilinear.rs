@@ -4,16 +4,13 @@
 //! companion eigenproblem. Each real root in `x_b` gives `x_a` from the two quadratics' common
 //! root.
 
-use super::lines::{eigenvalues, half_angle};
-use nalgebra::{Matrix4, SMatrix};
+use super::lines::{half_angle, quadratic_roots};
+use nalgebra::Matrix4;
 
 /// Offsets of the half-angle tangents (rad): a root at `offset + pi` would be at infinity, so
 /// they are angles no design chooses on purpose; `b` is retried at the others.
 const OFFSET_A: f64 = 0.583_117_2;
 pub(crate) const OFFSETS_B: [f64; 4] = [-1.193_406_1, 0.377_212_9, 2.441_730_5, -2.806_102_3];
-/// Largest imaginary part (relative) of an eigenvalue still tried as a real root: a double
-/// root splits into a pair about `sqrt(eps)` off the real line.
-const NEAR_REAL: f64 = 1e-4;
 
 /// The real common roots `(a, b)` of `equations` (coefficients indexed `fa * 3 + fb`), and
 /// whether every root in `b` gave its `a` (false where the quadratics in `x_a` vanish for every
@@ -64,22 +61,7 @@ pub(crate) fn common_roots(equations: &[[f64; 9]; 2]) -> Option<(Vec<(f64, f64)>
 fn roots(equations: &[[f64; 9]; 2]) -> Option<(f64, Vec<f64>, [Matrix4<f64>; 3])> {
     for offset_b in OFFSETS_B {
         let [c, b, a] = resultant(equations, offset_b);
-        let Some(inverse) = a.try_inverse() else { continue };
-        let condition = inverse.norm() * a.norm();
-        if condition.is_nan() || condition >= 1e8 {
-            continue;
-        }
-        let (ac, ab) = (inverse * c, inverse * b);
-        let mut companion = SMatrix::<f64, 8, 8>::zeros();
-        companion.fixed_view_mut::<4, 4>(0, 4).fill_with_identity();
-        companion.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-ac));
-        companion.fixed_view_mut::<4, 4>(4, 4).copy_from(&(-ab));
-        let Some(values) = eigenvalues(&companion) else { continue };
-        let roots: Vec<f64> = values
-            .iter()
-            .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
-            .map(|z| z.re)
-            .collect();
+        let Some(roots) = quadratic_roots(&c, &b, &a) else { continue };
         // A root near infinity is imprecise: another offset moves it.
         if roots.iter().any(|x| x.abs() > 50.0) && offset_b != OFFSETS_B[OFFSETS_B.len() - 1] {
             continue;

@@ -21,7 +21,7 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use super::lines::{eigenvalues, half_angle, interpolate2, node_inverse, Arm, Chain, NODES};
+use super::lines::{half_angle, interpolate2, node_inverse, quadratic_roots, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
 
@@ -49,9 +49,6 @@ const CANDIDATE: f64 = 1e-6;
 const LARGE_ROOT: f64 = 50.0;
 /// Ratio of smallest to largest singular value below which a matrix counts as singular.
 const SINGULAR: f64 = 1e-10;
-/// Largest imaginary part (relative) of an eigenvalue still tried as a real root: a double root
-/// (a pose on a workspace boundary) splits into a pair about `sqrt(eps)` off the real line.
-const NEAR_REAL: f64 = 1e-4;
 
 /// The first joints (0-based) of the three consecutive joints an elimination keeps, in the
 /// order tried: 2 is Raghavan and Roth's own (joints 3 to 5 kept, joint 6's line carried, joints
@@ -460,22 +457,7 @@ impl System {
     fn roots(&self) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
         for offset3 in [OFFSETS[0]].into_iter().chain(RETRY_OFFSETS) {
             let [c, b, a] = self.quadratic(offset3);
-            // Conditioning from the inverse: cheaper than a 12 x 12 SVD.
-            let Some(inverse) = a.try_inverse() else { continue };
-            if inverse.norm() * a.norm() > 1e8 {
-                continue;
-            }
-            let (ac, ab) = (inverse * c, inverse * b);
-            let mut companion = SMatrix::<f64, 24, 24>::zeros();
-            companion.fixed_view_mut::<12, 12>(0, 12).fill_with_identity();
-            companion.fixed_view_mut::<12, 12>(12, 0).copy_from(&(-ac));
-            companion.fixed_view_mut::<12, 12>(12, 12).copy_from(&(-ab));
-            let Some(eigenvalues) = eigenvalues(&companion) else { continue };
-            let roots = eigenvalues
-                .iter()
-                .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
-                .map(|z| z.re)
-                .collect::<Vec<f64>>();
+            let Some(roots) = quadratic_roots(&c, &b, &a) else { continue };
             // A root near infinity (joint 3 near the offset's half turn) is imprecise: another
             // offset moves it.
             if roots.iter().any(|x| x.abs() > LARGE_ROOT) && offset3 != RETRY_OFFSETS[RETRY_OFFSETS.len() - 1] {

@@ -6,7 +6,7 @@
 //! structure at the wrist applies it at the base by solving the reversed chain.
 
 use crate::model::{JointKind, KinematicsWorkspace, Model};
-use nalgebra::{Complex, DMatrix, Isometry3, Matrix3, SMatrix, Schur, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, Isometry3, Matrix3, SMatrix, Schur, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// One joint's axis line: a point on it and its unit direction.
@@ -304,15 +304,38 @@ pub(crate) fn interpolate2<const N: usize>(values: &[[[f64; N]; 3]; 3]) -> [[f64
     out
 }
 
-/// The eigenvalues of a companion matrix, `None` when the QR iteration has not converged
-/// within `40 N` steps: nalgebra's unbounded form can cycle forever on some finite matrices
-/// (found on a modular catalog arm), and a caller that gets `None` tries another matrix.
-pub(crate) fn eigenvalues<const N: usize>(matrix: &SMatrix<f64, N, N>) -> Option<Vec<Complex<f64>>> {
-    if !matrix.iter().all(|x| x.is_finite()) {
+/// Largest imaginary part (relative) of an eigenvalue still taken as a real root: a double root
+/// (a pose on a workspace boundary) splits into a pair about `sqrt(eps)` off the real line.
+const NEAR_REAL: f64 = 1e-4;
+
+/// The near-real roots of `det(c + b x + a x^2)`: the eigenvalues of its `2 N x 2 N` companion
+/// matrix. `None` when `a` is singular or ill-conditioned (the caller retries with another
+/// tangent offset), or when the QR iteration has not converged within `80 N` steps:
+/// nalgebra's unbounded form can cycle forever on some finite matrices (found on a modular
+/// catalog arm).
+pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>, a: &SMatrix<f64, N, N>) -> Option<Vec<f64>> {
+    // Conditioning from the inverse: cheaper than an SVD.
+    let inverse = a.try_inverse()?;
+    let condition = inverse.norm() * a.norm();
+    if condition.is_nan() || condition >= 1e8 {
         return None;
     }
+    let (ac, ab) = (inverse * c, inverse * b);
     // Dynamic: the static form needs type-level arithmetic bounds for any N.
-    let matrix = DMatrix::from_column_slice(N, N, matrix.as_slice());
-    let schur = Schur::try_new(matrix, f64::EPSILON, 40 * N)?;
-    Some(schur.complex_eigenvalues().iter().copied().collect())
+    let mut companion = DMatrix::zeros(2 * N, 2 * N);
+    companion.view_mut((0, N), (N, N)).fill_with_identity();
+    companion.view_mut((N, 0), (N, N)).copy_from(&(-ac));
+    companion.view_mut((N, N), (N, N)).copy_from(&(-ab));
+    if !companion.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let schur = Schur::try_new(companion, f64::EPSILON, 80 * N)?;
+    Some(
+        schur
+            .complex_eigenvalues()
+            .iter()
+            .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
+            .map(|z| z.re)
+            .collect(),
+    )
 }

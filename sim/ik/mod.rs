@@ -278,7 +278,6 @@ impl<'a> Ik<'a> {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
         let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
-        let ruled_out = exact.out_of_reach.is_some() || reach::beyond_reach(self.model, goal).is_some();
         // A pose within the tolerance has solutions only where the workspace's boundary passes
         // within it; the numeric search then ends close to the goal. Far misses skip the
         // nearby poses (48 exact solves, the brute force's largest cost), undecided all the same.
@@ -286,7 +285,8 @@ impl<'a> Ik<'a> {
             .solutions
             .first()
             .is_some_and(|s| s.error.position_m < NEARBY_MISS_M && s.error.orientation_rad < NEARBY_MISS_RAD);
-        if !result.reached() && exact.finite && !ruled_out && close && goal.tolerance == Tolerance::Pose {
+        let open = !result.reached() && exact.finite && close && goal.tolerance == Tolerance::Pose;
+        if open && exact.out_of_reach.is_none() && reach::beyond_reach(self.model, goal).is_none() {
             // No exact solution, not ruled out: poses just off it may have some.
             if let Some(solution) = self.reach_nearby(goal, selfmotion::Parameter::Turn, 0.0) {
                 result.solutions.insert(0, solution);

@@ -13,6 +13,7 @@
 
 use super::bilinear::common_roots;
 use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
+use super::solvers::Solutions;
 use super::wrist::trig_roots;
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, Vector3};
@@ -23,16 +24,6 @@ const PARALLEL: f64 = 1e-9;
 const ON_AXIS: f64 = 1e-9;
 /// Pose error (scaled lengths and rad) beyond which a candidate is not a solution.
 const CANDIDATE: f64 = 1e-6;
-
-/// Every solution of one pose, unpolished.
-#[derive(Debug, Clone, Default)]
-pub struct ParallelSolutions {
-    /// Joint configurations in the model's convention, angles in (-pi, pi].
-    pub configurations: Vec<[f64; 6]>,
-    /// Every solution is listed (given each is verified by the caller); false where a root
-    /// could not be resolved or a joint is free (a continuum).
-    pub resolved: bool,
-}
 
 /// The solver of one arm.
 #[derive(Debug, Clone)]
@@ -85,8 +76,9 @@ impl ParallelTriple {
         })
     }
 
-    /// Every configuration whose tool frame is at world pose `goal`, unpolished.
-    pub fn solve(&self, goal: &Isometry3<f64>) -> ParallelSolutions {
+    /// Every configuration whose tool frame is at world pose `goal`, unpolished; `resolved` is
+    /// false where a root could not be resolved or a joint is free (a continuum).
+    pub fn solve(&self, goal: &Isometry3<f64>) -> Solutions {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.solve_chain(&rotation, &translation);
         if self.reversed {
@@ -97,11 +89,11 @@ impl ParallelTriple {
         out
     }
 
-    fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> ParallelSolutions {
+    fn solve_chain(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Solutions {
         let chain = self.arm.chain(self.reversed);
-        let mut out = ParallelSolutions {
-            configurations: Vec::new(),
+        let mut out = Solutions {
             resolved: true,
+            ..Solutions::default()
         };
         let d = Motion {
             rotation: rotation * chain.home_rotation.transpose(),
@@ -132,7 +124,7 @@ impl ParallelTriple {
             };
             let lone_joint = if block == 1 { 0 } else { 5 };
             q[lone_joint] = lone;
-            match self.planar(chain, rotation, translation, q) {
+            match self.planar(chain, &d, rotation, q) {
                 Some(found) => {
                     for q in found {
                         if chain.misses(&q, rotation, translation) < CANDIDATE {
@@ -187,13 +179,13 @@ impl ParallelTriple {
     }
 
     /// The planar joints for the other three in `q` (up to two ways); `None` where one is free.
-    fn planar(&self, chain: &Chain, rotation: &Matrix3<f64>, translation: &Vector3<f64>, q: [f64; 6]) -> Option<Vec<[f64; 6]>> {
+    fn planar(&self, chain: &Chain, d: &Motion, rotation: &Matrix3<f64>, q: [f64; 6]) -> Option<Vec<[f64; 6]>> {
         let lines = &chain.lines;
         let k = self.block;
         let (first, second, third) = (&lines[k], &lines[k + 1], &lines[k + 2]);
         // Where the planar motion must put a point of the third parallel axis: the whole chain
         // with the planar joints at zero carries it to `P`'s image through the other joints.
-        let target = self.planar_target(chain, rotation, translation, &q, &third.point);
+        let target = self.planar_target(chain, d, &q, &third.point);
         let u = first.axis;
         let across = |x: Vector3<f64>| x - u * u.dot(&x);
         let wanted = across(target - first.point).norm_squared();
@@ -212,20 +204,8 @@ impl ParallelTriple {
     }
 
     /// `P(x)`: for block 2-4 `e1^-1 D e6^-1 e5^-1 x`, for block 1-3 `D e6^-1 e5^-1 e4^-1 x`.
-    fn planar_target(
-        &self,
-        chain: &Chain,
-        rotation: &Matrix3<f64>,
-        translation: &Vector3<f64>,
-        q: &[f64; 6],
-        x: &Vector3<f64>,
-    ) -> Vector3<f64> {
+    fn planar_target(&self, chain: &Chain, d: &Motion, q: &[f64; 6], x: &Vector3<f64>) -> Vector3<f64> {
         let lines = &chain.lines;
-        let d = Motion {
-            rotation: rotation * chain.home_rotation.transpose(),
-            home: chain.home_translation,
-            translation: *translation,
-        };
         let mut point = *x;
         for joint in self.block + 3..6 {
             point = lines[joint].turn(-q[joint], &point);

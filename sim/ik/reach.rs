@@ -77,7 +77,7 @@ pub fn unreachable_proof(model: &Model, world: &CollisionWorld, goal: &Goal) -> 
 pub fn beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
     let first = model.joints.first()?;
     let origin = (model.world_from_base * first.parent_from_joint).translation.vector;
-    tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_proof(model, goal))
+    tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_beyond_reach(model, goal))
 }
 
 /// The beyond-reach proof of the tool point.
@@ -89,12 +89,6 @@ fn tool_beyond_reach(model: &Model, goal: &Goal, origin: &Vector3<f64>) -> Optio
             "the goal is {away:.3} m from joint 1's origin; no tool position is further than {reach:.3} m (the joint offsets after joint 1, the tool offset and any prismatic travel)"
         )
     })
-}
-
-/// The last-joints proof (see the module doc), for a revolute arm of two joints or more: the
-/// pipeline's fallback where IK's own methods prove nothing (theirs say more where they do).
-pub fn last_joints_beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
-    last_joints_proof(model, goal)
 }
 
 /// A circle (a point where `radius` is 0): where a joint's origin can be as one joint turns.
@@ -230,8 +224,9 @@ fn base_side(model: &Model) -> Vec<(usize, Circle, &'static str)> {
 
 /// The last-joints proof (see the module doc), for a revolute arm of two joints or more: each
 /// place the goal puts a last joint's origin against each place of a first joint's origin, the
-/// offsets between them the most they can be apart.
-fn last_joints_proof(model: &Model, goal: &Goal) -> Option<String> {
+/// offsets between them the most they can be apart. The pipeline's fallback where IK's own
+/// methods prove nothing (theirs say more where they do).
+pub fn last_joints_beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
     let n = model.dof();
     let revolute = model.joints.iter().all(|j| j.kind != JointKind::Prismatic);
     if n < 2 || !revolute || goal.tolerance == Tolerance::Position {

@@ -118,14 +118,7 @@ impl AllSolutions {
                     out_of_reach: None,
                 }
             }
-            AllSolutions::Parallel(parallel) => {
-                let found = parallel.solve(goal);
-                Solutions {
-                    configurations: found.configurations,
-                    resolved: found.resolved,
-                    out_of_reach: None,
-                }
-            }
+            AllSolutions::Parallel(parallel) => parallel.solve(goal),
         }
     }
 }
