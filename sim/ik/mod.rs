@@ -15,6 +15,7 @@ mod loss;
 pub mod parallel;
 mod reach;
 mod refine;
+pub mod search;
 mod selfmotion;
 pub mod solvers;
 mod spd6;
@@ -73,6 +74,9 @@ pub struct IkOptions {
     /// off). A UR-type arm has up to 8 solutions; the exact flips of a known one are skipped
     /// unsolved, so the budget goes to the approximate ones.
     pub branch_starts: usize,
+    /// Boxes at most the joint-space search visits for a goal nothing else decides (default
+    /// 200 000; 0 turns it off), see [`search`].
+    pub search_boxes: usize,
 }
 
 impl Default for IkOptions {
@@ -86,6 +90,7 @@ impl Default for IkOptions {
             clearance_m: 0.0,
             analytic: true,
             branch_starts: 32,
+            search_boxes: SEARCH_BOXES,
         }
     }
 }
@@ -186,6 +191,8 @@ const POLISH_STEPS: usize = 3;
 /// A closed-form solution whose polished error stays above this (m and rad) is not exact: the
 /// pose sits on a workspace boundary where rounding decides, and the set is not called complete.
 const EXACT: f64 = 1e-9;
+/// Default of [`IkOptions::search_boxes`].
+pub const SEARCH_BOXES: usize = 200_000;
 
 impl<'a> Ik<'a> {
     /// A solver for `model` that ignores collisions.
@@ -233,7 +240,18 @@ impl<'a> Ik<'a> {
     /// the closed form's solutions join as extra starts where it applies but cannot list every
     /// solution (singular poses, poses just beyond reach that the tolerance may still accept,
     /// `z_symmetric` goals: those of the goal's own rotation).
+    ///
+    /// A goal that none of this reaches and none of it proves out of reach goes to the
+    /// joint-space search, which proves that no configuration within the limits is within the
+    /// tolerance, or finds one.
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
+        let mut result = self.solve_by_methods(goal, goal_index, first_seed);
+        self.search_joint_space(goal, goal_index, &mut result);
+        result
+    }
+
+    /// [`Self::solve`] without the joint-space search.
+    fn solve_by_methods(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
         let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
         let all_solutions = self.opts.analytic && finite && matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric);
@@ -494,6 +512,73 @@ impl<'a> Ik<'a> {
             complete,
             proof,
             undecided,
+        }
+    }
+
+    /// Decides by the joint-space search a goal that nothing reached within the pose's tolerance
+    /// and nothing proved out of reach: a proof, a configuration within the tolerance (solved
+    /// from and judged; a colliding one stays undecided), or the budget named as the limit.
+    /// Goals that some solution reaches in pose are left to the collision certificates, and
+    /// poses out of the tool's reach to their cheaper proof.
+    fn search_joint_space(&mut self, goal: &Goal, goal_index: usize, result: &mut GoalSolutions) {
+        let posed = result.solutions.iter().any(|s| s.pose_reached);
+        if result.reached() || result.proof.is_some() || posed || self.opts.search_boxes == 0 {
+            return;
+        }
+        let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
+        if !finite || reach::beyond_reach(self.model, goal).is_some() {
+            return;
+        }
+        let mut rng = self.rng(goal_index);
+        let (model, solver) = (self.model, &mut self.solver);
+        let local = |q: &mut [f64]| search::solve_locally(model, solver, goal, q, &mut rng);
+        let Some(outcome) = search::search(model, goal, self.opts.search_boxes, local) else {
+            return;
+        };
+        let before = result.undecided.take().map_or(String::new(), |open| format!("{open}; "));
+        match outcome {
+            search::Search::Proven { boxes } => {
+                result.complete = true;
+                result.proof = Some(format!(
+                    "joint-space search: no configuration within the joint limits comes within the goal's tolerance ({boxes} boxes, each ruled out by how far the tool can move within it)"
+                ));
+            }
+            search::Search::Found { q, boxes } => {
+                let margin = self.margin();
+                let (mut solution, used) = self.attempt(goal, q.clone(), true, margin, &mut rng);
+                if !solution.pose_reached {
+                    solution = self.judge(goal, q, None, margin);
+                }
+                if let Some(checker) = self.checker.as_mut() {
+                    if solution.clearance.is_some() {
+                        let exact = checker.clearance(&solution.q, true);
+                        solution.reached = solution.pose_reached && exact.exact_m > margin;
+                        solution.clearance = Some(exact);
+                    }
+                }
+                result.starts += 1;
+                result.iterations += used;
+                if !solution.reached {
+                    result.undecided = Some(format!(
+                        "{before}the joint-space search found a configuration within the goal's tolerance ({boxes} boxes), but it collides"
+                    ));
+                }
+                result.solutions.insert(0, solution);
+            }
+            search::Search::Open { boxes } => {
+                let miss = result.solutions.first().map_or(String::new(), |s| {
+                    format!(
+                        "no solution from {} IK starts, closest miss {:.1} mm, {:.2} deg; ",
+                        result.starts,
+                        s.error.position_m * 1e3,
+                        s.error.orientation_rad.to_degrees()
+                    )
+                });
+                let miss = if before.is_empty() { miss } else { before };
+                result.undecided = Some(format!(
+                    "{miss}a joint-space search of {boxes} boxes (its budget) neither ruled out a configuration within the goal's tolerance nor found one"
+                ));
+            }
         }
     }
 
