@@ -28,6 +28,7 @@ Examples:
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-00.json --planner straight
   validate-design designs/ur20.json --scenario scenarios/cluttered/task-12.json --plan-budget 50000
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-03.json --reach-only
+  validate-design designs/economic-scara.json --scenario scenarios/cluttered/task-24.json --reach-only --search-boxes 1000000
   validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --srdf designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
   validate-design robot.xml --kinematics-only --mujoco-checks 20
@@ -153,6 +154,10 @@ struct Cli {
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     ik_seeds: u64,
+    /// Boxes at most the joint-space search visits for a goal that IK neither reaches nor
+    /// proves out of reach (0 turns it off: such goals stay undecided).
+    #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SEARCH_BOXES)]
+    search_boxes: usize,
     /// Judge every goal by this tolerance mode instead of the scenario's.
     #[arg(long, value_name = "MODE")]
     tolerance: Option<ToleranceArg>,
@@ -496,6 +501,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Error> {
     let opts = pipeline::ValidateOptions {
         ik: proving_ground::ik::IkOptions {
             seeds: usize::try_from(cli.ik_seeds).unwrap_or(usize::MAX),
+            search_boxes: cli.search_boxes,
             seed: cli.seed,
             ..Default::default()
         },

@@ -45,6 +45,11 @@ pub(crate) struct SweepArgs {
     /// IK starts per goal.
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     ik_seeds: u64,
+    /// Boxes at most the joint-space search visits for a goal that IK neither reaches nor
+    /// proves out of reach (0 turns it off: such goals stay undecided; validation's default is
+    /// 200 000).
+    #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SWEEP_SEARCH_BOXES)]
+    search_boxes: usize,
     /// Rows of each ranked table.
     #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     top: u64,
@@ -179,6 +184,7 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
     threads(args.threads);
     let ik = proving_ground::ik::IkOptions {
         seeds: usize::try_from(args.ik_seeds).unwrap_or(usize::MAX),
+        search_boxes: args.search_boxes,
         seed: args.seed,
         ..Default::default()
     };
@@ -307,6 +313,7 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
     let mode = SweepMode::ReachOnly {
         ik: proving_ground::ik::IkOptions {
             seed: args.ik_seed,
+            search_boxes: proving_ground::ik::SWEEP_SEARCH_BOXES,
             ..Default::default()
         },
     };

@@ -105,7 +105,9 @@ fn a_reachable_goal_is_never_proven_and_is_found() {
 fn proofs_hold_against_a_dense_numeric_search() {
     let path = common::repo().join("designs/paper-real-world.json");
     let scenario = generate::workspace(100, 1.0, Tolerance::ZSymmetric, generate::WORKSPACE_SEED).expect("valid parameters");
-    let model = pipeline::load_model(&path, &LoadOptions::default()).expect("shipped design").placed(&scenario.world_from_base);
+    let model = pipeline::load_model(&path, &LoadOptions::default())
+        .expect("shipped design")
+        .placed(&scenario.world_from_base);
     let dense = IkOptions {
         seeds: 300,
         analytic: false,

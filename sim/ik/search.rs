@@ -264,9 +264,6 @@ const MIXES: [f64; 7] = [1.0, 0.9, 0.7, 0.5, 0.3, 0.1, 0.0];
 /// box is ruled out, else the joint to split (`usize::MAX`: the test does not apply).
 fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> Option<usize> {
     let half = bounds.half;
-    if half.iter().zip(bounds.revolute).any(|(h, r)| *r && *h > 1.0) {
-        return Some(usize::MAX);
-    }
     let tool = &ws.tool_in_world;
     let offset = tool.translation.vector - goal.position;
     let distance = offset.norm();
@@ -281,7 +278,11 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> O
     orientation_rest.iter_mut().for_each(|r| *r /= scale);
     let position_excess = (distance - REACHED_POSITION_M) / REACHED_POSITION_M;
     let orientation_excess = (tolerance_value - value) / scale;
-    let mixes: &[f64] = if goal.tolerance == Tolerance::Position { &MIXES[..1] } else { &MIXES };
+    let mixes: &[f64] = if goal.tolerance == Tolerance::Position {
+        &MIXES[..1]
+    } else {
+        &MIXES
+    };
     let mut best = (f64::NEG_INFINITY, 1.0);
     for &mix in mixes {
         let mut lowest = mix * position_excess + (1.0 - mix) * orientation_excess;
@@ -359,7 +360,8 @@ fn remainders(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f6
     let (mut position, mut orientation) = (vec![0.0; dof], vec![0.0; dof]);
     for j in (0..dof).filter(|&j| bounds.revolute[j]) {
         let h = bounds.half[j];
-        let second = h - h.sin() + 1.0 - h.cos();
+        // Both terms grow with the turn up to half a turn, the most a box spans.
+        let second = h - h.sin() + 1.0 - h.min(PI).cos();
         let lever = ws.jacobian.column(j).fixed_rows::<3>(0).norm();
         let (moved, turned) = (bounds.moves[j + 1], bounds.turns[j + 1]);
         position[j] = second * (lever + moved) + h * moved;
@@ -401,7 +403,9 @@ mod tests {
     }
 
     fn preset(name: &str) -> Model {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("designs").join(format!("{name}.json"));
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("designs")
+            .join(format!("{name}.json"));
         crate::pipeline::load_model(&path, &Default::default()).expect("shipped design")
     }
 
@@ -420,16 +424,22 @@ mod tests {
     fn the_bounds_hold_at_the_corners_and_inside() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for name in ["free-offset-6dof", "economic-elbow", "abb-irb-2600", "free-redundant-7dof", "paper-real-world"] {
+        for name in [
+            "free-offset-6dof",
+            "economic-elbow",
+            "abb-irb-2600",
+            "free-redundant-7dof",
+            "paper-real-world",
+        ] {
             let model = preset(name);
             for tolerance in [Tolerance::Pose, Tolerance::ZSymmetric] {
                 let q0: Vec<f64> = model.random_configuration(&mut rng);
                 let goal = goal_at(&model.tool_pose(&q0), tolerance);
                 let mut judge = Judge::new(&model, &goal);
                 for _ in 0..300 {
-                    let scale = rng.random_range((1e-3_f64).ln()..(1.0_f64).ln()).exp();
+                    let scale = rng.random_range((1e-3_f64).ln()..PI.ln()).exp();
                     let centre = model.random_configuration(&mut rng);
-                    let half: Vec<f64> = centre.iter().map(|_| scale * rng.random_range(0.3..1.0)).collect();
+                    let half: Vec<f64> = centre.iter().map(|_| (scale * rng.random_range(0.3..1.0)).min(PI)).collect();
                     let lower: Vec<f64> = centre.iter().zip(&half).map(|(c, h)| c - h).collect();
                     let upper: Vec<f64> = centre.iter().zip(&half).map(|(c, h)| c + h).collect();
                     judge.measure(&lower, &upper);
@@ -445,12 +455,27 @@ mod tests {
                     for corner in 0..40 {
                         let delta: Vec<f64> = half
                             .iter()
-                            .map(|h| if corner < 32 { if rng.random_bool(0.5) { *h } else { -h } } else { rng.random_range(-h..*h) })
+                            .map(|h| {
+                                if corner < 32 {
+                                    if rng.random_bool(0.5) {
+                                        *h
+                                    } else {
+                                        -h
+                                    }
+                                } else {
+                                    rng.random_range(-h..*h)
+                                }
+                            })
                             .collect();
                         let q: Vec<f64> = judge.centre.iter().zip(&delta).map(|(c, d)| c + d).collect();
                         let tool = model.tool_pose(&q);
                         let moved = tool.translation.vector - at_centre.translation.vector;
-                        assert!(moved.norm() <= judge.moves[0] + 1e-12, "{name}: moved {} > {}", moved.norm(), judge.moves[0]);
+                        assert!(
+                            moved.norm() <= judge.moves[0] + 1e-12,
+                            "{name}: moved {} > {}",
+                            moved.norm(),
+                            judge.moves[0]
+                        );
                         let turned = match tolerance {
                             Tolerance::Pose => at_centre.rotation.angle_to(&tool.rotation),
                             _ => super::super::angle_between(&(at_centre.rotation * Vector3::z()), &(tool.rotation * Vector3::z())),
@@ -463,10 +488,18 @@ mod tests {
                             rate += Vector3::new(column[3], column[4], column[5]).dot(&measure.gradient) * d;
                         }
                         let rest: f64 = position_rest.iter().sum();
-                        assert!((moved - linear).norm() <= rest + 1e-12, "{name}: position remainder {} > {rest}", (moved - linear).norm());
+                        assert!(
+                            (moved - linear).norm() <= rest + 1e-12,
+                            "{name}: position remainder {} > {rest}",
+                            (moved - linear).norm()
+                        );
                         let change = Orientation::of(&goal, &tool.rotation).value - measure.value;
                         let rest: f64 = orientation_rest.iter().sum();
-                        assert!((change - rate).abs() <= rest + 1e-12, "{name}: orientation remainder {} > {rest}", (change - rate).abs());
+                        assert!(
+                            (change - rate).abs() <= rest + 1e-12,
+                            "{name}: orientation remainder {} > {rest}",
+                            (change - rate).abs()
+                        );
                     }
                 }
             }

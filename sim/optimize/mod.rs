@@ -308,8 +308,10 @@ pub fn starts(design: &Design, scenario: &Scenario, opts: &OptimizeOptions) -> R
 /// [`OptimizeError::Batch`] for designs that cannot share a batch, [`OptimizeError::Pipeline`]
 /// when a collision world cannot be built.
 pub fn starts_of(designs: &[Design], scenario: &Scenario, opts: &OptimizeOptions) -> Result<(Batch, Params), OptimizeError> {
+    // Starts only: what the joint-space search decides adds none.
     let ik = crate::ik::IkOptions {
         seed: opts.seed,
+        search_boxes: 0,
         ..Default::default()
     };
     let mut q = Vec::new();
