@@ -569,7 +569,7 @@ impl<'a> Ik<'a> {
                         "{before}the joint-space search found a configuration within the goal's tolerance ({boxes} boxes), but it collides"
                     ));
                 }
-                result.solutions.insert(0, solution);
+                add_found(result, solution);
             }
             search::Search::Open { boxes } => {
                 let miss = result.solutions.first().map_or(String::new(), |s| {
@@ -894,6 +894,15 @@ impl<'a> Ik<'a> {
             difference.abs() <= self.opts.distinct_tolerance
         })
     }
+}
+
+/// Puts a solution the joint-space search led to first; one within the pose's tolerance
+/// replaces the closest miss kept when nothing reached the pose.
+fn add_found(result: &mut GoalSolutions, solution: IkSolution) {
+    if solution.pose_reached {
+        result.solutions.retain(|s| s.pose_reached);
+    }
+    result.solutions.insert(0, solution);
 }
 
 /// The first few of `items`, and how many more.
