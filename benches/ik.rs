@@ -8,7 +8,10 @@
 //! `free-offset-6dof`, target median <= 20 us; the spherical wrist on `abb-irb-2600` and
 //! `economic-spherical-wrist`, target <= 3 us) and polished, deduplicated and judged
 //! (`ik-all-solutions`); the same bare on catalog arms (`all-solutions-bare/modular6/...`: the
-//! elimination keeping joints 2 to 4, and three parallel axes).
+//! elimination keeping joints 2 to 4, and three parallel axes). The joint-space search proving a
+//! goal out of the tolerance by its bounds alone (`search/...`: the first goal each design's
+//! search proves, on the course for `economic-scara`, on the `z_symmetric` workspace task for
+//! `paper-real-world`; no target: its cost is the boxes it needs, reported in proofs).
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -153,5 +156,37 @@ fn scenarios(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, ik, catalog, scenarios);
+/// The joint-space search to a proof, by the bounds alone (no local solves).
+fn search(c: &mut Criterion) {
+    use proving_ground::ik::search::{search, Search};
+    use proving_ground::scenario::generate;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut group = c.benchmark_group("search");
+    group.sample_size(10);
+    let course = generate::course(generate::COURSE_SEED);
+    let workspace = generate::workspace(100, 1.0, Tolerance::ZSymmetric, generate::WORKSPACE_SEED).expect("valid parameters");
+    for (design, scenario) in [
+        ("designs/economic-scara.json", &course),
+        ("designs/paper-real-world.json", &workspace),
+    ] {
+        let model = load_model(&root.join(design), &LoadOptions::default())
+            .expect("shipped design loads")
+            .placed(&scenario.world_from_base);
+        let proven = scenario
+            .goals
+            .iter()
+            .enumerate()
+            .find_map(|(index, goal)| match search(&model, goal, 300_000, |_| false) {
+                Some(Search::Proven { boxes }) => Some((index, goal, boxes)),
+                _ => None,
+            });
+        let Some((index, goal, boxes)) = proven else { continue };
+        group.bench_function(format!("{}/{} goal {index} ({boxes} boxes)", model.name, scenario.name), |b| {
+            b.iter(|| black_box(search(&model, black_box(goal), 300_000, |_| false)))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, ik, catalog, scenarios, search);
 criterion_main!(benches);
