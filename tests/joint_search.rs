@@ -15,30 +15,20 @@ use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 
-fn unit(rng: &mut impl Rng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
-        let n: f64 = v.norm();
-        if n > 0.1 && n <= 1.0 {
-            return v / n;
-        }
-    }
-}
-
 /// A configuration and a goal of `tolerance` within 0.999 mm and 0.999 deg of its tool pose
 /// (a `z_symmetric` goal also turned about tool z): the configuration is a witness that the
 /// goal is reachable.
 fn witnessed_goal(model: &Model, tolerance: Tolerance, rng: &mut impl Rng) -> (Vec<f64>, Goal) {
     let q = model.random_configuration(rng);
     let tool = model.tool_pose(&q);
-    let turn = UnitQuaternion::from_scaled_axis(unit(rng) * rng.random_range(0.0..0.999_f64.to_radians()));
+    let turn = UnitQuaternion::from_scaled_axis(common::unit(rng) * rng.random_range(0.0..0.999_f64.to_radians()));
     let spin = match tolerance {
         Tolerance::ZSymmetric => UnitQuaternion::from_scaled_axis(Vector3::z() * rng.random_range(-PI..PI)),
         _ => UnitQuaternion::identity(),
     };
     let goal = Goal {
         name: "witnessed".into(),
-        position: tool.translation.vector + unit(rng) * rng.random_range(0.0..0.999e-3),
+        position: tool.translation.vector + common::unit(rng) * rng.random_range(0.0..0.999e-3),
         rotation: turn * tool.rotation * spin,
         tolerance,
     };

@@ -12,29 +12,19 @@ use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 
-fn unit(rng: &mut impl Rng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
-        let n: f64 = v.norm();
-        if n > 0.1 && n <= 1.0 {
-            return v / n;
-        }
-    }
-}
-
 /// A pose within 0.99 mm and 0.99 deg of the tool at a random configuration, placed off the
 /// origin and turned, as a goal of `tolerance`; a `z_symmetric` goal is turned about tool z.
 fn nearby_goal(model: &Model, tolerance: Tolerance, rng: &mut impl Rng) -> Goal {
     let q = model.random_configuration(rng);
     let tool = model.tool_pose(&q);
-    let turn = UnitQuaternion::from_scaled_axis(unit(rng) * 0.99_f64.to_radians());
+    let turn = UnitQuaternion::from_scaled_axis(common::unit(rng) * 0.99_f64.to_radians());
     let spin = match tolerance {
         Tolerance::ZSymmetric => UnitQuaternion::from_scaled_axis(Vector3::z() * rng.random_range(-PI..PI)),
         _ => UnitQuaternion::identity(),
     };
     Goal {
         name: "nearby".into(),
-        position: tool.translation.vector + unit(rng) * 0.99e-3,
+        position: tool.translation.vector + common::unit(rng) * 0.99e-3,
         rotation: turn * tool.rotation * spin,
         tolerance,
     }

@@ -196,3 +196,14 @@ pub fn pose_goal(
         tolerance,
     }
 }
+
+/// A random unit vector (uniform in direction: rejection from the unit ball).
+pub fn unit(rng: &mut impl rand::Rng) -> nalgebra::Vector3<f64> {
+    loop {
+        let v = nalgebra::Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+        let n: f64 = v.norm();
+        if n > 0.1 && n <= 1.0 {
+            return v / n;
+        }
+    }
+}
