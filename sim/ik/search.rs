@@ -161,7 +161,7 @@ impl<'a> Judge<'a> {
     fn judge(&mut self, lower: &[f64], upper: &[f64]) -> Judged {
         let (goal, dof) = (self.goal, self.model.dof());
         let error = self.measure(lower, upper);
-        if error.position_m < REACHED_POSITION_M && error.orientation_rad < REACHED_ORIENTATION_RAD {
+        if super::is_reached(&error) {
             return Judged::Inside;
         }
         let (moves, turns) = (&self.moves, &self.turns);
@@ -272,12 +272,29 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> O
     }
     let along = offset / distance;
     let measure = Orientation::of(goal, &tool.rotation);
-    let (value, gradient, tolerance_value, scale) = (measure.value, measure.gradient, measure.within, measure.scale);
-    let (mut position_rest, mut orientation_rest) = remainders(goal, ws, bounds);
+    let (mut position_rest, mut orientation_rest) = remainders(ws, bounds, measure.axes);
     position_rest.iter_mut().for_each(|r| *r /= REACHED_POSITION_M);
-    orientation_rest.iter_mut().for_each(|r| *r /= scale);
+    orientation_rest.iter_mut().for_each(|r| *r /= measure.scale);
+    // Per joint: the rates at the centre along the error direction and of the orientation
+    // measure.
+    let dof = half.len();
+    let rates: Vec<(f64, f64)> = (0..dof)
+        .map(|j| {
+            let column = ws.jacobian.column(j);
+            let linear = Vector3::new(column[0], column[1], column[2]);
+            let axis = Vector3::new(column[3], column[4], column[5]);
+            (along.dot(&linear), axis.dot(&measure.gradient))
+        })
+        .collect();
+    // Joint `j`'s share of the first-order bound at weight `mix`: its rate over the box and its
+    // remainder, both normalised.
+    let share = |j: usize, mix: f64| {
+        let (position, orientation) = rates[j];
+        let rate = mix * position / REACHED_POSITION_M - (1.0 - mix) * orientation / measure.scale;
+        rate.abs() * half[j] + mix * position_rest[j] + (1.0 - mix) * orientation_rest[j]
+    };
     let position_excess = (distance - REACHED_POSITION_M) / REACHED_POSITION_M;
-    let orientation_excess = (tolerance_value - value) / scale;
+    let orientation_excess = (measure.within - measure.value) / measure.scale;
     let mixes: &[f64] = if goal.tolerance == Tolerance::Position {
         &MIXES[..1]
     } else {
@@ -285,10 +302,9 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> O
     };
     let mut best = (f64::NEG_INFINITY, 1.0);
     for &mix in mixes {
-        let mut lowest = mix * position_excess + (1.0 - mix) * orientation_excess;
-        for j in 0..half.len() {
-            lowest -= contribution(ws, j, mix, &along, &gradient, scale, bounds, &position_rest, &orientation_rest);
-        }
+        let lowest = (0..dof).fold(mix * position_excess + (1.0 - mix) * orientation_excess, |lowest, j| {
+            lowest - share(j, mix)
+        });
         if lowest > ROUNDING {
             return None;
         }
@@ -297,14 +313,7 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> O
         }
     }
     let mix = best.1;
-    Some((0..half.len()).fold(0, |split, j| {
-        let of = |j| contribution(ws, j, mix, &along, &gradient, scale, bounds, &position_rest, &orientation_rest);
-        if of(j) > of(split) {
-            j
-        } else {
-            split
-        }
-    }))
+    Some((0..dof).fold(0, |split, j| if share(j, mix) > share(split, mix) { j } else { split }))
 }
 
 /// The orientation measure of the first-order test, linear in the tool's axes.
@@ -354,8 +363,8 @@ impl Orientation {
 
 /// Per joint, the second-order remainders over the box: of the tool position (m) and of the
 /// orientation measure ([`Orientation`]), beyond the centre's rates times the turns.
-fn remainders(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f64>, Vec<f64>) {
-    let axes = Orientation::of(goal, &ws.tool_in_world.rotation).axes;
+/// `axes` is [`Orientation::axes`].
+fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds, axes: f64) -> (Vec<f64>, Vec<f64>) {
     let dof = bounds.half.len();
     let (mut position, mut orientation) = (vec![0.0; dof], vec![0.0; dof]);
     for j in (0..dof).filter(|&j| bounds.revolute[j]) {
@@ -368,27 +377,6 @@ fn remainders(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f6
         orientation[j] = axes * (second + h * turned);
     }
     (position, orientation)
-}
-
-/// Joint `j`'s share of the first-order bound at weight `mix`: its rate along the mix over the
-/// box and its remainder.
-#[allow(clippy::too_many_arguments)]
-fn contribution(
-    ws: &KinematicsWorkspace,
-    j: usize,
-    mix: f64,
-    along: &Vector3<f64>,
-    gradient: &Vector3<f64>,
-    scale: f64,
-    bounds: &Bounds,
-    position_rest: &[f64],
-    orientation_rest: &[f64],
-) -> f64 {
-    let column = ws.jacobian.column(j);
-    let linear = Vector3::new(column[0], column[1], column[2]);
-    let axis = Vector3::new(column[3], column[4], column[5]);
-    let rate = mix * along.dot(&linear) / REACHED_POSITION_M - (1.0 - mix) * axis.dot(gradient) / scale;
-    rate.abs() * bounds.half[j] + mix * position_rest[j] + (1.0 - mix) * orientation_rest[j]
 }
 
 #[cfg(test)]
@@ -449,7 +437,8 @@ mod tests {
                         moves: &judge.moves,
                         turns: &judge.turns,
                     };
-                    let (position_rest, orientation_rest) = remainders(&goal, &judge.ws, &bounds);
+                    let axes = Orientation::of(&goal, &judge.ws.tool_in_world.rotation).axes;
+                    let (position_rest, orientation_rest) = remainders(&judge.ws, &bounds, axes);
                     let at_centre = judge.ws.tool_in_world;
                     let measure = Orientation::of(&goal, &at_centre.rotation);
                     for corner in 0..40 {
