@@ -17,9 +17,19 @@
 //! their generators), [`collide`] (exact and approximate distances), [`ik`] (every collision-free
 //! solution of a goal), [`plan`] (the trajectory, certified continuous checking, timing),
 //! [`engine`] (rapier and MuJoCo runs, the static load, MuJoCo as kinematic oracle), [`report`]
-//! (findings and the verdict), [`render`] (pictures and the HTML report), [`pipeline`] (runs the stages in order: [`pipeline::validate`]).
+//! (findings and the verdict), [`render`] (pictures and the HTML report). Above them
+//! [`pipeline`] runs the stages in order ([`pipeline::validate`]); [`run`] is one validation run
+//! as `validate-design` does it ([`validate`]: the robot file, SRDF, strict checks, tolerance
+//! override, exports, MuJoCo's kinematics check, the validation and its report), the entry
+//! point every front end calls; experiments ([`sweep`], [`optimize`], [`suite`]) build on both.
 //!
 //! ```no_run
+//! let opts = proving_ground::Options {
+//!     scenario: Some("scenarios/cluttered/task-07.json".into()),
+//!     ..Default::default()
+//! };
+//! let run = proving_ground::validate("designs/ur5e.json".as_ref(), &opts, &proving_ground::progress::Silent)?;
+//! println!("{:?}", run.outcome());
 //! let model = proving_ground::pipeline::load_model(
 //!     std::path::Path::new("designs/paper-real-world.json"),
 //!     &proving_ground::pipeline::LoadOptions::default(),
@@ -40,8 +50,9 @@
 //!   `conaffinity` 0) are skipped; planes and height fields are ignored on the base and errors
 //!   elsewhere. No velocity limits; ratings come from `actuatorfrcrange` or actuator
 //!   `forcerange`. The tool frame is the site `tool`, else the last moving body's frame.
-//! - Trajectories are straight joint-space segments between goal configurations: a goal whose
-//!   every straight segment is blocked is reported blocked, not routed around (no planner).
+//! - Trajectories join the goals by straight joint-space segments, else a certified RRT-Connect
+//!   detour within a sample budget; a goal it does not join in the budget is `no_path`
+//!   (undecided), not a failure.
 //! - rapier runs in f32 and its narrow phase on cylinders can be off by up to 1.25 cm: its
 //!   contacts are re-measured in exact geometry before they count. rapier 0.36 does not report a
 //!   multibody's motor impulses: its effort is the control law on the state after each step.
@@ -63,8 +74,16 @@ pub mod plan;
 pub mod progress;
 pub mod render;
 pub mod report;
+pub mod run;
 pub mod scenario;
 pub mod srdf;
 pub mod suite;
 pub mod sweep;
 pub mod xml;
+
+pub use run::{validate, Options, Run};
+
+/// The README's Rust examples, compiled as doc tests so they cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeExamples;

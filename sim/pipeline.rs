@@ -283,6 +283,21 @@ impl Engines {
     }
 }
 
+impl std::str::FromStr for Engines {
+    type Err = String;
+
+    /// A comma-separated list of engines (`rapier,mujoco`, `rapier`, `mujoco`), or `none`; the
+    /// error names what is not an engine and what was expected.
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let names: Vec<&str> = if text.trim() == "none" {
+            Vec::new()
+        } else {
+            text.split(',').map(str::trim).collect()
+        };
+        Self::from_names(names).map_err(|other| format!("unknown engine `{other}`; expected rapier,mujoco, rapier, mujoco or none"))
+    }
+}
+
 impl Default for Engines {
     fn default() -> Self {
         Self {

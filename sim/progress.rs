@@ -7,6 +7,10 @@ pub trait Progress: Sync {
     fn stage(&self, name: &str, total: Option<u64>);
     /// One more item of the current stage is done; called from any thread.
     fn advance(&self);
+    /// A warning about the input (the loader's, one line): worth showing even to a quiet user.
+    fn warning(&self, _line: &str) {}
+    /// A note about the input: a choice the loader made, what an SRDF left out (one line).
+    fn info(&self, _line: &str) {}
 }
 
 /// Shows nothing.

@@ -6,17 +6,19 @@
 //! ```json
 //! {
 //!   "snapshots": "golden",
-//!   "designs": ["designs/ur5e.json", {"path": "robots/panda.urdf", "tip": "panda_hand"}],
+//!   "designs": ["designs/ur5e.json", {"path": "robots/panda.urdf", "tip": "panda_hand", "srdf": "robots/panda.srdf"}],
 //!   "scenarios": ["scenarios/course.json"],
-//!   "options": {"seed": 0, "engines": ["rapier", "mujoco"], "plan_budget": 20000}
+//!   "options": {"seed": 0, "engines": ["rapier", "mujoco"], "plan_budget": 20000, "tolerance": "z_symmetric", "search_boxes": 1000}
 //! }
 //! ```
-//! Paths are relative to the suite file; `snapshots` defaults to `snapshots`.
+//! Paths are relative to the suite file; `snapshots` defaults to `snapshots`. Each run is
+//! [`crate::run::validate_loaded`]: what `validate-design` runs with the same options, without
+//! MuJoCo's kinematics check.
 
 use crate::error::Error;
 use crate::pipeline::{self, Engines, LoadOptions, ValidateOptions};
 use crate::report::{self, snapshot};
-use crate::{files, limits};
+use crate::{files, limits, run};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -47,6 +49,7 @@ struct DesignFull {
     tip: Option<String>,
     #[serde(default)]
     package_paths: Vec<PathBuf>,
+    srdf: Option<PathBuf>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -60,6 +63,8 @@ struct OptionsFile {
     margin: Option<f64>,
     contact_depth: Option<f64>,
     reach_only: Option<bool>,
+    tolerance: Option<crate::scenario::Tolerance>,
+    search_boxes: Option<usize>,
 }
 
 /// Most runs one suite may ask for.
@@ -142,17 +147,7 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
         })?;
     }
     if let Some(planner) = &file.planner {
-        opts.planner.kind = match planner.as_str() {
-            "rrt-connect" => crate::plan::PlannerKind::RrtConnect,
-            "straight" => crate::plan::PlannerKind::Straight,
-            other => {
-                return Err(invalid(
-                    path,
-                    "options.planner",
-                    format!("`{other}`: expected rrt-connect or straight"),
-                ))
-            }
-        };
+        opts.planner.kind = planner.parse().map_err(|message| invalid(path, "options.planner", message))?;
     }
     if let Some(budget) = file.plan_budget {
         if !(1..=limits::MAX_PLAN_BUDGET).contains(&budget) {
@@ -174,6 +169,9 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
     opts.certify.threshold_m = file.margin.unwrap_or(0.0);
     opts.engine.contact_depth_m = file.contact_depth.unwrap_or(0.0);
     opts.reach_only = file.reach_only.unwrap_or(false);
+    if let Some(boxes) = file.search_boxes {
+        opts.ik.search_boxes = boxes;
+    }
     Ok(opts)
 }
 
@@ -219,8 +217,8 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
         .collect::<Result<Vec<_>, Error>>()?;
     let mut entries = Vec::new();
     for (index, design) in suite.designs.iter().enumerate() {
-        let (path, name, load_opts) = match design {
-            DesignEntry::Path(p) => (dir.join(p), stem(p), LoadOptions::default()),
+        let (path, name, load_opts, srdf) = match design {
+            DesignEntry::Path(p) => (dir.join(p), stem(p), LoadOptions::default(), None),
             DesignEntry::Full(full) => (
                 dir.join(&full.path),
                 full.name.clone().unwrap_or_else(|| stem(&full.path)),
@@ -229,6 +227,7 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
                     tip_link: full.tip.clone(),
                     package_paths: full.package_paths.iter().map(|p| dir.join(p)).collect(),
                 },
+                full.srdf.as_ref().map(|p| dir.join(p)),
             ),
         };
         if name.is_empty() || name.contains(['/', '\\']) {
@@ -239,9 +238,19 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
             ));
         }
         let loaded = pipeline::load(&path, &load_opts)?;
+        // The snapshot is the report: no exports, and MuJoCo's kinematics check is the CLI's.
+        let run_opts = run::Options {
+            srdf,
+            tolerance: suite.options.tolerance,
+            kinematics_checks: 0,
+            validate: opts.clone(),
+            ..Default::default()
+        };
         for (scenario_name, scenario) in &scenarios {
-            let validation = pipeline::validate(loaded.clone(), scenario.clone(), &opts)?;
-            let built = report::build(&validation);
+            let done = run::validate_loaded(&path, loaded.clone(), scenario.clone(), &run_opts, &crate::progress::Silent)?;
+            let built = done.report.ok_or_else(|| Error::Report {
+                message: "a whole run has a report".into(),
+            })?;
             let body = snapshot::snapshot_text(&built).map_err(|message| Error::Report { message })?;
             let snapshot_name = format!("{name}__{scenario_name}");
             let file = folder.join(format!("{snapshot_name}.snap"));

@@ -37,6 +37,18 @@ impl PlannerKind {
     }
 }
 
+impl std::str::FromStr for PlannerKind {
+    type Err = String;
+
+    /// A planner by [`PlannerKind::name`]; the error says which names there are.
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        [PlannerKind::RrtConnect, PlannerKind::Straight]
+            .into_iter()
+            .find(|kind| kind.name() == text)
+            .ok_or_else(|| format!("unknown planner `{text}`; expected rrt-connect or straight"))
+    }
+}
+
 /// Settings of the planner.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PlannerOptions {

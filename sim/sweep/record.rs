@@ -6,6 +6,7 @@ use crate::ik::HARDWARE_WEIGHT;
 use crate::pipeline::{self, Loaded};
 use crate::scenario::Scenario;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// Decimals kept of lengths in metres (micrometres) and of losses: far below what a goal's 1 mm
 /// criterion distinguishes, and enough that ranks by loss do not tie by rounding.
@@ -87,7 +88,18 @@ pub fn evaluate(
         },
     };
     let hardware_cost_m = loaded.design.as_ref().map(crate::design::Design::hardware_cost);
-    let validation = pipeline::validate(loaded, scenario, &opts)?;
+    // The run `validate-design` makes, without MuJoCo's kinematics check.
+    let run_opts = crate::run::Options {
+        kinematics_checks: 0,
+        validate: opts,
+        ..Default::default()
+    };
+    let run = crate::run::validate_loaded(Path::new(design_id), loaded, scenario, &run_opts, &crate::progress::Silent)?;
+    let (Some(validation), Some(report)) = (run.validation, run.report) else {
+        return Err(crate::error::Error::Report {
+            message: "a whole run has a report".into(),
+        });
+    };
     let goals = validation.scenario.goals.len();
     let best: Vec<_> = validation.solutions.iter().map(|g| g.solutions.first()).collect();
     let mean = |values: Vec<f64>| (values.len() == goals && goals > 0).then(|| values.iter().sum::<f64>() / goals as f64);
@@ -108,7 +120,6 @@ pub fn evaluate(
             (solved, solved == goals, None)
         }
         SweepMode::Full { .. } => {
-            let report = crate::report::build(&validation);
             let solved = report.goals.iter().filter(|g| g.outcome == "reached").count();
             let passed = report.verdict.passed;
             (solved, passed, Some(report.verdict.word.to_string()))

@@ -4,7 +4,7 @@ use proving_ground::design::Design;
 use proving_ground::error::Error;
 use proving_ground::optimize::{self, OptimizeError, OptimizeOptions, Tensors};
 use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
-use proving_ground::report::{self, Report};
+use proving_ground::report::Report;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -31,7 +31,7 @@ pub(crate) struct OptimizeArgs {
     seed: u64,
     /// Engines of the two validations.
     #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
-    engines: String,
+    engines: Engines,
     /// Where the tensors live: cpu, or cuda (a build with the `cuda` feature and a GPU).
     #[arg(long, value_name = "DEVICE", default_value = "cpu", value_parser = ["cpu", "cuda"])]
     device: String,
@@ -50,9 +50,7 @@ struct Tuning {
 }
 
 pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
-    let names = args.engines.split(',').map(str::trim).filter(|s| !s.is_empty() && *s != "none");
-    let engines = Engines::from_names(names)
-        .map_err(|name| OptimizeError::Input(format!("--engines: `{name}` is not an engine; expected rapier, mujoco or none")))?;
+    let engines = args.engines;
     let mut tunings = Vec::with_capacity(args.designs.len());
     for path in &args.designs {
         if pipeline::input_kind(path)? != pipeline::InputKind::Design {
@@ -175,12 +173,12 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         let Some(back) = tuning.tuned else {
             continue;
         };
-        let before = report::build(&pipeline::validate(tuning.loaded, scenario.clone(), &validate_options)?);
+        let before = validated(&tuning.path, tuning.loaded, &scenario, &validate_options)?;
         let after_loaded = pipeline::Loaded {
             model: proving_ground::model::from_design(&back),
             design: Some(back),
         };
-        let after = report::build(&pipeline::validate(after_loaded, scenario.clone(), &validate_options)?);
+        let after = validated(&tuning.out, after_loaded, &scenario, &validate_options)?;
         print!("{}", side_by_side(&before, &after));
         failed |= after.verdict.word == "FAIL";
         undecided |= after.verdict.word == "UNDECIDED";
@@ -192,6 +190,25 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         ExitCode::from(3)
     } else {
         ExitCode::SUCCESS
+    })
+}
+
+/// The report of the run `validate-design` makes of `loaded` (read from `path`) on `scenario`,
+/// without MuJoCo's kinematics check.
+fn validated(
+    path: &Path,
+    loaded: pipeline::Loaded,
+    scenario: &proving_ground::scenario::Scenario,
+    opts: &ValidateOptions,
+) -> Result<Report, Error> {
+    let run_opts = proving_ground::Options {
+        kinematics_checks: 0,
+        validate: opts.clone(),
+        ..Default::default()
+    };
+    let run = proving_ground::run::validate_loaded(path, loaded, scenario.clone(), &run_opts, &proving_ground::progress::Silent)?;
+    run.report.ok_or_else(|| Error::Report {
+        message: "a whole run has a report".into(),
     })
 }
 

@@ -31,7 +31,7 @@ pub(crate) struct SweepArgs {
     full: bool,
     /// With --full: the engines to run.
     #[arg(long, value_name = "LIST", default_value = "rapier,mujoco", requires = "full")]
-    engines: String,
+    engines: Engines,
     /// Run the K-th of N shards: every pair whose canonical index i has i mod N = K - 1.
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
@@ -163,15 +163,6 @@ fn bar(quiet: bool) -> PairBar {
     })
 }
 
-fn threads(count: Option<u64>) {
-    if let Some(threads) = count {
-        // Only the first call configures the global pool; a second is harmless.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(usize::try_from(threads).unwrap_or(usize::MAX))
-            .build_global();
-    }
-}
-
 fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Error> {
     Ok(match dir {
         Some(dir) => Some(sweep::read_reference(dir)?),
@@ -181,7 +172,7 @@ fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Error> {
 
 /// `validate-design sweep ...`.
 pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
-    threads(args.threads);
+    super::threads(args.threads);
     let ik = proving_ground::ik::IkOptions {
         seeds: usize::try_from(args.ik_seeds).unwrap_or(usize::MAX),
         search_boxes: args.search_boxes,
@@ -189,15 +180,7 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
         ..Default::default()
     };
     let mode = if args.full {
-        let engines = match args.engines.as_str() {
-            "none" => Engines::from_names([]),
-            list => Engines::from_names(list.split(',').map(str::trim)),
-        }
-        .map_err(|name| sweep::SweepError::Designs {
-            argument: format!("--engines {}", args.engines),
-            message: format!("unknown engine `{name}`; expected rapier, mujoco or none"),
-        })?;
-        SweepMode::Full { ik, engines }
+        SweepMode::Full { ik, engines: args.engines }
     } else {
         SweepMode::ReachOnly { ik }
     };
@@ -257,7 +240,7 @@ pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Error> {
 
 /// `validate-design table1 ...`.
 pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
-    threads(args.threads);
+    super::threads(args.threads);
     let scenario_args = if args.scenarios.is_empty() {
         vec!["scenarios/cluttered".to_string()]
     } else {
@@ -288,7 +271,7 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
 
 /// `validate-design ga ...`.
 pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
-    threads(args.threads);
+    super::threads(args.threads);
     let scenario = inputs::resolve_scenarios(std::slice::from_ref(&args.scenario)).map_err(|e| match e {
         sweep::SweepError::Scenarios { message, .. } => sweep::SweepError::Scenarios {
             argument: format!("{} (--scenario)", args.scenario),

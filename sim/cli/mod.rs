@@ -1,0 +1,100 @@
+//! The command line: one module per subcommand, each parsing its arguments into the library's
+//! options, calling the library and printing what it returns.
+
+pub(crate) mod generate;
+mod help;
+pub(crate) mod optimize;
+pub(crate) mod snapshot;
+pub(crate) mod sweep;
+pub(crate) mod validate;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use proving_ground::scenario::Tolerance;
+
+/// Proves or disproves a robot manipulator design in simulation.
+#[derive(Debug, Parser)]
+#[command(
+    name = "validate-design",
+    version,
+    about,
+    after_help = help::AFTER_HELP,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    allow_negative_numbers = true
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Option<Command>,
+    #[command(flatten)]
+    pub(crate) validate: validate::ValidateArgs,
+}
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum Command {
+    /// Write a generated scenario (the paper's cluttered tasks, its workspace task, or the course
+    /// for its real-world robot); an existing file is only replaced with --force.
+    Generate(generate::GenerateArgs),
+    /// Run a suite (designs x scenarios x options, a JSON file) and compare every report with its
+    /// snapshot in the suite's folder: exit 1 with a diff on any difference, missing snapshot
+    /// (written as .snap.new) or orphan; --accept records them.
+    Snapshot(snapshot::SnapshotArgs),
+    /// Run many designs on many scenarios (reach-only by default, --full for the whole
+    /// validation), in parallel and resumable; results as JSON lines, CSV and ranked tables with
+    /// the paper's normalised score and percentile.
+    Sweep(sweep::SweepArgs),
+    /// Join the shard folders of a sweep (`sweep --shard K/N`) into the folder the whole sweep
+    /// writes, byte for byte.
+    Merge(sweep::MergeArgs),
+    /// The paper's Table 1 (UR15, UR20, ABB IRB 2600 on the cluttered tasks), its numbers
+    /// beside ours.
+    Table1(sweep::Table1Args),
+    /// The paper's genetic-algorithm baseline over the 6-slot modular catalog on one scenario
+    /// (population 128, 100 generations, single-point crossover, tournament 4, mutation 0.05).
+    Ga(sweep::GaArgs),
+    /// Fine-tune a design on a scenario with the paper's Adam refinement of its differentiable
+    /// objective (200 steps, rates 0.1 for joints and 0.01 for d and a), write the tuned design,
+    /// validate both and print their verdicts side by side.
+    Optimize(optimize::OptimizeArgs),
+}
+
+/// A finite length of at least 0 m.
+pub(crate) fn non_negative(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(value) if value.is_finite() && value >= 0.0 => Ok(value),
+        Ok(value) => Err(format!("{value} m: expected a finite length of at least 0")),
+        Err(error) => Err(format!("`{text}`: {error}")),
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ToleranceArg {
+    /// Position and orientation.
+    #[value(name = "pose")]
+    Pose,
+    /// Position and the tool z axis.
+    #[value(name = "z_symmetric")]
+    ZSymmetric,
+    /// Position only.
+    #[value(name = "position")]
+    Position,
+}
+
+impl From<ToleranceArg> for Tolerance {
+    fn from(arg: ToleranceArg) -> Self {
+        match arg {
+            ToleranceArg::Pose => Tolerance::Pose,
+            ToleranceArg::ZSymmetric => Tolerance::ZSymmetric,
+            ToleranceArg::Position => Tolerance::Position,
+        }
+    }
+}
+
+/// `--threads N`: the global pool's size (the reports do not depend on it).
+pub(crate) fn threads(count: Option<u64>) {
+    if let Some(threads) = count {
+        // Only the first call configures the global pool; a second is harmless.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::try_from(threads).unwrap_or(usize::MAX))
+            .build_global();
+    }
+}

@@ -1,0 +1,318 @@
+//! `validate-design ROBOT`: the arguments become [`proving_ground::Options`], the library's
+//! [`proving_ground::validate`] runs, and what it returns is printed and written.
+
+use super::ToleranceArg;
+use proving_ground::error::Error;
+use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
+use proving_ground::plan::PlannerKind;
+use proving_ground::run::{self, Exports, Outcome, Run, Stop, Written};
+use proving_ground::{render, report};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// The robot and how to validate it (the command line without a subcommand).
+#[derive(Debug, clap::Args)]
+pub(crate) struct ValidateArgs {
+    /// Design JSON (free, economic, modular, preset), URDF or MJCF file.
+    #[arg(required = true)]
+    pub(crate) design: Option<PathBuf>,
+    /// URDF: first link of the chain [default: the root link].
+    #[arg(long, value_name = "LINK")]
+    pub(crate) base: Option<String>,
+    /// URDF: last link of the chain; MJCF: a body or a site, the tool frame [default: the arm's
+    /// last link, or the link fixed below it named like a tool frame (tcp, tool0, eef, ee_link,
+    /// flange, hand); gripper joints are not arm joints].
+    #[arg(long, value_name = "LINK")]
+    pub(crate) tip: Option<String>,
+    /// URDF: leave out the self-collision pairs the SRDF FILE's <disable_collisions> list, with
+    /// its reasons (never read unless given).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) srdf: Option<PathBuf>,
+    /// URDF: a root for package://NAME/... mesh URIs (repeatable; searched before ROS_PACKAGE_PATH).
+    #[arg(long = "package-path", value_name = "DIR")]
+    pub(crate) package_paths: Vec<PathBuf>,
+    /// Write the model as URDF to FILE (never over an input file).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) export_urdf: Option<PathBuf>,
+    /// Write the model as MJCF to FILE (never over an input file).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) export_mjcf: Option<PathBuf>,
+    /// With --export-mjcf: write the scenario too (the robot at its base pose, the obstacles, the
+    /// floor and a site `goal/K` per goal), so MuJoCo's own viewer shows the whole scene.
+    #[arg(long, requires = "export_mjcf")]
+    pub(crate) scene: bool,
+    /// Write pictures as SVG into DIR (created if missing; only the files named scene.svg,
+    /// goal-NNN.svg and clearance.svg are written): four views of the robot in exact geometry per
+    /// goal and at home, and the clearance along the trajectory.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["describe", "kinematics_only"])]
+    pub(crate) svg: Option<PathBuf>,
+    /// The same pictures as PNG into DIR.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["describe", "kinematics_only"])]
+    pub(crate) png: Option<PathBuf>,
+    /// Write the report as one self-contained HTML page to FILE (opens offline: verdict, goals,
+    /// findings, a 3D view with a timeline, the clearance plot).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["describe", "kinematics_only"])]
+    pub(crate) html: Option<PathBuf>,
+    /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips).
+    #[arg(long, value_name = "N", default_value_t = 100, value_parser = clap::value_parser!(u64).range(0..=100_000))]
+    pub(crate) mujoco_checks: u64,
+    /// Seed of IK's random starts and of the kinematics check's random configurations.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub(crate) seed: u64,
+    /// Print only the joints, links and tool pose; run nothing else.
+    #[arg(long, conflicts_with = "kinematics_only")]
+    pub(crate) describe: bool,
+    /// Treat warnings about the input as errors (exit 2).
+    #[arg(long)]
+    pub(crate) strict: bool,
+    /// Print only the verdict line (warnings about the input and errors still go to stderr).
+    #[arg(long)]
+    pub(crate) quiet: bool,
+    /// Scenario JSON to validate the design on [default: scenarios/course.json, or the same
+    /// course built in when that file is not in the current directory].
+    #[arg(long, value_name = "FILE")]
+    pub(crate) scenario: Option<PathBuf>,
+    /// Build, export and check the model against MuJoCo's kinematics only; run no scenario.
+    #[arg(long)]
+    pub(crate) kinematics_only: bool,
+    /// Write the machine-readable report (JSON) to FILE (never over an input file).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) json: Option<PathBuf>,
+    /// Physics engines to run the trajectory in.
+    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
+    pub(crate) engines: Engines,
+    /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
+    pub(crate) ik_seeds: u64,
+    /// Boxes at most the joint-space search visits for a goal that IK neither reaches nor
+    /// proves out of reach (0 turns it off: such goals stay undecided).
+    #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SEARCH_BOXES)]
+    pub(crate) search_boxes: usize,
+    /// Judge every goal by this tolerance mode instead of the scenario's.
+    #[arg(long, value_name = "MODE")]
+    pub(crate) tolerance: Option<ToleranceArg>,
+    /// Clearance (m) every configuration and trajectory segment must keep.
+    #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = super::non_negative)]
+    pub(crate) margin: f64,
+    /// Engine contacts shallower than M metres are not counted (a tolerance for the engines'
+    /// own geometric approximations).
+    #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = super::non_negative)]
+    pub(crate) contact_depth: f64,
+    /// How goals are joined: `rrt-connect` (straight segments first, then a certified
+    /// RRT-Connect detour) or `straight` (the paper's heuristic: one straight segment).
+    #[arg(long, value_name = "PLANNER", default_value = "rrt-connect")]
+    pub(crate) planner: PlannerKind,
+    /// Random samples per goal before the planner reports `no_path` (rrt-connect).
+    #[arg(long, value_name = "N", default_value_t = proving_ground::plan::DEFAULT_PLAN_BUDGET as u64, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_PLAN_BUDGET))]
+    pub(crate) plan_budget: u64,
+    /// The paper's static metric only: a collision-free IK solution per goal; no trajectory, no
+    /// engines (the fastest mode).
+    #[arg(long, conflicts_with_all = ["engines", "planner", "plan_budget"])]
+    pub(crate) reach_only: bool,
+    /// Worker threads [default: the number of cores]; the report is the same for any number.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub(crate) threads: Option<u64>,
+}
+
+impl ValidateArgs {
+    /// The library's options for these arguments.
+    fn options(&self) -> proving_ground::Options {
+        let stop = if self.describe {
+            Stop::Described
+        } else if self.kinematics_only {
+            Stop::KinematicsChecked
+        } else {
+            Stop::Validated
+        };
+        proving_ground::Options {
+            load: LoadOptions {
+                base_link: self.base.clone(),
+                tip_link: self.tip.clone(),
+                package_paths: self.package_paths.clone(),
+            },
+            srdf: self.srdf.clone(),
+            strict: self.strict,
+            scenario: self.scenario.clone(),
+            tolerance: self.tolerance.map(Into::into),
+            kinematics_checks: usize::try_from(self.mujoco_checks).unwrap_or(usize::MAX),
+            stop,
+            exports: Exports {
+                urdf: self.export_urdf.clone(),
+                mjcf: self.export_mjcf.clone(),
+                scene: self.scene,
+            },
+            validate: ValidateOptions {
+                ik: proving_ground::ik::IkOptions {
+                    seeds: usize::try_from(self.ik_seeds).unwrap_or(usize::MAX),
+                    search_boxes: self.search_boxes,
+                    seed: self.seed,
+                    ..Default::default()
+                },
+                certify: proving_ground::plan::CertifyOptions { threshold_m: self.margin },
+                engines: self.engines,
+                planner: proving_ground::plan::PlannerOptions {
+                    kind: self.planner,
+                    budget: usize::try_from(self.plan_budget).unwrap_or(usize::MAX),
+                    seed: self.seed,
+                },
+                reach_only: self.reach_only,
+                engine: proving_ground::engine::RunOptions {
+                    contact_depth_m: self.contact_depth,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        }
+    }
+}
+
+/// The run's progress on stderr: a spinner for a stage that cannot be counted, else the goals
+/// done of all, the time taken and an estimate of the time left; the notes about the input.
+struct StageBar {
+    bar: indicatif::ProgressBar,
+    /// Print the loader's choices and the SRDF's summary (not with --quiet, nor where
+    /// --describe lists them).
+    infos: bool,
+}
+
+impl proving_ground::progress::Progress for StageBar {
+    fn stage(&self, name: &str, total: Option<u64>) {
+        let style = match total {
+            Some(total) => {
+                self.bar.set_length(total);
+                self.bar.set_position(0);
+                self.bar.reset_eta();
+                indicatif::ProgressStyle::with_template("{spinner} {msg}: {pos}/{len} goals, {elapsed} (about {eta} left)")
+            }
+            None => indicatif::ProgressStyle::with_template("{spinner} {msg}"),
+        };
+        if let Ok(style) = style {
+            self.bar.set_style(style);
+        }
+        self.bar.set_message(name.to_string());
+    }
+
+    fn advance(&self) {
+        self.bar.inc(1);
+    }
+
+    fn warning(&self, line: &str) {
+        self.bar.suspend(|| eprintln!("{line}"));
+    }
+
+    fn info(&self, line: &str) {
+        if self.infos {
+            self.bar.suspend(|| eprintln!("info: {line}"));
+        }
+    }
+}
+
+/// Validates, prints and writes what was asked; the exit code of the outcome.
+pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
+    let input = args.design.as_deref().expect("clap requires DESIGN without a subcommand");
+    super::threads(args.threads);
+    let describing = args.describe || args.kinematics_only;
+    // On stderr; indicatif draws nothing when stderr is not a terminal.
+    let bar = StageBar {
+        bar: if args.quiet {
+            indicatif::ProgressBar::hidden()
+        } else {
+            indicatif::ProgressBar::new_spinner()
+        },
+        infos: !args.quiet && !describing,
+    };
+    bar.bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    let run = proving_ground::validate(input, &args.options(), &bar);
+    bar.bar.finish_and_clear();
+    let run = run?;
+    if !args.quiet && describing {
+        print!("{}", report::describe(&run.model, run.hardware_cost_m));
+        if let Some(srdf) = &run.srdf {
+            println!("{}", srdf.describe());
+        }
+        println!("{}", report::scenario_summary(&run.scenario));
+    }
+    if !args.quiet {
+        for (what, path) in &run.written {
+            let what = match what {
+                Written::Urdf => "URDF",
+                Written::Mjcf => "MJCF",
+            };
+            println!("wrote {what} {}", path.display());
+        }
+    }
+    if let Some(check) = &run.kinematics_check {
+        // A full run prints the line with the report.
+        if args.kinematics_only || !check.agree {
+            println!("{}", check.line());
+        }
+        if !check.agree {
+            println!(
+                "worst at `{}`, q = {:?}",
+                check.agreement.worst_element, check.agreement.worst_configuration
+            );
+        }
+    }
+    if args.describe && args.quiet {
+        println!("{}: {} joints, model built", run.model.name, run.model.dof());
+    }
+    print_report(args, &run)?;
+    Ok(match run.outcome() {
+        Outcome::Pass => ExitCode::SUCCESS,
+        Outcome::Fail => ExitCode::from(1),
+        Outcome::Undecided => ExitCode::from(3),
+    })
+}
+
+/// The report on stdout, and `--json`, `--svg`, `--png`, `--html`.
+fn print_report(args: &ValidateArgs, run: &Run) -> Result<(), Error> {
+    let (Some(validation), Some(report)) = (&run.validation, &run.report) else {
+        return Ok(());
+    };
+    if let Some(path) = &args.json {
+        pipeline::write_output(path, &run::report_json(report)?)?;
+    }
+    write_pictures(args, validation, report)?;
+    if args.quiet {
+        println!("{}", report::verdict_line(&report.verdict));
+    } else {
+        print!("{}", report::render(report));
+    }
+    Ok(())
+}
+
+/// `--svg DIR`, `--png DIR`, `--html FILE`.
+fn write_pictures(args: &ValidateArgs, validation: &pipeline::Validation, report: &report::Report) -> Result<(), Error> {
+    use rayon::prelude::*;
+    if args.svg.is_some() || args.png.is_some() {
+        let pictures = render::pictures(validation, report);
+        if let Some(dir) = &args.svg {
+            let files: Vec<(String, Vec<u8>)> = pictures
+                .iter()
+                .map(|p| (format!("{}.svg", p.name), p.svg.clone().into_bytes()))
+                .collect();
+            pipeline::write_files_into(dir, &files)?;
+            if !args.quiet {
+                println!("wrote {} SVG pictures into {}", files.len(), dir.display());
+            }
+        }
+        if let Some(dir) = &args.png {
+            // Each picture on its own: the order and the bytes do not depend on the threads.
+            let files = pictures
+                .par_iter()
+                .map(|p| Ok((format!("{}.png", p.name), render::png::to_png(&p.name, &p.svg)?)))
+                .collect::<Result<Vec<_>, render::RenderError>>()?;
+            pipeline::write_files_into(dir, &files)?;
+            if !args.quiet {
+                println!("wrote {} PNG pictures into {}", files.len(), dir.display());
+            }
+        }
+    }
+    if let Some(path) = &args.html {
+        pipeline::write_output(path, &render::page(validation, report))?;
+        if !args.quiet {
+            println!("wrote HTML report {}", path.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,287 @@
+//! One validation run, as `validate-design ROBOT` does it, for every front end: reads the robot
+//! (design JSON, URDF or MJCF) and the scenario, applies an SRDF, `strict` and a tolerance
+//! override, writes the exports asked for, checks our kinematics against MuJoCo's on the MJCF
+//! export, and validates. The CLI parses its arguments into [`Options`], calls [`validate`] and
+//! prints the [`Run`]; the library's users get the same run, byte for byte.
+//!
+//! ```no_run
+//! use proving_ground::run::{validate, Options};
+//! let opts = Options {
+//!     scenario: Some("scenarios/cluttered/task-00.json".into()),
+//!     ..Options::default()
+//! };
+//! let run = validate("designs/ur5e.json".as_ref(), &opts, &proving_ground::progress::Silent)?;
+//! if let Some(report) = &run.report {
+//!     println!("{}", proving_ground::report::verdict_line(&report.verdict));
+//! }
+//! # Ok::<(), proving_ground::error::Error>(())
+//! ```
+
+use crate::engine::KinematicsCheck;
+use crate::error::Error;
+use crate::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
+use crate::pipeline::{self, InputKind, LoadOptions, Loaded, ValidateOptions, Validation};
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::scenario::{Scenario, Tolerance};
+use crate::srdf::SrdfExclusions;
+use std::path::{Path, PathBuf};
+
+/// How far a run goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Stop {
+    /// Build the model (and write the exports): nothing is run.
+    Described,
+    /// Also check our kinematics against MuJoCo's; no scenario.
+    KinematicsChecked,
+    /// The whole validation on the scenario.
+    #[default]
+    Validated,
+}
+
+/// Files a run writes besides the report (never over a file the run read).
+#[derive(Debug, Clone, Default)]
+pub struct Exports {
+    /// The model as URDF.
+    pub urdf: Option<PathBuf>,
+    /// The model as MJCF.
+    pub mjcf: Option<PathBuf>,
+    /// The MJCF export holds the scenario too (obstacles, floor, a site per goal).
+    pub scene: bool,
+}
+
+/// Everything a run takes besides the robot file; every default is `validate-design`'s.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// How the robot file is read (URDF base and tip, package paths; MJCF tip).
+    pub load: LoadOptions,
+    /// URDF: an SRDF whose `<disable_collisions>` pairs are left out.
+    pub srdf: Option<PathBuf>,
+    /// Warnings about the input are errors ([`Error::Strict`]).
+    pub strict: bool,
+    /// The scenario file; `None`: [`pipeline::scenario_or_default`].
+    pub scenario: Option<PathBuf>,
+    /// Judge every goal by this tolerance instead of the scenario's.
+    pub tolerance: Option<Tolerance>,
+    /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips the
+    /// check); seeded with the IK seed.
+    pub kinematics_checks: usize,
+    /// How far the run goes.
+    pub stop: Stop,
+    /// Files to write.
+    pub exports: Exports,
+    /// The validation's settings (IK, planner, engines, margin, reach-only).
+    pub validate: ValidateOptions,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            load: LoadOptions::default(),
+            srdf: None,
+            strict: false,
+            scenario: None,
+            tolerance: None,
+            kinematics_checks: DEFAULT_KINEMATICS_CHECKS,
+            stop: Stop::default(),
+            exports: Exports::default(),
+            validate: ValidateOptions::default(),
+        }
+    }
+}
+
+/// Configurations of the kinematics check unless told otherwise.
+pub const DEFAULT_KINEMATICS_CHECKS: usize = 100;
+
+/// What a file of the run's is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Written {
+    /// The URDF export.
+    Urdf,
+    /// The MJCF export (with the scene when asked).
+    Mjcf,
+}
+
+/// What a run found, as far as it went.
+#[derive(Debug)]
+pub struct Run {
+    /// The robot file.
+    pub input: PathBuf,
+    /// The model every stage used (at its own base; the validation holds it placed).
+    pub model: crate::model::Model,
+    /// The design's hardware cost (m), for design files.
+    pub hardware_cost_m: Option<f64>,
+    /// The SRDF's exclusions, when one was given.
+    pub srdf: Option<SrdfExclusions>,
+    /// The scenario, with the tolerance override applied.
+    pub scenario: Scenario,
+    /// The files written, in order.
+    pub written: Vec<(Written, PathBuf)>,
+    /// MuJoCo's kinematics against ours; a disagreement ends the run before the scenario.
+    pub kinematics_check: Option<KinematicsCheck>,
+    /// The validation, when the run got that far.
+    pub validation: Option<Validation>,
+    /// Its report.
+    pub report: Option<Report>,
+}
+
+impl Run {
+    /// How the run ended, for an exit code: the report's verdict, a kinematics disagreement, or
+    /// a run that stopped before the scenario.
+    pub fn outcome(&self) -> Outcome {
+        if self.kinematics_check.as_ref().is_some_and(|c| !c.agree) {
+            return Outcome::Fail;
+        }
+        match &self.report {
+            None => Outcome::Pass,
+            Some(report) => match (report.verdict.passed, report.verdict.word) {
+                (true, _) => Outcome::Pass,
+                (false, "UNDECIDED") => Outcome::Undecided,
+                (false, _) => Outcome::Fail,
+            },
+        }
+    }
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// The design passes (or the model was built and agrees with MuJoCo).
+    Pass,
+    /// The design fails, proven (or MuJoCo disagrees with our kinematics).
+    Fail,
+    /// Nothing failed, but the harness's limits left something open.
+    Undecided,
+}
+
+/// Runs what `validate-design input` runs with `opts`, telling `progress` the stages and the
+/// notes about the input (the loader's warnings and choices, the SRDF's summary).
+///
+/// # Errors
+/// The stages' errors, each naming the file and the field or element: an unreadable robot,
+/// scenario or SRDF; [`Error::Strict`]; a failed export or write; MuJoCo refusing the model.
+pub fn validate(input: &Path, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
+    let loaded = pipeline::load(input, &opts.load)?;
+    let scenario = pipeline::scenario_or_default(opts.scenario.as_deref())?;
+    validate_loaded(input, loaded, scenario, opts, progress)
+}
+
+/// [`validate`] on a robot already read from `input` and a scenario already read
+/// (`opts.load` and `opts.scenario` are not used).
+///
+/// # Errors
+/// As [`validate`].
+pub fn validate_loaded(
+    input: &Path,
+    loaded: Loaded,
+    mut scenario: Scenario,
+    opts: &Options,
+    progress: &dyn Progress,
+) -> Result<Run, Error> {
+    let model = &loaded.model;
+    for diagnostic in &model.diagnostics {
+        progress.warning(&diagnostic.to_string());
+    }
+    for choice in model.source.choices() {
+        progress.info(&format!("{}: {choice}", input.display()));
+    }
+    let srdf = match &opts.srdf {
+        Some(path) if pipeline::input_kind(input)? != InputKind::Urdf => {
+            return Err(Error::Srdf {
+                path: path.clone(),
+                element: "--srdf".into(),
+                message: format!("is for URDF input; {} is not a URDF", input.display()),
+            })
+        }
+        Some(path) => Some(crate::srdf::exclusions(path, model)?),
+        None => None,
+    };
+    if let Some(srdf) = &srdf {
+        progress.info(&format!(
+            "{}: {} self-collision pairs left out ({} entries not applied); listed with --describe and in the JSON report's criteria.excluded_pairs",
+            srdf.path.display(),
+            srdf.pairs.len(),
+            srdf.notes.len()
+        ));
+    }
+    if opts.strict && !model.diagnostics.is_empty() {
+        let list = model.diagnostics.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n");
+        return Err(Error::Strict {
+            count: model.diagnostics.len(),
+            list,
+        });
+    }
+    if let Some(tolerance) = opts.tolerance {
+        for goal in &mut scenario.goals {
+            goal.tolerance = tolerance;
+        }
+    }
+    // Built only when written or checked: a sweep validates thousands of designs.
+    let wants_mjcf = (opts.exports.mjcf.is_some() && !opts.exports.scene) || kinematics_checked(opts);
+    let mjcf = if wants_mjcf {
+        to_mjcf(model, &MjcfOptions::default())?
+    } else {
+        String::new()
+    };
+    let mut written = Vec::new();
+    if let Some(path) = &opts.exports.urdf {
+        pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?)?;
+        written.push((Written::Urdf, path.clone()));
+    }
+    if let Some(path) = &opts.exports.mjcf {
+        let text = if opts.exports.scene {
+            pipeline::scene_mjcf(model, &scenario)?
+        } else {
+            mjcf.clone()
+        };
+        pipeline::write_output(path, &text)?;
+        written.push((Written::Mjcf, path.clone()));
+    }
+    let mut run = Run {
+        input: input.to_path_buf(),
+        model: model.clone(),
+        hardware_cost_m: loaded.design.as_ref().map(crate::design::Design::hardware_cost),
+        srdf,
+        scenario,
+        written,
+        kinematics_check: None,
+        validation: None,
+        report: None,
+    };
+    if kinematics_checked(opts) {
+        let source = format!("the MJCF export of {}", input.display());
+        let check = crate::engine::check_kinematics(model, &mjcf, &source, opts.kinematics_checks, opts.validate.ik.seed)?;
+        let agree = check.agree;
+        run.kinematics_check = Some(check);
+        if !agree {
+            return Ok(run);
+        }
+    }
+    if opts.stop != Stop::Validated {
+        return Ok(run);
+    }
+    let mut validate_options = opts.validate.clone();
+    if let Some(srdf) = &run.srdf {
+        validate_options.excluded_pairs.extend(srdf.pairs.iter().cloned());
+    }
+    let mut validation = pipeline::validate_with_progress(loaded, run.scenario.clone(), &validate_options, progress)?;
+    validation.kinematics_check = run.kinematics_check.clone();
+    run.report = Some(crate::report::build(&validation));
+    run.validation = Some(validation);
+    Ok(run)
+}
+
+/// Whether the run checks our kinematics against MuJoCo's.
+fn kinematics_checked(opts: &Options) -> bool {
+    opts.kinematics_checks > 0 && opts.stop != Stop::Described
+}
+
+/// The report as the JSON file `--json` writes: pretty, with a final newline.
+///
+/// # Errors
+/// [`Error::Report`] (a bug: every field is plain data).
+pub fn report_json(report: &Report) -> Result<String, Error> {
+    serde_json::to_string_pretty(report)
+        .map(|text| text + "\n")
+        .map_err(|e| Error::Report { message: e.to_string() })
+}
