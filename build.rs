@@ -11,7 +11,7 @@
 //! 4. The official wheel is fetched with `python3 -m pip download`, hash checked, and unpacked.
 //!
 //! Except with 1, the binaries do not depend on the library at start-up: it is loaded at first
-//! use (see `sim/engine/library.rs`).
+//! use (see `sim/mujoco.rs`).
 //!
 //! Failures end the build with one message saying what to install or set.
 
@@ -73,7 +73,7 @@ fn run(manifest: &Path, pin_path: &Path) -> Result<(), String> {
         }
     }
 
-    // MuJoCo is loaded at first use (sim/engine/library.rs), so a binary without it still runs
+    // MuJoCo is loaded at first use (sim/mujoco.rs), so a binary without it still runs
     // everything else. mujoco-rs links `-lmujoco` from this folder: an empty linker script of that
     // name satisfies it without a DT_NEEDED entry; the MuJoCo symbols stay undefined and are bound
     // lazily through the PLT, which needs `-C relro-level=partial` (.cargo/config.toml).
@@ -82,7 +82,7 @@ fn run(manifest: &Path, pin_path: &Path) -> Result<(), String> {
     let _ = fs::remove_file(&link);
     fs::write(
         &link,
-        "/* MuJoCo is loaded at run time (sim/engine/library.rs); -lmujoco links nothing. */\n",
+        "/* MuJoCo is loaded at run time (sim/mujoco.rs); -lmujoco links nothing. */\n",
     )
     .map_err(|e| format!("cannot write {}: {e}", link.display()))?;
     println!("cargo::rustc-link-arg=-Wl,--unresolved-symbols=ignore-all");

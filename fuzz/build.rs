@@ -1,7 +1,7 @@
 //! Link settings for the fuzz binaries, mirroring the ones proving-ground's build.rs gives its own
 //! binaries: `cargo::rustc-link-arg` of a dependency does not reach its dependents.
 //!
-//! MuJoCo is loaded at first use (sim/engine/library.rs): its symbols are left undefined and bound
+//! MuJoCo is loaded at first use (sim/mujoco.rs): its symbols are left undefined and bound
 //! lazily (with `-C relro-level=partial`, which fuzz/run adds to RUSTFLAGS, because cargo-fuzz's
 //! RUSTFLAGS replace the flags of .cargo/config.toml), and the library is found through the rpath.
 fn main() {

@@ -30,12 +30,6 @@ pub enum Error {
     /// A picture could not be made.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
-    /// A fine-tuning could not run.
-    #[error(transparent)]
-    Optimize(#[from] crate::optimize::OptimizeError),
-    /// A sweep, merge or design-space experiment could not run.
-    #[error(transparent)]
-    Sweep(#[from] crate::sweep::SweepError),
     /// An input file type proving-ground does not read.
     #[error("{path}: unknown input type; expected a design (.json) or a URDF (.urdf) file")]
     UnknownInput {

@@ -17,7 +17,8 @@
 //! their generators), [`collide`] (exact and approximate distances), [`ik`] (every collision-free
 //! solution of a goal), [`plan`] (the trajectory, certified continuous checking, timing),
 //! [`engine`] (rapier and MuJoCo runs, the static load, MuJoCo as kinematic oracle), [`report`]
-//! (findings and the verdict), [`render`] (pictures and the HTML report). Above them
+//! (findings and the verdict), [`render`] (pictures and the HTML report). Below them
+//! [`mujoco`] loads the MuJoCo library at first use and checks its version. Above them
 //! [`pipeline`] runs the stages in order ([`pipeline::validate`]); [`run`] is one validation run
 //! as `validate-design` does it ([`validate`]: the robot file, SRDF, strict checks, tolerance
 //! override, exports, MuJoCo's kinematics check, the validation and its report), the entry
@@ -68,6 +69,7 @@ pub mod frames;
 pub mod ik;
 pub mod limits;
 pub mod model;
+pub mod mujoco;
 pub mod optimize;
 pub mod pipeline;
 pub mod plan;

@@ -8,6 +8,7 @@
 mod cli;
 
 use clap::Parser;
+use cli::Failure;
 use cli::{Cli, Command};
 use proving_ground::error::Error;
 use std::process::ExitCode;
@@ -25,14 +26,14 @@ fn main() -> ExitCode {
     }
     let cli = Cli::parse();
     let result = match &cli.command {
-        Some(Command::Generate(args)) => cli::generate::command(args).map_err(Error::from),
-        Some(Command::Snapshot(args)) => cli::snapshot::command(args),
+        Some(Command::Generate(args)) => cli::generate::command(args).map_err(|e| Failure::from(Error::from(e))),
+        Some(Command::Snapshot(args)) => cli::snapshot::command(args).map_err(Failure::from),
         Some(Command::Sweep(args)) => cli::sweep::sweep_command(args),
         Some(Command::Merge(args)) => cli::sweep::merge_command(args),
         Some(Command::Table1(args)) => cli::sweep::table1_command(args),
         Some(Command::Ga(args)) => cli::sweep::ga_command(args),
         Some(Command::Optimize(args)) => cli::optimize::optimize_command(args),
-        None => cli::validate::command(&cli.validate),
+        None => cli::validate::command(&cli.validate).map_err(Failure::from),
     };
     match result {
         Ok(code) => code,

@@ -225,7 +225,13 @@ pub fn validate_loaded(
     };
     let mut written = Vec::new();
     if let Some(path) = &opts.exports.urdf {
-        pipeline::write_output(path, &to_urdf(model, &UrdfExportOptions::default())?)?;
+        // Meshes named relative to the file: it loads from any folder, and moves with them.
+        let folder = std::path::absolute(path).ok().and_then(|p| p.parent().map(Path::to_path_buf));
+        let urdf = UrdfExportOptions {
+            mesh_base: folder,
+            ..Default::default()
+        };
+        pipeline::write_output(path, &to_urdf(model, &urdf)?)?;
         written.push((Written::Urdf, path.clone()));
     }
     if let Some(path) = &opts.exports.mjcf {

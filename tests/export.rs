@@ -92,7 +92,14 @@ fn mjcf_export_matches_mujoco_kinematics_and_jacobian() {
 fn urdf_export_matches_mujocos_own_urdf_importer() {
     let dir = tempfile::tempdir().expect("temp dir");
     for (id, model) in shipped_models() {
-        let text = to_urdf(&model, &UrdfExportOptions { mujoco_block: true }).unwrap_or_else(|e| panic!("{id}: {e}"));
+        let text = to_urdf(
+            &model,
+            &UrdfExportOptions {
+                mujoco_block: true,
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{id}: {e}"));
         let path = dir.path().join(format!("{id}.urdf"));
         std::fs::write(&path, &text).expect("write URDF");
         let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();

@@ -98,3 +98,48 @@ fn validate_stops_where_asked_and_reports_errors_with_the_file() {
     let message = srdf_on_a_design.to_string();
     assert!(message.contains("panda.srdf") && message.contains("ur5e.json"), "{message}");
 }
+
+#[test]
+fn the_exported_urdf_names_its_meshes_relative_to_itself_and_loads_elsewhere() {
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let out = dir.path().join("nested/panda.urdf");
+    std::fs::create_dir_all(out.parent().expect("a folder")).expect("folder");
+    let opts = proving_ground::Options {
+        stop: Stop::Described,
+        exports: proving_ground::run::Exports {
+            urdf: Some(out.clone()),
+            ..Default::default()
+        },
+        load: proving_ground::pipeline::LoadOptions {
+            tip_link: Some("panda_hand".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let run = proving_ground::validate(&panda_urdf(), &opts, &proving_ground::progress::Silent).expect("exports");
+    let text = std::fs::read_to_string(&out).expect("written");
+    let filenames: Vec<&str> = text
+        .split("filename=\"")
+        .skip(1)
+        .filter_map(|rest| rest.split('"').next())
+        .collect();
+    assert!(!filenames.is_empty(), "the Panda has mesh colliders:\n{text}");
+    for name in &filenames {
+        assert!(name.starts_with("../"), "{name}: expected a path relative to the URDF's folder");
+    }
+    // Read back from its own folder, whatever the working folder: the same meshes.
+    let back = proving_ground::pipeline::load_model(&out, &Default::default()).expect("the export loads");
+    let meshes = |model: &proving_ground::model::Model| -> Vec<usize> {
+        model
+            .links
+            .iter()
+            .flat_map(|l| &l.colliders)
+            .filter_map(|c| match &c.shape {
+                proving_ground::model::Shape::Mesh(mesh) => Some(mesh.vertices.len()),
+                _ => None,
+            })
+            .collect()
+    };
+    assert!(!meshes(&run.model).is_empty());
+    assert_eq!(meshes(&back), meshes(&run.model));
+}

@@ -89,6 +89,21 @@ impl From<ToleranceArg> for Tolerance {
     }
 }
 
+/// Whatever stops a subcommand: the library's error or an experiment's (each names the file,
+/// field or argument); every one exits 2.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum Failure {
+    /// A run, a load, a write.
+    #[error(transparent)]
+    Run(#[from] proving_ground::error::Error),
+    /// A sweep, merge or GA.
+    #[error(transparent)]
+    Sweep(#[from] proving_ground::sweep::SweepError),
+    /// A fine-tuning.
+    #[error(transparent)]
+    Optimize(#[from] proving_ground::optimize::OptimizeError),
+}
+
 /// `--threads N`: the global pool's size (the reports do not depend on it).
 pub(crate) fn threads(count: Option<u64>) {
     if let Some(threads) = count {

@@ -1,5 +1,6 @@
 //! `validate-design optimize`: the command-line side of [`proving_ground::optimize`].
 
+use super::Failure;
 use proving_ground::design::Design;
 use proving_ground::error::Error;
 use proving_ground::optimize::{self, OptimizeError, OptimizeOptions, Tensors};
@@ -49,12 +50,12 @@ struct Tuning {
     summary: String,
 }
 
-pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
+pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure> {
     let engines = args.engines;
     let mut tunings = Vec::with_capacity(args.designs.len());
     for path in &args.designs {
         if pipeline::input_kind(path)? != pipeline::InputKind::Design {
-            return Err(Error::from(OptimizeError::Input(format!(
+            return Err(Failure::from(OptimizeError::Input(format!(
                 "{}: optimize needs a design JSON (DH rows); a URDF or MJCF robot has no design parameters",
                 path.display()
             ))));
@@ -68,7 +69,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
         // Compared without case: on a case-insensitive file system `A` and `a` are one file.
         let same = |t: &Tuning| t.out.to_string_lossy().to_lowercase() == out.to_string_lossy().to_lowercase();
         if tunings.iter().any(same) {
-            return Err(Error::from(OptimizeError::Input(format!(
+            return Err(Failure::from(OptimizeError::Input(format!(
                 "{}: another input is also called `{}`; the tuned designs would share `{}`",
                 path.display(),
                 path.file_stem().unwrap_or_default().to_string_lossy(),
@@ -123,7 +124,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Error> {
             );
             let text = optimize::write::design_json(&tuned, &description);
             // The file must read back to exactly the design optimized.
-            let back = proving_ground::design::parse(&text, &tuning.out)?;
+            let back = proving_ground::design::parse(&text, &tuning.out).map_err(Error::from)?;
             if back.joints != tuned.joints {
                 return Err(
                     OptimizeError::Input(format!("{}: the tuned design does not read back to itself", tuning.out.display())).into(),
@@ -200,15 +201,17 @@ fn validated(
     loaded: pipeline::Loaded,
     scenario: &proving_ground::scenario::Scenario,
     opts: &ValidateOptions,
-) -> Result<Report, Error> {
+) -> Result<Report, Failure> {
     let run_opts = proving_ground::Options {
         kinematics_checks: 0,
         validate: opts.clone(),
         ..Default::default()
     };
     let run = proving_ground::run::validate_loaded(path, loaded, scenario.clone(), &run_opts, &proving_ground::progress::Silent)?;
-    run.report.ok_or_else(|| Error::Report {
-        message: "a whole run has a report".into(),
+    run.report.ok_or_else(|| {
+        Failure::from(Error::Report {
+            message: "a whole run has a report".into(),
+        })
     })
 }
 
@@ -219,7 +222,7 @@ fn into_folder(args: &OptimizeArgs) -> bool {
 
 /// Where the tuned design of `input` goes: `--out` itself, or `<input name>-tuned.json` in the
 /// `--out` folder.
-fn out_path(args: &OptimizeArgs, input: &Path) -> Result<PathBuf, Error> {
+fn out_path(args: &OptimizeArgs, input: &Path) -> Result<PathBuf, Failure> {
     if !into_folder(args) {
         return Ok(args.out.clone());
     }
@@ -231,7 +234,7 @@ fn out_path(args: &OptimizeArgs, input: &Path) -> Result<PathBuf, Error> {
 
 /// Refuses, before any work, what the writes at the end would refuse: a folder `--out` that is
 /// a file, a file `--out` that is a folder, a target that this run read.
-fn check_targets(args: &OptimizeArgs, tunings: &[Tuning]) -> Result<(), Error> {
+fn check_targets(args: &OptimizeArgs, tunings: &[Tuning]) -> Result<(), Failure> {
     if into_folder(args) && args.out.exists() && !args.out.is_dir() {
         return Err(OptimizeError::Input(format!(
             "--out {}: exists and is not a folder; several tuned designs need a folder",
@@ -244,7 +247,7 @@ fn check_targets(args: &OptimizeArgs, tunings: &[Tuning]) -> Result<(), Error> {
             return Err(OptimizeError::Input(format!("--out {}: a folder is there, expected a file name", tuning.out.display())).into());
         }
         if proving_ground::files::is_input(&tuning.out) {
-            return Err(Error::WouldOverwriteInput { path: tuning.out.clone() });
+            return Err(Error::WouldOverwriteInput { path: tuning.out.clone() }.into());
         }
     }
     Ok(())

@@ -1,5 +1,6 @@
 //! `validate-design sweep`, `merge` and `table1`: the command-line side of [`proving_ground::sweep`].
 
+use super::Failure;
 use proving_ground::error::Error;
 use proving_ground::pipeline::{Engines, LoadOptions};
 use proving_ground::sweep::{self, inputs, Shard, SweepMode, SweepOptions};
@@ -163,7 +164,7 @@ fn bar(quiet: bool) -> PairBar {
     })
 }
 
-fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Error> {
+fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Failure> {
     Ok(match dir {
         Some(dir) => Some(sweep::read_reference(dir)?),
         None => None,
@@ -171,7 +172,7 @@ fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Error> {
 }
 
 /// `validate-design sweep ...`.
-pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
+pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
     super::threads(args.threads);
     let ik = proving_ground::ik::IkOptions {
         seeds: usize::try_from(args.ik_seeds).unwrap_or(usize::MAX),
@@ -218,7 +219,7 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Error> {
 }
 
 /// `validate-design merge ...`.
-pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Error> {
+pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Failure> {
     let result = sweep::merge(
         &args.shards,
         &args.out,
@@ -239,7 +240,7 @@ pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Error> {
 }
 
 /// `validate-design table1 ...`.
-pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
+pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Failure> {
     super::threads(args.threads);
     let scenario_args = if args.scenarios.is_empty() {
         vec!["scenarios/cluttered".to_string()]
@@ -270,7 +271,7 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Error> {
 }
 
 /// `validate-design ga ...`.
-pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Error> {
+pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
     super::threads(args.threads);
     let scenario = inputs::resolve_scenarios(std::slice::from_ref(&args.scenario)).map_err(|e| match e {
         sweep::SweepError::Scenarios { message, .. } => sweep::SweepError::Scenarios {

@@ -44,7 +44,7 @@ pub struct JointLoad {
 /// be placed as in the run (the base orientation decides where gravity points).
 ///
 /// # Errors
-/// [`EngineError::Export`], [`EngineError::MujocoLoad`], [`EngineError::Version`], and
+/// [`EngineError::Export`], [`EngineError::MujocoLoad`], [`EngineError::Mujoco`], and
 /// [`EngineError::ConfigurationLength`] for a sample of the wrong length.
 pub fn static_load<Q: AsRef<[f64]>>(
     model: &Model,

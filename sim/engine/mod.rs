@@ -6,7 +6,6 @@ mod confirm;
 mod crosscheck;
 mod gains;
 mod inputs;
-pub mod library;
 mod load;
 mod mujoco;
 mod mujoco_run;
@@ -45,20 +44,9 @@ pub enum EngineError {
         /// The name looked for.
         name: String,
     },
-    /// The MuJoCo library could not be loaded.
-    #[error("{message}")]
-    Unavailable {
-        /// What was tried and what to install.
-        message: String,
-    },
-    /// The linked MuJoCo is not the version the project pins.
-    #[error("linked MuJoCo is {found}, proving-ground was built and verified against {expected} (mujoco/PIN)")]
-    Version {
-        /// Version reported by the library.
-        found: String,
-        /// Version pinned.
-        expected: &'static str,
-    },
+    /// MuJoCo cannot be used: not loaded, or not the pinned version.
+    #[error(transparent)]
+    Mujoco(#[from] crate::mujoco::MujocoError),
     /// The model could not be written as MJCF for an engine run.
     #[error("robot `{robot}`: cannot export the model for MuJoCo: {source}")]
     Export {

@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Matrix6xX, Quaternion, Translation3, UnitQuaternion};
 use std::path::Path;
 
 /// The MuJoCo version proving-ground is verified against; `mujoco/PIN` says the same.
-pub const MUJOCO_VERSION: &str = "3.17.0";
+pub use crate::mujoco::MUJOCO_VERSION;
 
 /// A loaded MuJoCo model with the joints of our chain located in it.
 pub struct MujocoKinematics {
@@ -182,7 +182,7 @@ impl MujocoGeomDistance {
     /// Loads MJCF text.
     ///
     /// # Errors
-    /// [`EngineError::MujocoLoad`] with MuJoCo's message, or [`EngineError::Version`].
+    /// [`EngineError::MujocoLoad`] with MuJoCo's message, or [`EngineError::Mujoco`].
     pub fn from_xml_str(xml: &str, source_name: &str) -> Result<Self, EngineError> {
         check_version()?;
         let model = MjModel::from_xml_string(xml).map_err(|e| EngineError::MujocoLoad {
@@ -235,18 +235,7 @@ impl MujocoGeomDistance {
 /// use of MuJoCo starts here.
 ///
 /// # Errors
-/// [`EngineError::Unavailable`] or [`EngineError::Version`].
+/// [`EngineError::Mujoco`].
 pub fn check_version() -> Result<(), EngineError> {
-    super::library::ensure().map_err(|message| EngineError::Unavailable { message })?;
-    // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
-    let found = unsafe { std::ffi::CStr::from_ptr(mujoco_rs::mujoco_c::mj_versionString()) }
-        .to_string_lossy()
-        .into_owned();
-    if found != MUJOCO_VERSION {
-        return Err(EngineError::Version {
-            found,
-            expected: MUJOCO_VERSION,
-        });
-    }
-    Ok(())
+    crate::mujoco::check_version().map_err(EngineError::from)
 }

@@ -275,7 +275,7 @@ struct Tracking {
 /// # Errors
 /// [`EngineError::InvalidTimestep`] for a step that is not positive, [`EngineError::Export`]
 /// when the model cannot be exported (including gains not matching the joints),
-/// [`EngineError::MujocoLoad`] / [`EngineError::Version`] from MuJoCo,
+/// [`EngineError::MujocoLoad`] / [`EngineError::Mujoco`] from MuJoCo,
 /// [`EngineError::ConfigurationLength`] for a path whose configurations do not fit the model.
 pub fn run_mujoco(
     model: &Model,

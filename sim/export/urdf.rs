@@ -28,6 +28,10 @@ pub struct UrdfExportOptions {
     /// Insert a `<mujoco><compiler .../></mujoco>` block right after `<robot>` so that MuJoCo's
     /// URDF importer keeps every link as a body and reads angles in radians; default `false`.
     pub mujoco_block: bool,
+    /// The folder the URDF will be written into: mesh files are then named relative to it, so
+    /// the file loads from any working folder and moves with its meshes; `None` names them by
+    /// absolute path (text kept in memory, compared with other exports).
+    pub mesh_base: Option<std::path::PathBuf>,
 }
 
 /// Writes a model as URDF text.
@@ -35,7 +39,8 @@ pub struct UrdfExportOptions {
 /// A base link already called `world` and placed at the world origin is used as the root
 /// itself, without an extra `world` link. Joints without known effort or velocity get `0` in
 /// `<limit>`; continuous joints get a `<limit>` with effort and velocity only. Mesh colliders
-/// refer to their file by absolute path, with the model's scale (the file holds unscaled
+/// refer to their file relative to [`UrdfExportOptions::mesh_base`] (by absolute path without
+/// one, or where no relative path leads there), with the model's scale (the file holds unscaled
 /// vertices).
 ///
 /// # Errors
@@ -60,7 +65,7 @@ pub fn to_urdf(model: &Model, opts: &UrdfExportOptions) -> Result<String, Export
         joints.push(fixed_joint(name, WORLD_LINK, &base.name, &model.world_from_base));
     }
     for link in &model.links {
-        links.push(urdf_link(model, link)?);
+        links.push(urdf_link(model, link, opts)?);
         has_inertial.push(link.inertial.is_some());
     }
     for (i, joint) in model.joints.iter().enumerate() {
@@ -104,7 +109,7 @@ fn bare_link(name: &str) -> urdf_rs::Link {
     }
 }
 
-fn urdf_link(model: &Model, link: &Link) -> Result<urdf_rs::Link, ExportError> {
+fn urdf_link(model: &Model, link: &Link, opts: &UrdfExportOptions) -> Result<urdf_rs::Link, ExportError> {
     let collision = link
         .colliders
         .iter()
@@ -113,7 +118,7 @@ fn urdf_link(model: &Model, link: &Link) -> Result<urdf_rs::Link, ExportError> {
             Ok(urdf_rs::Collision {
                 name: Some(collider.label.clone()),
                 origin: pose(&collider.link_from_shape),
-                geometry: geometry(model, link, k, collider)?,
+                geometry: geometry(model, link, k, collider, opts)?,
             })
         })
         .collect::<Result<Vec<_>, ExportError>>()?;
@@ -146,7 +151,7 @@ fn urdf_link(model: &Model, link: &Link) -> Result<urdf_rs::Link, ExportError> {
     })
 }
 
-fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider) -> Result<urdf_rs::Geometry, ExportError> {
+fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider, opts: &UrdfExportOptions) -> Result<urdf_rs::Geometry, ExportError> {
     Ok(match &collider.shape {
         Shape::Sphere { radius } => urdf_rs::Geometry::Sphere { radius: *radius },
         Shape::Cylinder { radius, length } => urdf_rs::Geometry::Cylinder {
@@ -174,13 +179,27 @@ fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider) -> Result
             }
             // Fails only for an empty path (ruled out above) or an unknown current folder.
             let absolute = std::path::absolute(&mesh.file).map_err(|_| mesh_error("it cannot be made absolute"))?;
-            let filename = absolute.to_str().ok_or_else(|| mesh_error("the path is not valid UTF-8"))?;
+            let named = opts
+                .mesh_base
+                .as_deref()
+                .and_then(|base| relative_path(&absolute, base))
+                .unwrap_or(absolute);
+            let filename = named.to_str().ok_or_else(|| mesh_error("the path is not valid UTF-8"))?;
             urdf_rs::Geometry::Mesh {
                 filename: filename.to_string(),
                 scale: Some(urdf_rs::Vec3(mesh.scale)),
             }
         }
     })
+}
+
+/// `file` as seen from the folder `base`, both with their links resolved (`..` from a linked
+/// folder leads where the file system says, not where the text says); `None` when either does
+/// not exist or no relative path leads there (another drive).
+fn relative_path(file: &std::path::Path, base: &std::path::Path) -> Option<std::path::PathBuf> {
+    let file = std::fs::canonicalize(file).ok()?;
+    let base = std::fs::canonicalize(base).ok()?;
+    pathdiff::diff_paths(file, base)
 }
 
 fn urdf_joint(joint: &Joint, parent: &str, child: &str) -> urdf_rs::Joint {
@@ -438,7 +457,10 @@ mod tests {
     #[test]
     fn mujoco_block_follows_the_robot_tag() {
         let model = modular_model();
-        let opts = UrdfExportOptions { mujoco_block: true };
+        let opts = UrdfExportOptions {
+            mujoco_block: true,
+            ..Default::default()
+        };
         let text = to_urdf(&model, &opts).expect("exports");
         let robot_tag_end = text.find('>').expect("robot tag");
         let after = text[robot_tag_end + 1..].trim_start();

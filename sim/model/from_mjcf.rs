@@ -56,7 +56,7 @@ pub fn from_mjcf(path: &Path) -> Result<Model, ModelError> {
 /// one no joint moves.
 pub fn from_mjcf_to(path: &Path, tip: Option<&str>) -> Result<Model, ModelError> {
     // Loads MuJoCo, and checks its version first: mujoco-rs panics on a mismatch.
-    crate::engine::check_version().map_err(|e| ModelError::MjcfLoad {
+    crate::mujoco::check_version().map_err(|e| ModelError::MjcfLoad {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;

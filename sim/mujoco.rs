@@ -1,4 +1,7 @@
-//! Loads the MuJoCo library at first use, so that everything that does not need MuJoCo (help,
+//! The MuJoCo library, below every stage that uses it (the MJCF reader, the engines, the
+//! kinematic oracle): loaded at first use, and its version checked against the pin.
+//!
+//! Loaded at first use, so that everything that does not need MuJoCo (help,
 //! `generate`, `--engines rapier`, designs and URDFs without the kinematics check) runs on a
 //! machine without it, and a run that needs it says what to install.
 //!
@@ -40,7 +43,7 @@ fn last_dl_error() -> String {
 }
 
 fn load() -> Result<(), String> {
-    let version = super::MUJOCO_VERSION;
+    let version = MUJOCO_VERSION;
     // A file named by the user is the only one tried: loading another one instead would hide
     // the mistake.
     let names = match std::env::var(LIBRARY_ENV) {
@@ -86,4 +89,46 @@ fn load() -> Result<(), String> {
         names.join(", "),
         failures.join("; ")
     ))
+}
+
+/// The MuJoCo version the project pins (`mujoco/PIN`) and was verified against.
+pub const MUJOCO_VERSION: &str = "3.17.0";
+
+/// Why MuJoCo cannot be used.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MujocoError {
+    /// The MuJoCo library could not be loaded.
+    #[error("{message}")]
+    Unavailable {
+        /// What was tried and what to install.
+        message: String,
+    },
+    /// The linked MuJoCo is not the version the project pins.
+    #[error("linked MuJoCo is {found}, proving-ground was built and verified against {expected} (mujoco/PIN)")]
+    Version {
+        /// Version reported by the library.
+        found: String,
+        /// Version pinned.
+        expected: &'static str,
+    },
+}
+
+/// Loads MuJoCo if needed and checks that it is the pinned version (mujoco-rs panics on a
+/// mismatch, so this comes before any model is loaded).
+///
+/// # Errors
+/// [`MujocoError::Unavailable`] or [`MujocoError::Version`].
+pub fn check_version() -> Result<(), MujocoError> {
+    ensure().map_err(|message| MujocoError::Unavailable { message })?;
+    // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
+    let found = unsafe { CStr::from_ptr(mujoco_rs::mujoco_c::mj_versionString()) }
+        .to_string_lossy()
+        .into_owned();
+    if found != MUJOCO_VERSION {
+        return Err(MujocoError::Version {
+            found,
+            expected: MUJOCO_VERSION,
+        });
+    }
+    Ok(())
 }
