@@ -236,7 +236,7 @@ pub fn validate_loaded(
     }
     if let Some(path) = &opts.exports.mjcf {
         let text = if opts.exports.scene {
-            pipeline::scene_mjcf(model, &scenario)?
+            crate::export::scene_mjcf(model, &scenario)?
         } else {
             mjcf.clone()
         };

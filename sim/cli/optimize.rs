@@ -165,6 +165,10 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
             seed: args.seed,
             ..Default::default()
         },
+        planner: proving_ground::plan::PlannerOptions {
+            seed: args.seed,
+            ..Default::default()
+        },
         engines,
         ..Default::default()
     };

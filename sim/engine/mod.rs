@@ -4,6 +4,7 @@
 
 mod confirm;
 mod crosscheck;
+mod engines;
 mod gains;
 mod inputs;
 mod load;
@@ -14,6 +15,7 @@ mod run;
 
 pub use confirm::{confirm_contacts, measure_reference};
 pub use crosscheck::{check_kinematics, compare_kinematics, KinematicsAgreement, KinematicsCheck, ToolElement, KINEMATICS_AGREEMENT};
+pub use engines::Engines;
 pub use gains::{gains, GainOptions};
 pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};

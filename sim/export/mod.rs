@@ -1,11 +1,14 @@
-//! Consumes a [`Model`].
-//! Produces URDF text ([`to_urdf`], through urdf-rs) and MJCF text ([`to_mjcf`], written directly).
+//! Consumes a [`Model`] (and for [`scene_mjcf`] a scenario).
+//! Produces URDF text ([`to_urdf`], through urdf-rs) and MJCF text ([`to_mjcf`], written directly;
+//! [`scene_mjcf`], the robot in its scenario).
 //! Fails with [`ExportError`]: names that would clash, unreferenceable meshes, massless moving links.
 
 mod mjcf;
+mod scene;
 mod urdf;
 
 pub use mjcf::{to_mjcf, MjcfOptions};
+pub use scene::scene_mjcf;
 pub use urdf::{to_urdf, UrdfExportOptions};
 
 use crate::model::Model;

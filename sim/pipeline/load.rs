@@ -1,0 +1,127 @@
+//! Reading a run's inputs: the robot (design JSON, URDF, MJCF) into one model, and the scenario.
+
+use crate::design;
+use crate::error::Error;
+use crate::model::{self, Model, UrdfOptions};
+use std::path::{Path, PathBuf};
+
+/// How to read the robot a run is about.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// URDF: first link of the chain (default: the root).
+    pub base_link: Option<String>,
+    /// URDF: last link of the chain; MJCF: a body or site holding the tool frame (default: the
+    /// arm's tool frame, see [`crate::model::from_urdf`] and [`crate::model::from_mjcf`]).
+    pub tip_link: Option<String>,
+    /// URDF: roots for `package://` URIs, searched before `ROS_PACKAGE_PATH`.
+    pub package_paths: Vec<PathBuf>,
+}
+
+/// What kind of robot description a file is, from its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputKind {
+    /// Design JSON.
+    Design,
+    /// URDF.
+    Urdf,
+    /// MJCF (`.xml`, `.mjcf`), loaded through MuJoCo.
+    Mjcf,
+}
+
+/// The kind of a robot description file.
+///
+/// # Errors
+/// [`Error::UnknownInput`] for an extension other than `.json`, `.urdf`, `.xml` or `.mjcf`.
+pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("json") => Ok(InputKind::Design),
+        Some("urdf") => Ok(InputKind::Urdf),
+        Some("xml" | "mjcf") => Ok(InputKind::Mjcf),
+        _ => Err(Error::UnknownInput { path: path.to_path_buf() }),
+    }
+}
+
+/// A loaded robot: the model, and the design when it came from one.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The model every stage uses.
+    pub model: Model,
+    /// The validated design, for design files.
+    pub design: Option<design::Design>,
+}
+
+/// Reads a design JSON, a URDF or an MJCF file into a model.
+///
+/// # Errors
+/// The design or model stage's error, naming the file and the field or element.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
+    match input_kind(path)? {
+        InputKind::Design => {
+            let design = design::load(path)?;
+            Ok(Loaded {
+                model: model::from_design(&design),
+                design: Some(design),
+            })
+        }
+        InputKind::Urdf => {
+            let urdf = UrdfOptions {
+                base_link: opts.base_link.clone(),
+                tip_link: opts.tip_link.clone(),
+                package_paths: opts.package_paths.clone(),
+            };
+            Ok(Loaded {
+                model: model::from_urdf(path, &urdf)?,
+                design: None,
+            })
+        }
+        InputKind::Mjcf => {
+            // The base of an MJCF chain is where its first joint hangs; a URDF-style base link
+            // would be silently meaningless.
+            if opts.base_link.is_some() {
+                return Err(model::ModelError::UnsupportedMjcf {
+                    path: path.to_path_buf(),
+                    element: "--base".into(),
+                    problem: "is for URDF input; an MJCF chain runs from the body holding its first joint".into(),
+                }
+                .into());
+            }
+            Ok(Loaded {
+                model: model::from_mjcf_to(path, opts.tip_link.as_deref())?,
+                design: None,
+            })
+        }
+    }
+}
+
+/// Reads a design JSON, a URDF or an MJCF file into a model.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_model(path: &Path, opts: &LoadOptions) -> Result<Model, Error> {
+    Ok(load(path, opts)?.model)
+}
+
+/// Reads and validates a scenario file.
+///
+/// # Errors
+/// [`Error::Scenario`] naming the file and the field.
+pub fn load_scenario(path: &Path) -> Result<crate::scenario::Scenario, Error> {
+    Ok(crate::scenario::load(path)?)
+}
+
+/// Scenario loaded when none is given, relative to the current directory, when it exists there.
+pub const DEFAULT_SCENARIO: &str = "scenarios/course.json";
+
+/// The scenario at `path`; with none, [`DEFAULT_SCENARIO`] when that file exists under the
+/// current directory, else the same course built in.
+///
+/// # Errors
+/// [`Error::Scenario`] naming the file and the field.
+pub fn scenario_or_default(path: Option<&Path>) -> Result<crate::scenario::Scenario, Error> {
+    match path {
+        Some(path) => load_scenario(path),
+        None if Path::new(DEFAULT_SCENARIO).is_file() => load_scenario(Path::new(DEFAULT_SCENARIO)),
+        // The committed course is this generator's output, byte for byte (tests/scenario.rs).
+        None => Ok(crate::scenario::generate::course(crate::scenario::generate::COURSE_SEED)),
+    }
+}
