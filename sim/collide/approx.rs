@@ -1,11 +1,11 @@
 //! The paper's approximate model: capsules of radius 0.06 m on each link's segments, closed-form
 //! signed distances to other capsules, spheres, capsule obstacles and the floor plane.
 
-use super::exact::floor_part;
 use super::narrow::measure_shapes;
+use super::primitives::{capsules, Closest};
 use super::world::{CollisionWorld, Other};
 use super::{effective_margin, Body, Distances, PairDistance, PairEstimate, Part, QueryOptions};
-use crate::frames::{closest_points_of_segments, parry_pose, vector_from_parry};
+use crate::frames::{parry_pose, vector_from_parry};
 use crate::model::PAPER_CAPSULE_RADIUS_M;
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -80,7 +80,7 @@ pub fn approximate_distances(world: &CollisionWorld, link_in_world: &[Isometry3<
             }
             Other::Floor => {
                 let height = world.floor.expect("floor pairs exist only with a floor");
-                (capsule_floor(start, end, radius, height), floor_part(), false)
+                (capsule_floor(start, end, radius, height), Part::floor(), false)
             }
         };
         *narrow_phase_calls += 1;
@@ -105,44 +105,6 @@ pub fn approximate_distances(world: &CollisionWorld, link_in_world: &[Isometry3<
         exact: true,
     }));
     out.collect();
-}
-
-/// A signed distance with witness points and the unit normal from `a` to `b` (world frame, m).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Closest {
-    pub(crate) distance: f64,
-    pub(crate) point_a: Vector3<f64>,
-    pub(crate) point_b: Vector3<f64>,
-    pub(crate) normal: Vector3<f64>,
-}
-
-/// Signed distance between capsules (segment ends in the world, radii in m); a zero-length
-/// segment is a sphere.
-pub(crate) fn capsules(
-    start_a: Vector3<f64>,
-    end_a: Vector3<f64>,
-    radius_a: f64,
-    start_b: Vector3<f64>,
-    end_b: Vector3<f64>,
-    radius_b: f64,
-) -> Closest {
-    let (centre_a, centre_b) = closest_points_of_segments(start_a, end_a, start_b, end_b);
-    let between = centre_b - centre_a;
-    let length = between.norm();
-    let normal = if length > 0.0 {
-        between / length
-    } else {
-        // The axes cross: any direction across axis a separates them.
-        perpendicular(end_a - start_a)
-            .or_else(|| perpendicular(end_b - start_b))
-            .unwrap_or(Vector3::z())
-    };
-    Closest {
-        distance: length - radius_a - radius_b,
-        point_a: centre_a + normal * radius_a,
-        point_b: centre_b - normal * radius_b,
-        normal,
-    }
 }
 
 /// Signed distance between a capsule and the floor, the half-space below `z = height` (m).
@@ -228,7 +190,7 @@ pub(crate) fn capsule_shape_distance(
         crate::frames::parry_vector(&end),
         PAPER_CAPSULE_RADIUS_M,
     );
-    let geometry = super::world::Geometry::convex(parry3d_f64::shape::SharedShape::new(capsule));
+    let geometry = super::geometry::Geometry::convex(parry3d_f64::shape::SharedShape::new(capsule));
     let obstacle = &world.obstacles[obstacle];
     let measured = measure_shapes(
         &parry_pose(link_in_world),
@@ -245,52 +207,9 @@ pub(crate) fn capsule_shape_distance(
     }
 }
 
-/// A unit vector perpendicular to `axis`, if `axis` is not zero.
-fn perpendicular(axis: Vector3<f64>) -> Option<Vector3<f64>> {
-    let axis = axis.try_normalize(0.0)?;
-    let helper = if axis.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-    Some(axis.cross(&helper).normalize())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn skew_segments_meet_at_their_common_perpendicular() {
-        let (a, b) = closest_points_of_segments(
-            Vector3::new(-1.0, 0.0, 0.0),
-            Vector3::new(1.0, 0.0, 0.0),
-            Vector3::new(0.3, -1.0, 2.0),
-            Vector3::new(0.3, 1.0, 2.0),
-        );
-        assert!((a - Vector3::new(0.3, 0.0, 0.0)).norm() < 1e-15, "{a}");
-        assert!((b - Vector3::new(0.3, 0.0, 2.0)).norm() < 1e-15, "{b}");
-    }
-
-    #[test]
-    fn parallel_and_point_segments_are_handled() {
-        let (a, b) = closest_points_of_segments(
-            Vector3::zeros(),
-            Vector3::x(),
-            Vector3::new(0.5, 1.0, 0.0),
-            Vector3::new(3.0, 1.0, 0.0),
-        );
-        assert!(((b - a).norm() - 1.0).abs() < 1e-15, "{a} {b}");
-        let point = Vector3::new(0.2, 0.3, 0.4);
-        let (a, b) = closest_points_of_segments(point, point, Vector3::zeros(), Vector3::z());
-        assert_eq!((a, b), (point, Vector3::new(0.0, 0.0, 0.4)));
-        let (a, b) = closest_points_of_segments(Vector3::zeros(), Vector3::z(), point, point);
-        assert_eq!((a, b), (Vector3::new(0.0, 0.0, 0.4), point));
-    }
-
-    #[test]
-    fn crossing_capsules_penetrate_by_both_radii() {
-        let closest = capsules(-Vector3::x(), Vector3::x(), 0.1, -Vector3::y(), Vector3::y(), 0.2);
-        assert!((closest.distance + 0.3).abs() < 1e-15);
-        assert!((closest.normal.norm() - 1.0).abs() < 1e-15);
-        assert!(closest.normal.x.abs() < 1e-15);
-    }
 
     #[test]
     fn floor_distance_uses_the_lower_end() {

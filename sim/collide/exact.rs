@@ -2,22 +2,19 @@
 //! collider pair within the margin, then branch and bound for the closest pair; mesh hulls beside
 //! the meshes.
 
-use super::narrow::{measure_convex, measure_floor, measure_shapes, Measured};
+use super::narrow::{measure_convex, measure_floor, measure_shapes};
+use super::primitives::{order_key, Measured, BOUND_ROUNDING_M};
 
 /// Below the hulls' unpolished GJK gap that is still a lower bound of the meshes' gap (m): GJK on
 /// polytopes stops within its tolerance, far below this.
 const HULL_SLACK_M: f64 = 1e-4;
 use super::world::{CollisionWorld, Other};
-use super::{approx, effective_margin, Body, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
+use super::{effective_margin, Body, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
 use crate::frames::{parry_pose, vector_from_parry};
 use nalgebra::Isometry3;
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector;
 use std::cmp::Reverse;
-
-/// Subtracted from every AABB bound (m): the bound and a narrow phase round differently, and a
-/// bound a rounding error above the distance it bounds could skip the closest pair.
-pub(super) const BOUND_ROUNDING_M: f64 = 1e-9;
 
 /// Signed distances of every checked pair at one configuration, in the exact geometry.
 ///
@@ -195,7 +192,7 @@ fn capsule_bound(world: &CollisionWorld, index: usize, scratch: &super::Scratch)
         Other::Obstacle(k) => (world.obstacles[k].bounding, world.obstacles[k].geometry.bounding.radius),
         Other::Floor => return None,
     };
-    let capsules = approx::capsules(start, end, radius, other_start, other_end, other_radius).distance;
+    let capsules = super::primitives::capsules(start, end, radius, other_start, other_end, other_radius).distance;
     Some(capsules + candidate.allowance - BOUND_ROUNDING_M)
 }
 
@@ -220,7 +217,7 @@ fn measure(
         Other::Floor => {
             let height = world.floor.expect("floor pairs exist only with a floor");
             let measured = measure_floor(pose_a, &a.geometry, height);
-            record(scratch, index, candidate.pair, measured, part_a, floor_part());
+            record(scratch, index, candidate.pair, measured, part_a, Part::floor());
             return (measured.distance, false);
         }
         Other::Link(j) => {
@@ -313,24 +310,6 @@ fn record(scratch: &mut super::Scratch, index: usize, pair: usize, measured: Mea
     let best = &mut scratch.best[pair];
     if best.is_none_or(|best| measured.distance < best.distance) {
         *best = Some(measured.into_pair_distance(pair, a, b));
-    }
-}
-
-/// A key whose unsigned order is the total order of `value`.
-pub(super) fn order_key(value: f64) -> u64 {
-    let bits = value.to_bits();
-    if bits >> 63 == 1 {
-        !bits
-    } else {
-        bits | 1 << 63
-    }
-}
-
-/// The part the floor is.
-pub(super) fn floor_part() -> Part {
-    Part {
-        body: Body::Floor,
-        element: 0,
     }
 }
 

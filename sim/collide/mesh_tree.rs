@@ -15,9 +15,7 @@
 //! Only separated pairs are answered here: when a measured triangle touches or overlaps the
 //! other shape, the caller falls back to parry's descent, which gives the deepest triangle.
 
-use super::exact::{order_key, BOUND_ROUNDING_M};
-use super::narrow::{leaf_contact, Measured};
-use super::triangles::{segment_segment, triangle_distance};
+use super::primitives::{order_key, segment_segment, triangle_distance, Measured, BOUND_ROUNDING_M};
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::query::Contact;
 use parry3d_f64::shape::{Shape, SupportMap, Triangle};
@@ -77,7 +75,16 @@ impl SphereTree {
 
     /// The exact gap between this mesh at `pose` and a convex (non-mesh) `shape` at `pose_other`,
     /// with witnesses; `None` when a triangle touches or overlaps the shape.
-    pub(super) fn gap_to_shape(&self, pose: &Pose, shape: &dyn Shape, pose_other: &Pose) -> Option<Measured> {
+    ///
+    /// `leaf` measures one triangle (first, mesh frame) against the shape at a relative pose,
+    /// `None` unless they are apart: the narrow phase's query.
+    pub(super) fn gap_to_shape(
+        &self,
+        pose: &Pose,
+        shape: &dyn Shape,
+        pose_other: &Pose,
+        leaf: impl Fn(&Pose, &dyn Shape, &dyn Shape) -> Option<Contact>,
+    ) -> Option<Measured> {
         // Everything in the mesh frame; the shape at `pos12` there.
         let pos12 = pose.inv_mul(pose_other);
         let bound = |node: &Node| {
@@ -113,7 +120,7 @@ impl SphereTree {
                                 continue;
                             }
                         }
-                        let contact = leaf_contact(&pos12, triangle, shape)?;
+                        let contact = leaf(&pos12, triangle, shape)?;
                         if best.is_none_or(|best| contact.dist < best.dist) {
                             best = Some(contact);
                         }
@@ -129,7 +136,15 @@ impl SphereTree {
 
     /// The exact gap between this mesh at `pose` and `other` at `pose_other`, with witnesses;
     /// `None` when two triangles touch or overlap.
-    pub(super) fn gap_to_tree(&self, pose: &Pose, other: &SphereTree, pose_other: &Pose) -> Option<Measured> {
+    ///
+    /// `leaf` measures two triangles as in [`SphereTree::gap_to_shape`].
+    pub(super) fn gap_to_tree(
+        &self,
+        pose: &Pose,
+        other: &SphereTree,
+        pose_other: &Pose,
+        leaf: impl Fn(&Pose, &dyn Shape, &dyn Shape) -> Option<Contact>,
+    ) -> Option<Measured> {
         let pos12 = pose.inv_mul(pose_other);
         // The spheres' gap first (cheap); the capsules' only when the spheres cannot prune.
         let bound = |a: &Node, b: &Node, best: f64| {
@@ -196,7 +211,7 @@ impl SphereTree {
             }
         }
         let (ta, tb) = nearest?;
-        let mut contact = leaf_contact(&pos12, ta, tb)?;
+        let mut contact = leaf(&pos12, ta, tb)?;
         contact.transform_by_mut(pose, pose_other);
         Some(Measured::from_contact(&contact))
     }
@@ -354,80 +369,6 @@ mod tests {
             [3, 7, 5],
         ];
         (vertices, faces)
-    }
-
-    /// The trees against parry's descent of every triangle (the oracle), on every mesh pair and
-    /// mesh-obstacle pair of two real robots, at random configurations: same distances, and
-    /// witnesses at that distance.
-    #[test]
-    fn trees_measure_what_parry_descent_measures_on_real_robots() {
-        use crate::collide::narrow::{measure_mesh_descent, measure_shapes};
-        use crate::collide::world::Other;
-        use crate::pipeline::{collision_world, load_model, LoadOptions};
-        use rand::SeedableRng;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let robots = [
-            (
-                "designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf",
-                "panda_hand",
-                "scenarios/course.json",
-            ),
-            (
-                "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
-                "tool0",
-                "scenarios/cluttered/task-00.json",
-            ),
-        ];
-        let (mut separated, mut compared) = (0, 0);
-        for (robot, tip, scenario) in robots {
-            let opts = LoadOptions {
-                tip_link: Some(tip.into()),
-                ..Default::default()
-            };
-            let model = load_model(&root.join(robot), &opts).expect("shipped robot loads");
-            let scenario = crate::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
-            let model = model.placed(&scenario.world_from_base);
-            let world = collision_world(&model, &scenario, &[]).expect("valid world");
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-            let mut ws = model.workspace();
-            for _ in 0..16 {
-                model.forward(&model.random_configuration(&mut rng), &mut ws);
-                let pose =
-                    |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
-                for candidate in &world.candidates {
-                    let a = &world.colliders[candidate.a];
-                    let (pose_b, b) = match candidate.b {
-                        Other::Link(j) => (pose(j), &world.colliders[j].geometry),
-                        Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
-                        Other::Floor => continue,
-                    };
-                    if !a.geometry.is_mesh() && !b.is_mesh() {
-                        continue;
-                    }
-                    let pose_a = pose(candidate.a);
-                    let fast = measure_shapes(&pose_a, &a.geometry, &pose_b, b, true);
-                    let oracle = measure_mesh_descent(&pose_a, &a.geometry, &pose_b, b);
-                    compared += 1;
-                    separated += usize::from(oracle.distance > 0.0);
-                    assert!(
-                        (fast.distance - oracle.distance).abs() < 1e-9,
-                        "{robot}: candidate {candidate:?}: trees {} m, parry {} m",
-                        fast.distance,
-                        oracle.distance
-                    );
-                    let witnesses = (fast.point_b - fast.point_a).length();
-                    assert!(
-                        (witnesses - fast.distance.abs()).abs() < 1e-9,
-                        "witnesses {witnesses} m apart, distance {}",
-                        fast.distance
-                    );
-                }
-            }
-        }
-        assert!(
-            separated > 400 && compared > separated,
-            "{separated} separated of {compared} compared"
-        );
     }
 
     #[test]

@@ -3,6 +3,13 @@
 //! geometry (parry3d-f64) or the paper's capsule model, and findings where the models disagree.
 //! Fails with [`CollideError`] when the geometry cannot be built: a mesh parry rejects, an exclusion naming no link.
 //!
+//! # Files, each importing only those before it
+//!
+//! `primitives` (closed forms, shared constants, the measured-distance type) -> `mesh_tree`
+//! (sphere trees over triangles) -> `geometry` (a parry shape per collider, its hull, tree and
+//! bounds) -> `narrow` (one pair of shapes) -> `pairs` / `world` (what is checked) -> `exact` and
+//! `approx` (every pair at a configuration), `structural`, `compare`, `motion` and `point` beside.
+//!
 //! # Pairs
 //!
 //! A [`CollisionWorld`] is built once per model and scenario by [`world`]. It lists every robot pair
@@ -92,21 +99,23 @@
 mod approx;
 mod compare;
 mod exact;
+mod geometry;
 mod mesh_tree;
 mod motion;
 mod narrow;
 mod pairs;
 mod point;
+mod primitives;
 mod structural;
-mod triangles;
 mod world;
 
 pub use approx::approximate_distances;
-pub(crate) use approx::{capsule_floor, capsule_model, capsule_shape_distance, capsules, CapsuleModel, CapsuleOther, Closest};
+pub(crate) use approx::{capsule_floor, capsule_model, capsule_shape_distance, CapsuleModel, CapsuleOther};
 pub use compare::compare;
 pub use exact::{clear, distances};
 pub use motion::MotionBounds;
 pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};
+pub(crate) use primitives::{capsules, Closest};
 pub use structural::{structural_overlaps, StructuralExclusions, StructuralOptions, TOUCHING_M};
 pub use world::{world, CollisionWorld};
 
@@ -175,6 +184,16 @@ pub struct Part {
     /// Index of the collider in `Link::colliders` (exact model) or of the segment in
     /// `Link::segments` (approximate model); 0 for obstacles and the floor.
     pub element: usize,
+}
+
+impl Part {
+    /// The floor (it has one element).
+    pub(crate) fn floor() -> Self {
+        Self {
+            body: Body::Floor,
+            element: 0,
+        }
+    }
 }
 
 /// The signed distance of one checked pair, where it is measured.

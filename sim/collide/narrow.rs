@@ -16,8 +16,8 @@
 //! - parry 0.31's `contact` of a shape with a half-space given second passes the wrong relative
 //!   pose; the floor is given first and the contact flipped.
 
-use super::approx::capsules;
-use super::world::{BoundingCapsule, Geometry};
+use super::geometry::{BoundingCapsule, Geometry};
+use super::primitives::{capsules, Measured};
 use crate::frames::{closest_points_of_segments, parry_vector, vector_from_parry};
 use parry3d_f64::math::{Pose, Real, Vector};
 use parry3d_f64::query::details::{
@@ -43,39 +43,6 @@ const CERTIFIED_M: f64 = 1e-10;
 /// (m): its error on curved shapes was at most 1.3e-5 m at 0.5 m.
 const PARRY_SLACK_RELATIVE: f64 = 0.01;
 const PARRY_SLACK_M: f64 = 1e-4;
-
-/// A measured signed distance in parry's types, world frame.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Measured {
-    pub(super) distance: f64,
-    pub(super) point_a: Vector,
-    pub(super) point_b: Vector,
-    /// Unit, from `a` to `b`.
-    pub(super) normal: Vector,
-    pub(super) enclosed: bool,
-}
-
-impl Measured {
-    /// The same measurement with the bodies swapped.
-    pub(super) fn flipped(self) -> Self {
-        Self {
-            point_a: self.point_b,
-            point_b: self.point_a,
-            normal: -self.normal,
-            ..self
-        }
-    }
-
-    pub(super) fn from_contact(contact: &Contact) -> Self {
-        Self {
-            distance: contact.dist,
-            point_a: contact.point1,
-            point_b: contact.point2,
-            normal: contact.normal1,
-            enclosed: false,
-        }
-    }
-}
 
 /// Signed distance between two shapes: closed form for balls and capsules, the mesh path when a
 /// side is a mesh, parry's convex queries (polished) otherwise.
@@ -128,9 +95,9 @@ pub(super) fn measure_convex(pose_a: &Pose, a: &dyn Shape, pose_b: &Pose, b: &dy
 /// deepest triangle; an enclosure by a containment test on closed meshes.
 fn measure_mesh(pose_a: &Pose, a: &Geometry, pose_b: &Pose, b: &Geometry) -> Measured {
     let separated = match (&a.tree, &b.tree) {
-        (Some(tree_a), Some(tree_b)) => tree_a.gap_to_tree(pose_a, tree_b, pose_b),
-        (Some(tree), None) => tree.gap_to_shape(pose_a, &*b.shape, pose_b),
-        (None, Some(tree)) => tree.gap_to_shape(pose_b, &*a.shape, pose_a).map(Measured::flipped),
+        (Some(tree_a), Some(tree_b)) => tree_a.gap_to_tree(pose_a, tree_b, pose_b, leaf_contact),
+        (Some(tree), None) => tree.gap_to_shape(pose_a, &*b.shape, pose_b, leaf_contact),
+        (None, Some(tree)) => tree.gap_to_shape(pose_b, &*a.shape, pose_a, leaf_contact).map(Measured::flipped),
         (None, None) => None,
     };
     match separated {
@@ -177,7 +144,7 @@ fn separated_mesh(mut measured: Measured, pose_a: &Pose, a: &Geometry, pose_b: &
 
 /// The contact of one triangle of a mesh (first, in the mesh frame) with a shape at `pos12`, as
 /// parry's mesh descent measures it through [`Polished`]; `None` unless they are apart.
-pub(super) fn leaf_contact(pos12: &Pose, triangle: &dyn Shape, shape: &dyn Shape) -> Option<Contact> {
+fn leaf_contact(pos12: &Pose, triangle: &dyn Shape, shape: &dyn Shape) -> Option<Contact> {
     Polished::EXACT
         .contact(pos12, triangle, shape, UNBOUNDED_M)
         .ok()
@@ -458,6 +425,79 @@ fn polish(pos12: &Pose, g1: &dyn Shape, g2: &dyn Shape, contact: &mut Contact) {
 mod tests {
     use super::*;
     use parry3d_f64::shape::{Capsule, Cuboid, Cylinder};
+
+    /// The trees against parry's descent of every triangle (the oracle), on every mesh pair and
+    /// mesh-obstacle pair of two real robots, at random configurations: same distances, and
+    /// witnesses at that distance.
+    #[test]
+    fn trees_measure_what_parry_descent_measures_on_real_robots() {
+        use crate::collide::world::Other;
+        use crate::pipeline::{collision_world, load_model, LoadOptions};
+        use rand::SeedableRng;
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robots = [
+            (
+                "designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf",
+                "panda_hand",
+                "scenarios/course.json",
+            ),
+            (
+                "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf",
+                "tool0",
+                "scenarios/cluttered/task-00.json",
+            ),
+        ];
+        let (mut separated, mut compared) = (0, 0);
+        for (robot, tip, scenario) in robots {
+            let opts = LoadOptions {
+                tip_link: Some(tip.into()),
+                ..Default::default()
+            };
+            let model = load_model(&root.join(robot), &opts).expect("shipped robot loads");
+            let scenario = crate::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
+            let model = model.placed(&scenario.world_from_base);
+            let world = collision_world(&model, &scenario, &[]).expect("valid world");
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+            let mut ws = model.workspace();
+            for _ in 0..16 {
+                model.forward(&model.random_configuration(&mut rng), &mut ws);
+                let pose =
+                    |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
+                for candidate in &world.candidates {
+                    let a = &world.colliders[candidate.a];
+                    let (pose_b, b) = match candidate.b {
+                        Other::Link(j) => (pose(j), &world.colliders[j].geometry),
+                        Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
+                        Other::Floor => continue,
+                    };
+                    if !a.geometry.is_mesh() && !b.is_mesh() {
+                        continue;
+                    }
+                    let pose_a = pose(candidate.a);
+                    let fast = measure_shapes(&pose_a, &a.geometry, &pose_b, b, true);
+                    let oracle = measure_mesh_descent(&pose_a, &a.geometry, &pose_b, b);
+                    compared += 1;
+                    separated += usize::from(oracle.distance > 0.0);
+                    assert!(
+                        (fast.distance - oracle.distance).abs() < 1e-9,
+                        "{robot}: candidate {candidate:?}: trees {} m, parry {} m",
+                        fast.distance,
+                        oracle.distance
+                    );
+                    let witnesses = (fast.point_b - fast.point_a).length();
+                    assert!(
+                        (witnesses - fast.distance.abs()).abs() < 1e-9,
+                        "witnesses {witnesses} m apart, distance {}",
+                        fast.distance
+                    );
+                }
+            }
+        }
+        assert!(
+            separated > 400 && compared > separated,
+            "{separated} separated of {compared} compared"
+        );
+    }
 
     #[test]
     fn floor_contact_is_the_lowest_point_whichever_way_the_shape_is_turned() {

@@ -1,8 +1,107 @@
-//! The distance between two triangles in closed form, for ranking triangle pairs in a mesh
-//! descent: two triangles apart are nearest at a vertex of one against the other or at two
-//! edges (Ericson, Real-Time Collision Detection, 5.1), about 15 closed forms where GJK iterates.
+//! The bottom of `collide/`: closed forms (capsule and triangle distances), the constants every
+//! query shares, and [`Measured`], the one measured distance with witnesses. Everything else in
+//! the stage builds on it; it imports nothing of the stage.
+//!
+//! Two triangles apart are nearest at a vertex of one against the other or at two edges
+//! (Ericson, Real-Time Collision Detection, 5.1): about 15 closed forms where GJK iterates, for
+//! ranking triangle pairs in a mesh descent.
 
+use crate::frames::closest_points_of_segments;
+use nalgebra::Vector3;
 use parry3d_f64::math::Vector;
+use parry3d_f64::query::Contact;
+
+/// Subtracted from every AABB bound (m): the bound and a narrow phase round differently, and a
+/// bound a rounding error above the distance it bounds could skip the closest pair.
+pub(super) const BOUND_ROUNDING_M: f64 = 1e-9;
+
+/// A key whose unsigned order is the total order of `value`.
+pub(super) fn order_key(value: f64) -> u64 {
+    let bits = value.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+/// A measured signed distance in parry's types, world frame.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Measured {
+    pub(super) distance: f64,
+    pub(super) point_a: Vector,
+    pub(super) point_b: Vector,
+    /// Unit, from `a` to `b`.
+    pub(super) normal: Vector,
+    pub(super) enclosed: bool,
+}
+
+impl Measured {
+    /// The same measurement with the bodies swapped.
+    pub(super) fn flipped(self) -> Self {
+        Self {
+            point_a: self.point_b,
+            point_b: self.point_a,
+            normal: -self.normal,
+            ..self
+        }
+    }
+
+    pub(super) fn from_contact(contact: &Contact) -> Self {
+        Self {
+            distance: contact.dist,
+            point_a: contact.point1,
+            point_b: contact.point2,
+            normal: contact.normal1,
+            enclosed: false,
+        }
+    }
+}
+
+/// A signed distance with witness points and the unit normal from `a` to `b` (world frame, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Closest {
+    pub(crate) distance: f64,
+    pub(crate) point_a: Vector3<f64>,
+    pub(crate) point_b: Vector3<f64>,
+    pub(crate) normal: Vector3<f64>,
+}
+
+/// Signed distance between capsules (segment ends in the world, radii in m); a zero-length
+/// segment is a sphere.
+pub(crate) fn capsules(
+    start_a: Vector3<f64>,
+    end_a: Vector3<f64>,
+    radius_a: f64,
+    start_b: Vector3<f64>,
+    end_b: Vector3<f64>,
+    radius_b: f64,
+) -> Closest {
+    let (centre_a, centre_b) = closest_points_of_segments(start_a, end_a, start_b, end_b);
+    let between = centre_b - centre_a;
+    let length = between.norm();
+    let normal = if length > 0.0 {
+        between / length
+    } else {
+        // The axes cross: any direction across axis a separates them.
+        perpendicular(end_a - start_a)
+            .or_else(|| perpendicular(end_b - start_b))
+            .unwrap_or(Vector3::z())
+    };
+    Closest {
+        distance: length - radius_a - radius_b,
+        point_a: centre_a + normal * radius_a,
+        point_b: centre_b - normal * radius_b,
+        normal,
+    }
+}
+
+/// A unit vector perpendicular to `axis`, if `axis` is not zero.
+fn perpendicular(axis: Vector3<f64>) -> Option<Vector3<f64>> {
+    let axis = axis.try_normalize(0.0)?;
+    let helper = if axis.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    Some(axis.cross(&helper).normalize())
+}
 
 /// The distance between two triangles (m), or `None` when they intersect: an edge of one
 /// crosses the other (two triangles that meet always do, or touch at distance 0).
@@ -125,6 +224,42 @@ mod tests {
     use parry3d_f64::query;
     use parry3d_f64::shape::Triangle;
     use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn skew_segments_meet_at_their_common_perpendicular() {
+        let (a, b) = closest_points_of_segments(
+            Vector3::new(-1.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.3, -1.0, 2.0),
+            Vector3::new(0.3, 1.0, 2.0),
+        );
+        assert!((a - Vector3::new(0.3, 0.0, 0.0)).norm() < 1e-15, "{a}");
+        assert!((b - Vector3::new(0.3, 0.0, 2.0)).norm() < 1e-15, "{b}");
+    }
+
+    #[test]
+    fn parallel_and_point_segments_are_handled() {
+        let (a, b) = closest_points_of_segments(
+            Vector3::zeros(),
+            Vector3::x(),
+            Vector3::new(0.5, 1.0, 0.0),
+            Vector3::new(3.0, 1.0, 0.0),
+        );
+        assert!(((b - a).norm() - 1.0).abs() < 1e-15, "{a} {b}");
+        let point = Vector3::new(0.2, 0.3, 0.4);
+        let (a, b) = closest_points_of_segments(point, point, Vector3::zeros(), Vector3::z());
+        assert_eq!((a, b), (point, Vector3::new(0.0, 0.0, 0.4)));
+        let (a, b) = closest_points_of_segments(Vector3::zeros(), Vector3::z(), point, point);
+        assert_eq!((a, b), (Vector3::new(0.0, 0.0, 0.4), point));
+    }
+
+    #[test]
+    fn crossing_capsules_penetrate_by_both_radii() {
+        let closest = capsules(-Vector3::x(), Vector3::x(), 0.1, -Vector3::y(), Vector3::y(), 0.2);
+        assert!((closest.distance + 0.3).abs() < 1e-15);
+        assert!((closest.normal.norm() - 1.0).abs() < 1e-15);
+        assert!(closest.normal.x.abs() < 1e-15);
+    }
 
     /// Against parry's GJK (exact on polytopes) on random triangle pairs, apart and crossing.
     #[test]
