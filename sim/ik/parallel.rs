@@ -13,7 +13,7 @@
 
 use super::bilinear::common_roots;
 use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
-use super::solvers::Solutions;
+use super::solutions::Solutions;
 use super::wrist::trig_roots;
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, Vector3};

@@ -9,6 +9,7 @@
 use super::general::General6R;
 use super::lines::Arm;
 use super::parallel::ParallelTriple;
+use super::solutions::Solutions;
 use super::wrist::SphericalWrist;
 use crate::model::Model;
 use crate::scenario::Tolerance;
@@ -28,18 +29,6 @@ pub enum AllSolutions {
     General(Box<General6R>),
     /// Three consecutive parallel axes where the elimination degenerates.
     Parallel(Box<ParallelTriple>),
-}
-
-/// Every solution of one pose, unpolished, each with six angles (the sixth is the virtual
-/// joint's for a 5R arm).
-#[derive(Debug, Clone, Default)]
-pub struct Solutions {
-    /// The configurations, angles in (-pi, pi].
-    pub configurations: Vec<[f64; 6]>,
-    /// Every solution is listed, given each is verified (see the methods' `resolved`).
-    pub resolved: bool,
-    /// Why no configuration reaches the pose within the tolerance, when a method proves it.
-    pub out_of_reach: Option<String>,
 }
 
 impl AllSolutions {

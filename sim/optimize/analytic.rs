@@ -220,7 +220,7 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
 
 /// The closest axis points of two capsules from their surface witnesses. Where the axes meet
 /// (segments joined through a link with `d = a = 0` do, whatever the joints) the normal is
-/// arbitrary and the distance has no gradient: closer than [`super::tensor::MEET_M`] the normal
+/// arbitrary and the distance has no gradient: closer than [`super::gaps::MEET_M`] the normal
 /// is zero, as in the tensors.
 fn segment_contact(closest: crate::collide::Closest, radius_a: f64, radius_b: f64) -> Contact {
     let centre_a = closest.point_a - closest.normal * radius_a;
@@ -230,7 +230,7 @@ fn segment_contact(closest: crate::collide::Closest, radius_a: f64, radius_b: f6
         distance: closest.distance,
         centre_a,
         centre_b,
-        normal: if length < super::tensor::MEET_M {
+        normal: if length < super::gaps::MEET_M {
             Vector3::zeros()
         } else {
             closest.normal

@@ -15,14 +15,17 @@
 //! `(s, t)` the distance is stationary in `s` and `t`, or they sit on a bound): with `n` the unit
 //! vector from the first axis's point to the second's, the ends move the distance by
 //! `-(1 - s) n`, `-s n` (first) and `(1 - t) n`, `t n` (second). Axes that meet (closer than
-//! [`super::tensor::MEET_M`]) have no normal and pass no gradient, as on the CPU path. A floor
+//! [`MEET_M`]) have no normal and pass no gradient, as on the CPU path. A floor
 //! gap moves with the height of the capsule's lower end.
 
-use super::tensor::MEET_M;
 use crate::frames::closest_parameters_of_segments;
 use candle_core::{CpuStorage, CustomOp1, CustomOp2, Device, Layout, Shape, Tensor};
 use nalgebra::Vector3;
 use std::sync::Arc;
+
+/// Axes closer than this (m) meet: segments joined through a link with `d = a = 0` do, whatever
+/// the joints, up to rounding. Their normal is arbitrary, so their distance gets no gradient.
+pub(super) const MEET_M: f64 = 1e-9;
 
 /// The other segment of a pair.
 #[derive(Debug, Clone, Copy)]

@@ -22,9 +22,6 @@ use nalgebra::{Matrix3, Vector3};
 /// Added under every square root so that a zero gradient through it stays 0, not NaN; it moves
 /// a value by at most 1e-15 m.
 const SQRT_FLOOR: f64 = 1e-30;
-/// Axes closer than this (m) meet: segments joined through a link with `d = a = 0` do, whatever
-/// the joints, up to rounding. Their normal is arbitrary, so their distance gets no gradient.
-pub(super) const MEET_M: f64 = 1e-9;
 /// Distance (m) of a pair without candidates: far beyond the collision threshold.
 const FAR_M: f64 = 1e3;
 
