@@ -73,20 +73,10 @@ pub fn static_load<Q: AsRef<[f64]>>(
         for (j, load) in joints.iter_mut().enumerate() {
             let difference = (mujoco[j] - ours[j]).abs();
             max_relative_disagreement = max_relative_disagreement.max(difference / scale);
-            if mujoco[j].abs() > load.peak_torque {
-                load.peak_torque = mujoco[j].abs();
-                load.sample = index;
-            }
+            load.record(mujoco[j], index);
         }
     }
-    for load in &mut joints {
-        load.over = load.rated.is_some_and(|rated| load.peak_torque > rated);
-    }
-    Ok(StaticLoad {
-        gravity_m_s2,
-        joints,
-        max_relative_disagreement: Some(max_relative_disagreement),
-    })
+    Ok(judged(joints, gravity_m_s2, Some(max_relative_disagreement)))
 }
 
 /// As [`static_load`] from our own gravity torques alone ([`Model::gravity_torques`], which
@@ -106,20 +96,10 @@ pub fn static_load_without_mujoco<Q: AsRef<[f64]>>(
         let q = q.as_ref();
         check_length(model, index, q)?;
         for (load, torque) in joints.iter_mut().zip(model.gravity_torques_in(&mut ws, q, gravity_m_s2)) {
-            if torque.abs() > load.peak_torque {
-                load.peak_torque = torque.abs();
-                load.sample = index;
-            }
+            load.record(torque, index);
         }
     }
-    for load in &mut joints {
-        load.over = load.rated.is_some_and(|rated| load.peak_torque > rated);
-    }
-    Ok(StaticLoad {
-        gravity_m_s2,
-        joints,
-        max_relative_disagreement: None,
-    })
+    Ok(judged(joints, gravity_m_s2, None))
 }
 
 /// [`EngineError::ConfigurationLength`] for sample `index` of the wrong length.
@@ -134,6 +114,29 @@ fn check_length(model: &Model, index: usize, q: &[f64]) -> Result<(), EngineErro
         found: q.len(),
         expected: model.dof(),
     })
+}
+
+impl JointLoad {
+    /// Keeps `torque` (N m or N) of sample `index` when its magnitude is the largest so far (the
+    /// first sample on a tie).
+    fn record(&mut self, torque: f64, index: usize) {
+        if torque.abs() > self.peak_torque {
+            self.peak_torque = torque.abs();
+            self.sample = index;
+        }
+    }
+}
+
+/// The peaks judged against the ratings.
+fn judged(mut joints: Vec<JointLoad>, gravity_m_s2: f64, max_relative_disagreement: Option<f64>) -> StaticLoad {
+    for load in &mut joints {
+        load.over = load.rated.is_some_and(|rated| load.peak_torque > rated);
+    }
+    StaticLoad {
+        gravity_m_s2,
+        joints,
+        max_relative_disagreement,
+    }
 }
 
 fn unloaded(model: &Model) -> Vec<JointLoad> {

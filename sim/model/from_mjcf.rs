@@ -24,7 +24,7 @@ mod joint;
 
 use chain::Tool;
 
-use super::{Diagnostic, Inertial, Joint, Link, Model, ModelError, ModelSource, Segment};
+use super::{Diagnostic, Inertial, Joint, Link, Model, ModelError, ModelSource};
 use mujoco_rs::mujoco_c::{mj_deleteModel, mj_loadXML, mjtJoint};
 use mujoco_rs::prelude::*;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -202,20 +202,8 @@ impl Reader<'_> {
         }
         let last_from_tool = self.tool(tool, &moving, &layout)?;
 
-        // The paper's capsule approximation, as for URDF: the bone from a link's origin to the
-        // next joint (the tool frame for the last link).
-        for (i, link) in links.iter_mut().enumerate().skip(1) {
-            let next = joints
-                .get(i)
-                .map(|j| j.parent_from_joint.translation.vector)
-                .unwrap_or(last_from_tool.translation.vector);
-            if next.norm() > 1e-9 {
-                link.segments.push(Segment {
-                    start: Vector3::zeros(),
-                    end: next,
-                });
-            }
-        }
+        // The paper's capsule approximation, as for every robot read from a file.
+        super::add_bones(&mut links, &joints, &last_from_tool);
 
         let base_body = parent(first);
         let world_from_base = self.world_from_body(base_body);

@@ -15,7 +15,7 @@
 
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
 use super::names;
-use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Segment, Shape};
+use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
 use crate::frames::isometry_from_xyz_rpy;
 use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -337,20 +337,8 @@ impl<'a> Builder<'a> {
         for (index, group) in owned.iter().enumerate() {
             model_links.push(self.link(index, group, &links, &joints)?);
         }
-        // The capsule approximation of a URDF link: the bone from its origin to the next joint
-        // (the tool frame for the last link); a link whose next joint sits at its origin gets none.
-        for (i, link) in model_links.iter_mut().enumerate().skip(1) {
-            let next = joints
-                .get(i)
-                .map(|j| j.parent_from_joint.translation.vector)
-                .unwrap_or(last_from_tool.translation.vector);
-            if next.norm() > 1e-9 {
-                link.segments.push(Segment {
-                    start: Vector3::zeros(),
-                    end: next,
-                });
-            }
-        }
+        // The paper's capsule approximation, as for every robot read from a file.
+        super::add_bones(&mut model_links, &joints, &last_from_tool);
         Ok(Model {
             name: if robot.name.is_empty() {
                 "robot".into()

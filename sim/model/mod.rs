@@ -153,6 +153,24 @@ pub struct Segment {
     pub end: Vector3<f64>,
 }
 
+/// The paper's capsule approximation of a robot read from a file (URDF, MJCF), which has no DH
+/// rows: each moving link's bone runs from its origin to the next joint (the tool frame for the
+/// last link); a link whose next joint sits at its origin gets none.
+pub(crate) fn add_bones(links: &mut [Link], joints: &[Joint], last_from_tool: &Isometry3<f64>) {
+    for (i, link) in links.iter_mut().enumerate().skip(1) {
+        let next = joints
+            .get(i)
+            .map(|j| j.parent_from_joint.translation.vector)
+            .unwrap_or(last_from_tool.translation.vector);
+        if next.norm() > 1e-9 {
+            link.segments.push(Segment {
+                start: Vector3::zeros(),
+                end: next,
+            });
+        }
+    }
+}
+
 /// A warning about usable but suspicious input.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostic {

@@ -2,7 +2,6 @@
 //! to the numbers a design-space table compares.
 
 use super::SweepMode;
-use crate::ik::HARDWARE_WEIGHT;
 use crate::pipeline::{self, Loaded};
 use crate::scenario::Scenario;
 use serde::{Deserialize, Serialize};
@@ -108,12 +107,8 @@ pub fn evaluate(
     let goals_proven_unreachable = (0..goals)
         .filter(|&i| !validation.solutions[i].reached() && validation.proof(i).is_some())
         .count();
-    let task_loss = validation
-        .task_loss_terms
-        .iter()
-        .map(|t| t.map(|t| t.weighted()))
-        .sum::<Option<f64>>()
-        .map(|sum| sum + HARDWARE_WEIGHT * hardware_cost_m.unwrap_or(0.0));
+    // The report's paper loss, each goal at its best IK solution: one home for the sum.
+    let task_loss = report.paper_loss.total;
     let (goals_solved, task_solved, verdict) = match mode {
         SweepMode::ReachOnly { .. } => {
             let solved = validation.solutions.iter().filter(|g| g.reached()).count();
