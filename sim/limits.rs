@@ -1,6 +1,6 @@
-//! Documented limits on inputs (README, "Limits"): past them a run stops with an error naming the
-//! file and the limit, instead of running out of memory, stack or time on a hostile or broken
-//! file. Each is far above what a real robot or task needs.
+//! Documented limits on inputs (docs/usage.md, "Files and limits"): past them a run stops with
+//! an error naming the file and the limit, instead of running out of memory, stack or time on a
+//! hostile or broken file. Each is far above what a real robot or task needs.
 
 /// Largest design, scenario, URDF or MJCF file (bytes).
 pub const MAX_TEXT_BYTES: u64 = 16 << 20;

@@ -27,7 +27,7 @@ const INERTIA_AGREEMENT: f64 = 1e-9;
 const HOLD_POSITION_M: f64 = 1e-3;
 const HOLD_ORIENTATION_RAD: f64 = 0.017_453_292_519_943_295;
 /// MuJoCo's penetration depth against parry's exact one for a box or sphere obstacle against
-/// the links' cylinders (m): MuJoCo's cylinder collisions are approximate (README, "Collision
+/// the links' cylinders (m): MuJoCo's cylinder collisions are approximate (docs/collision.md, "Collision
 /// checking").
 const DEPTH_AGREEMENT_M: f64 = 2e-3;
 

@@ -12,7 +12,7 @@
 //! (an `<exclude>` names bodies, and obstacles are all in the world body) but not recorded; the
 //! only such pair by default is the base against the floor, and the base never moves. MuJoCo
 //! never collides two bodies fixed to the world, so a base-obstacle contact is not reported.
-//! MuJoCo collides cylinders approximately (README, "Collision checking"): depths involving a
+//! MuJoCo collides cylinders approximately (docs/collision.md): depths involving a
 //! cylinder are MuJoCo's, not the exact ones. Meshes are written as their convex pieces
 //! ([`crate::convex`], the pieces rapier collides), geoms `<link>/<k>/<p>` and `<obstacle>/<p>`,
 //! each attributed to its link or obstacle, so a contact names the pair as before.

@@ -10,7 +10,7 @@
 //! For a physics run, [`MjcfOptions`] also adds the world around the robot: static geoms in the
 //! world body (a scenario's obstacles, named as given), a floor plane `floor`, contact
 //! exclusions for further body pairs (the pairs a collision world does not check), gravity and
-//! the integrator. MuJoCo collides cylinders approximately (see the README, "Collision
+//! the integrator. MuJoCo collides cylinders approximately (see docs/collision.md, "Collision
 //! checking"); the geometry written is still the exact one.
 //!
 //! Numbers are written with `{}` (shortest text that parses back to the same f64) and angles in

@@ -4,7 +4,7 @@
 //! counts only when its closest pair stays colliding throughout that neighbourhood, and a
 //! solution outside the limits only when it stays outside. A colliding branch that no
 //! certificate covers is searched for a free configuration within the tolerance first. First
-//! order (doubled), not interval arithmetic: the README says so.
+//! order (doubled), not interval arithmetic: docs/ik.md says so.
 
 use super::{refine, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use crate::model::JointKind;
