@@ -22,10 +22,7 @@ fn options() -> proving_ground::Options {
         kinematics_checks: 20,
         ..Default::default()
     };
-    opts.validate.engines = Engines {
-        rapier: false,
-        mujoco: true,
-    };
+    opts.validate.engines = "mujoco".parse::<Engines>().expect("an engine");
     opts.validate.ik.search_boxes = 2_000;
     opts
 }

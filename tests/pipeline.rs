@@ -173,10 +173,7 @@ fn the_report_is_the_same_with_one_engine_at_a_time_and_without_engines() {
         .expect("runs");
         report::build(&validation)
     };
-    let none = run(Engines {
-        rapier: false,
-        mujoco: false,
-    });
+    let none = run(Engines::none());
     // Without MuJoCo the static load comes from our own gravity torques, with no cross-check.
     assert!(none.engines.is_empty() && none.static_load.as_ref().is_some_and(|l| l.max_relative_disagreement.is_none()));
     let both = run(Engines::default());
@@ -215,10 +212,7 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
         provenance: None,
     };
     let opts = ValidateOptions {
-        engines: Engines {
-            rapier: false,
-            mujoco: true,
-        },
+        engines: "mujoco".parse::<Engines>().expect("an engine"),
         ..Default::default()
     };
     // Judged from MuJoCo's gravity torques, and from ours alone when MuJoCo does not run.
@@ -227,7 +221,11 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
             model: model.clone(),
             design: Some(design.clone()),
         };
-        let engines = Engines { rapier: false, mujoco };
+        let engines = if mujoco {
+            "mujoco".parse().expect("an engine")
+        } else {
+            Engines::none()
+        };
         let report = report::build(&validate(loaded, scenario.clone(), &ValidateOptions { engines, ..opts.clone() }).expect("runs"));
         let overloads: Vec<_> = report.findings.iter().filter(|f| f.kind == FindingKind::StaticOverload).collect();
         assert!(

@@ -511,10 +511,7 @@ fn report_of(model: Model, scenario: Scenario, opts: &ValidateOptions) -> provin
 
 fn kinematic() -> ValidateOptions {
     ValidateOptions {
-        engines: proving_ground::pipeline::Engines {
-            rapier: false,
-            mujoco: false,
-        },
+        engines: proving_ground::pipeline::Engines::none(),
         ..Default::default()
     }
 }

@@ -1,42 +1,195 @@
-//! Which engines a validation runs, by name.
+//! The physics engines behind one seam: what the pipeline asks of an engine ([`Engine`]), the
+//! engines there are ([`ENGINES`]: a new engine is a file with its runs and one entry there),
+//! and which of them a validation runs ([`Engines`], by name).
 
-/// Which physics engines a validation runs.
+use super::{EngineError, EngineRun, Gains, RunOptions, StaticLoad};
+use crate::collide::CollisionWorld;
+use crate::model::Model;
+use crate::plan::TimedPath;
+use crate::scenario::Scenario;
+
+/// A physics engine the trajectory is run in.
+pub trait Engine: Sync {
+    /// Its name on the command line and in reports.
+    fn name(&self) -> &'static str;
+
+    /// Follows the timed path under the gains' position control, gravity on.
+    ///
+    /// # Errors
+    /// The engine refusing the model, the path or the options.
+    fn run(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        path: &TimedPath,
+        gains: &Gains,
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError>;
+
+    /// Sets the positions of `samples` (replay clock, configuration) one after the other and
+    /// records the contacts: the kinematic replay.
+    ///
+    /// # Errors
+    /// As [`Engine::run`].
+    fn replay(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        samples: &[(f64, Vec<f64>)],
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError>;
+
+    /// The gravity torques at `configurations` judged against the ratings, when the engine
+    /// computes them independently of our dynamics (a cross-check); `None` otherwise.
+    ///
+    /// # Errors
+    /// As [`Engine::run`].
+    fn static_load(
+        &self,
+        _model: &Model,
+        _configurations: &mut dyn Iterator<Item = Vec<f64>>,
+        _gravity_m_s2: f64,
+    ) -> Option<Result<StaticLoad, EngineError>> {
+        None
+    }
+}
+
+/// rapier (multibody, f32); its contacts are re-measured in exact geometry before they count.
+pub struct Rapier;
+
+impl Engine for Rapier {
+    fn name(&self) -> &'static str {
+        "rapier"
+    }
+
+    fn run(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        path: &TimedPath,
+        gains: &Gains,
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError> {
+        super::run_rapier(model, scenario, world, path, gains, opts)
+    }
+
+    fn replay(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        samples: &[(f64, Vec<f64>)],
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError> {
+        super::replay_rapier(model, scenario, world, samples, opts)
+    }
+}
+
+/// MuJoCo (the official library): also the static load's cross-check.
+pub struct Mujoco;
+
+impl Engine for Mujoco {
+    fn name(&self) -> &'static str {
+        "mujoco"
+    }
+
+    fn run(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        path: &TimedPath,
+        gains: &Gains,
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError> {
+        super::run_mujoco(model, scenario, world, path, gains, opts)
+    }
+
+    fn replay(
+        &self,
+        model: &Model,
+        scenario: &Scenario,
+        world: &CollisionWorld,
+        samples: &[(f64, Vec<f64>)],
+        opts: &RunOptions,
+    ) -> Result<EngineRun, EngineError> {
+        super::replay_mujoco(model, scenario, world, samples, opts)
+    }
+
+    fn static_load(
+        &self,
+        model: &Model,
+        configurations: &mut dyn Iterator<Item = Vec<f64>>,
+        gravity_m_s2: f64,
+    ) -> Option<Result<StaticLoad, EngineError>> {
+        Some(super::static_load(model, configurations, gravity_m_s2))
+    }
+}
+
+/// Every engine, in the order reports list them.
+pub static ENGINES: &[&dyn Engine] = &[&Rapier, &Mujoco];
+
+/// Which of [`ENGINES`] a validation runs (a set, kept in their order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Engines {
-    /// rapier (multibody, f32).
-    pub rapier: bool,
-    /// MuJoCo (the official library).
-    pub mujoco: bool,
+    /// Bit `k` set: `ENGINES[k]` runs.
+    chosen: u32,
 }
 
 impl Engines {
-    /// The engines named (`rapier`, `mujoco`); no name gives no engine.
+    /// No engine.
+    pub fn none() -> Self {
+        Self { chosen: 0 }
+    }
+
+    /// Every engine there is.
+    pub fn all() -> Self {
+        Self {
+            chosen: (1 << ENGINES.len()) - 1,
+        }
+    }
+
+    /// The engines named (each a [`Engine::name`]); no name gives no engine.
     ///
     /// # Errors
     /// The first name that is not an engine.
     pub fn from_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Result<Self, String> {
-        let mut engines = Self {
-            rapier: false,
-            mujoco: false,
-        };
+        let mut engines = Self::none();
         for name in names {
-            match name {
-                "rapier" => engines.rapier = true,
-                "mujoco" => engines.mujoco = true,
-                other => return Err(other.to_string()),
-            }
+            let k = ENGINES.iter().position(|e| e.name() == name).ok_or_else(|| name.to_string())?;
+            engines.chosen |= 1 << k;
         }
         Ok(engines)
     }
 
+    /// Whether the engine called `name` runs.
+    pub fn contains(self, name: &str) -> bool {
+        self.selected().any(|e| e.name() == name)
+    }
+
+    /// Whether no engine runs.
+    pub fn is_empty(self) -> bool {
+        self.chosen == 0
+    }
+
+    /// The engines that run, in [`ENGINES`]' order.
+    pub fn selected(self) -> impl Iterator<Item = &'static dyn Engine> {
+        ENGINES
+            .iter()
+            .enumerate()
+            .filter(move |(k, _)| self.chosen & (1 << k) != 0)
+            .map(|(_, e)| *e)
+    }
+
     /// The names, comma-separated (`rapier,mujoco`), or `none`.
     pub fn name(self) -> String {
-        match (self.rapier, self.mujoco) {
-            (true, true) => "rapier,mujoco".into(),
-            (true, false) => "rapier".into(),
-            (false, true) => "mujoco".into(),
-            (false, false) => "none".into(),
+        if self.is_empty() {
+            return "none".into();
         }
+        self.selected().map(|e| e.name()).collect::<Vec<_>>().join(",")
     }
 }
 
@@ -51,15 +204,15 @@ impl std::str::FromStr for Engines {
         } else {
             text.split(',').map(str::trim).collect()
         };
-        Self::from_names(names).map_err(|other| format!("unknown engine `{other}`; expected rapier,mujoco, rapier, mujoco or none"))
+        Self::from_names(names).map_err(|other| {
+            let each: Vec<&str> = ENGINES.iter().map(|e| e.name()).collect();
+            format!("unknown engine `{other}`; expected {}, {} or none", each.join(","), each.join(", "))
+        })
     }
 }
 
 impl Default for Engines {
     fn default() -> Self {
-        Self {
-            rapier: true,
-            mujoco: true,
-        }
+        Self::all()
     }
 }

@@ -15,7 +15,7 @@ mod run;
 
 pub use confirm::{confirm_contacts, measure_reference};
 pub use crosscheck::{check_kinematics, compare_kinematics, KinematicsAgreement, KinematicsCheck, ToolElement, KINEMATICS_AGREEMENT};
-pub use engines::Engines;
+pub use engines::{Engine, Engines, Mujoco, Rapier, ENGINES};
 pub use gains::{gains, GainOptions};
 pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};

@@ -14,6 +14,7 @@ pub use world::collision_world;
 use crate::collide;
 use crate::error::Error;
 use crate::model::Model;
+use rayon::prelude::*;
 
 /// Settings of a whole validation run; every field's default is the documented one.
 #[derive(Debug, Clone, Default)]
@@ -137,8 +138,7 @@ pub fn validate_with_progress(
         proofs,
         trajectory: motion.trajectory,
         replayed: motion.replayed,
-        rapier: motion.rapier,
-        mujoco: motion.mujoco,
+        engines: motion.engines,
         static_load: motion.static_load,
         gains: motion.gains,
         loss_terms: motion.loss_terms,
@@ -153,8 +153,7 @@ pub fn validate_with_progress(
 struct Motion {
     trajectory: Option<crate::plan::Trajectory>,
     replayed: Vec<crate::plan::ReplaySegment>,
-    rapier: Option<EngineRuns>,
-    mujoco: Option<EngineRuns>,
+    engines: Vec<EngineRuns>,
     static_load: Option<crate::engine::StaticLoad>,
     gains: Option<crate::engine::Gains>,
     loss_terms: Vec<Option<crate::ik::LossTerms>>,
@@ -182,8 +181,7 @@ impl Motion {
         Self {
             trajectory: None,
             replayed: Vec::new(),
-            rapier: None,
-            mujoco: None,
+            engines: Vec::new(),
             static_load: None,
             gains: None,
             loss_terms,
@@ -226,7 +224,7 @@ impl Motion {
             .collect();
         // The engines replay every sample; without them only the static load reads them, one at a
         // time (tens of thousands of goals make millions).
-        let samples = if opts.engines.rapier || opts.engines.mujoco {
+        let samples = if !opts.engines.is_empty() {
             crate::plan::replay_samples(&replayed)
         } else {
             Vec::new()
@@ -245,15 +243,6 @@ impl Motion {
             &trajectory.timed
         };
         let gains = crate::engine::gains(model, timed, &gain_options);
-        let run_rapier = || -> Result<Option<EngineRuns>, crate::engine::EngineError> {
-            if !opts.engines.rapier {
-                return Ok(None);
-            }
-            Ok(Some(EngineRuns {
-                dynamic: crate::engine::run_rapier(model, scenario, world, timed, &gains, &opts.engine)?,
-                replay: crate::engine::replay_rapier(model, scenario, world, &samples, &opts.engine)?,
-            }))
-        };
         // The static load along the trajectory only: a blocked goal's attempt is not a motion the
         // robot makes.
         let on_trajectory = |(clock, _): &(f64, Vec<f64>)| replayed.get(*clock as usize).is_some_and(|segment| segment.planned);
@@ -261,32 +250,39 @@ impl Motion {
             std::iter::once(trajectory.home.clone()).chain(crate::plan::replay_sample_iter(&replayed).filter(on_trajectory).map(|(_, q)| q))
         };
         let gravity = opts.engine.gravity_m_s2;
-        let run_mujoco = || -> Result<(Option<EngineRuns>, crate::engine::StaticLoad), crate::engine::EngineError> {
-            if !opts.engines.mujoco {
-                return Ok((None, crate::engine::static_load_without_mujoco(model, configurations(), gravity)?));
-            }
-            let runs = EngineRuns {
-                dynamic: crate::engine::run_mujoco(model, scenario, world, timed, &gains, &opts.engine)?,
-                replay: crate::engine::replay_mujoco(model, scenario, world, &samples, &opts.engine)?,
-            };
-            Ok((Some(runs), crate::engine::static_load(model, configurations(), gravity)?))
-        };
         progress.stage(&format!("running the engines ({:.1} s simulated)", timed.duration_s()), None);
         // The engines are independent and each deterministic: running them side by side changes
-        // no number.
-        let (rapier, mujoco) = rayon::join(run_rapier, run_mujoco);
-        let mut rapier = rapier?;
-        let (mut mujoco, static_load) = mujoco?;
-        for runs in rapier.iter_mut().chain(mujoco.iter_mut()) {
+        // no number. Each also measures the static load where it can cross-check ours.
+        let selected: Vec<&dyn crate::engine::Engine> = opts.engines.selected().collect();
+        let results: Vec<Result<(EngineRuns, Option<crate::engine::StaticLoad>), crate::engine::EngineError>> = selected
+            .par_iter()
+            .map(|engine| {
+                let runs = EngineRuns {
+                    dynamic: engine.run(model, scenario, world, timed, &gains, &opts.engine)?,
+                    replay: engine.replay(model, scenario, world, &samples, &opts.engine)?,
+                };
+                let load = engine.static_load(model, &mut configurations(), gravity).transpose()?;
+                Ok((runs, load))
+            })
+            .collect();
+        let mut engines = Vec::with_capacity(results.len());
+        let mut static_load = None;
+        for result in results {
+            let (mut runs, load) = result?;
             crate::engine::confirm_contacts(model, world, &mut runs.dynamic.contacts);
             crate::engine::measure_reference(model, world, timed, &mut runs.dynamic.contacts);
             crate::engine::confirm_contacts(model, world, &mut runs.replay.contacts);
+            static_load = static_load.or(load);
+            engines.push(runs);
         }
+        let static_load = match static_load {
+            Some(load) => load,
+            None => crate::engine::static_load_without_mujoco(model, configurations(), gravity)?,
+        };
         Ok(Self {
             trajectory: Some(trajectory),
             replayed,
-            rapier,
-            mujoco,
+            engines,
             static_load: Some(static_load),
             gains: Some(gains),
             loss_terms,

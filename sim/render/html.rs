@@ -203,9 +203,9 @@ fn data(validation: &Validation, report: &Report) -> Value {
             })
         })
         .collect();
-    let contacts: Vec<Value> = [&validation.rapier, &validation.mujoco]
-        .into_iter()
-        .flatten()
+    let contacts: Vec<Value> = validation
+        .engines
+        .iter()
         .flat_map(|runs| runs.replay.contacts.iter().map(move |c| (runs.replay.engine, c)))
         .map(|(engine, c)| json!({"engine": engine, "a": c.a, "b": c.b, "start": c.start_s, "end": c.end_s}))
         .collect();

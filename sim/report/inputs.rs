@@ -44,10 +44,8 @@ pub struct Validation {
     pub trajectory: Option<crate::plan::Trajectory>,
     /// Segments replayed in the engines, with their certified checks.
     pub replayed: Vec<crate::plan::ReplaySegment>,
-    /// rapier's runs, when run.
-    pub rapier: Option<EngineRuns>,
-    /// MuJoCo's runs, when run.
-    pub mujoco: Option<EngineRuns>,
+    /// The runs of each engine that ran, in [`crate::engine::ENGINES`]' order.
+    pub engines: Vec<EngineRuns>,
     /// Gravity torques along the trajectory against ratings (MuJoCo's cross-checked with ours, or
     /// ours alone without MuJoCo).
     pub static_load: Option<crate::engine::StaticLoad>,

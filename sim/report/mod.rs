@@ -295,10 +295,7 @@ pub struct Verdict {
 /// Builds the report of a validation.
 pub fn build(validation: &Validation) -> Report {
     let settings = &validation.settings;
-    let engines: Vec<_> = [("rapier", &validation.rapier), ("mujoco", &validation.mujoco)]
-        .into_iter()
-        .filter_map(|(name, runs)| runs.as_ref().map(|runs| (name, runs)))
-        .collect();
+    let engines: Vec<_> = validation.engines.iter().map(|runs| (runs.dynamic.engine, runs)).collect();
     let hold = (settings.hold_position_m, settings.hold_orientation_rad);
     let criteria = Criteria {
         mode: if settings.reach_only { "reach_only" } else { "full" },
