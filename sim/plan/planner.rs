@@ -35,6 +35,15 @@ impl PlannerKind {
             PlannerKind::RrtConnect => "rrt-connect",
         }
     }
+
+    /// Whether it draws random samples within [`PlannerOptions::budget`] (a goal it does not
+    /// join is then `no_path` within that budget).
+    pub fn samples(self) -> bool {
+        match self {
+            PlannerKind::Straight => false,
+            PlannerKind::RrtConnect => true,
+        }
+    }
 }
 
 impl std::str::FromStr for PlannerKind {

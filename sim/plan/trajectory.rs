@@ -433,11 +433,7 @@ pub fn plan_counted(
         }
     }
     let mut ik = Ik::with_collisions(model, world, opts.ik.clone());
-    let mut rrt = RrtConnect {
-        limits: model.joints.iter().map(|j| j.limits).collect(),
-        budget: opts.planner.budget,
-        straight_attempts: 0,
-    };
+    let mut planner = goal_planner(model, &opts.planner);
     let mut previous = home.clone();
     let mut steps = Vec::with_capacity(scenario.goals.len());
     let mut waypoints = vec![home.clone()];
@@ -446,10 +442,14 @@ pub fn plan_counted(
     for (index, goal) in scenario.goals.iter().enumerate() {
         let given = solutions.get(index).map(|s| s.solutions.as_slice()).unwrap_or_default();
         let stream = opts.planner.seed ^ (index as u64 + 1).wrapping_mul(0xA076_1D64_78BD_642F);
-        let step = match opts.planner.kind {
-            PlannerKind::Straight => straight_step(&mut ik, &mut checker, model, goal, index, given, &previous, stream),
-            PlannerKind::RrtConnect => sampled_step(&mut ik, &mut checker, &mut rrt, model, goal, index, given, &previous, stream, opts),
+        let request = Request {
+            goal,
+            index,
+            given,
+            previous: &previous,
+            stream,
         };
+        let step = planner.step(&mut ik, &mut checker, model, &request);
         done();
         let mut step = step;
         if let GoalStep::Reached { q, clearance, .. } = &mut step {
@@ -501,96 +501,114 @@ fn free_candidates(ik: &Ik<'_>, model: &Model, found: &[IkSolution], previous: &
     candidates
 }
 
+/// One goal to join: where the arm is, the goal, and the solutions IK gave it.
+struct Request<'r> {
+    goal: &'r Goal,
+    index: usize,
+    /// The goal's solutions from the IK stage.
+    given: &'r [IkSolution],
+    /// The configuration the arm is in.
+    previous: &'r [f64],
+    /// Seeds this goal's random choices.
+    stream: u64,
+}
+
+/// How a planner joins the arm's configuration to one goal: which configurations it aims at,
+/// and the path it certifies there (see [`super::planner::Planner`]).
+trait GoalPlanner {
+    fn step(&mut self, ik: &mut Ik<'_>, checker: &mut SegmentChecker<'_>, model: &Model, request: &Request<'_>) -> GoalStep;
+}
+
+/// The planner [`PlannerOptions::kind`] names, with its budget.
+fn goal_planner(model: &Model, opts: &super::PlannerOptions) -> Box<dyn GoalPlanner> {
+    match opts.kind {
+        PlannerKind::Straight => Box::new(Straight),
+        PlannerKind::RrtConnect => Box::new(RrtConnect {
+            limits: model.joints.iter().map(|j| j.limits).collect(),
+            budget: opts.budget,
+            straight_attempts: 0,
+        }),
+    }
+}
+
 /// The paper's heuristic: among the goal's solutions, the nearest one a straight certified
 /// segment reaches; else IK solved again from the previous configuration, and the same.
-#[allow(clippy::too_many_arguments)]
-fn straight_step(
-    ik: &mut Ik<'_>,
-    checker: &mut SegmentChecker<'_>,
-    model: &Model,
-    goal: &Goal,
-    index: usize,
-    given: &[IkSolution],
-    previous: &[f64],
-    stream: u64,
-) -> GoalStep {
-    let mut tried: Vec<Vec<f64>> = Vec::new();
-    let mut failure = None;
-    let mut fresh = None;
-    for resolved in [false, true] {
-        if resolved {
-            fresh = Some(ik.solve(goal, index, Some(previous)));
+impl GoalPlanner for Straight {
+    fn step(&mut self, ik: &mut Ik<'_>, checker: &mut SegmentChecker<'_>, model: &Model, request: &Request<'_>) -> GoalStep {
+        let Request {
+            goal,
+            index,
+            given,
+            previous,
+            stream,
+        } = *request;
+        let mut tried: Vec<Vec<f64>> = Vec::new();
+        let mut failure = None;
+        let mut fresh = None;
+        for resolved in [false, true] {
+            if resolved {
+                fresh = Some(ik.solve(goal, index, Some(previous)));
+            }
+            let found = fresh.as_ref().map_or(given, |f| f.solutions.as_slice());
+            let candidates = free_candidates(ik, model, found, previous, &tried);
+            let offset = tried.len();
+            tried.extend(candidates.iter().cloned());
+            match self.connect(checker, previous, &candidates, stream) {
+                Ok(path) => return reached(index, path, offset, resolved),
+                Err(f) if failure.is_none() && !candidates.is_empty() => failure = Some((f, candidates[0].clone())),
+                Err(_) => {}
+            }
         }
-        let found = fresh.as_ref().map_or(given, |f| f.solutions.as_slice());
-        let candidates = free_candidates(ik, model, found, previous, &tried);
-        let offset = tried.len();
-        tried.extend(candidates.iter().cloned());
-        match Straight.connect(checker, previous, &candidates, stream) {
-            Ok(path) => return reached(index, path, offset, resolved),
-            Err(f) if failure.is_none() && !candidates.is_empty() => failure = Some((f, candidates[0].clone())),
-            Err(_) => {}
-        }
+        not_reached(checker, ik, index, tried.len(), 0, previous, failure)
     }
-    not_reached(checker, ik, index, tried.len(), 0, previous, failure)
 }
 
 /// The default: straight segments to the goal set, then the sampling planner towards every
 /// collision-free solution (the scenario's and those of IK solved again from the previous
 /// configuration) and their whole-turn equivalents.
-#[allow(clippy::too_many_arguments)]
-fn sampled_step(
-    ik: &mut Ik<'_>,
-    checker: &mut SegmentChecker<'_>,
-    planner: &mut RrtConnect,
-    model: &Model,
-    goal: &Goal,
-    index: usize,
-    given: &[IkSolution],
-    previous: &[f64],
-    stream: u64,
-    opts: &TrajectoryOptions,
-) -> GoalStep {
-    let fresh = ik.solve(goal, index, Some(previous));
-    let mut candidates = free_candidates(ik, model, given, previous, &[]);
-    let from_given = candidates.len();
-    candidates.extend(free_candidates(ik, model, &fresh.solutions, previous, &candidates));
-    if candidates.is_empty() {
-        return not_reached(checker, ik, index, 0, 0, previous, None);
-    }
-    // The goal set: each candidate (nearest first) and then every whole-turn equivalent.
-    let mut goal_set = candidates.clone();
-    for candidate in &candidates {
-        goal_set.extend(
-            whole_turn_equivalents(model, candidate, previous)
-                .into_iter()
-                .filter(|e| e != candidate),
-        );
-    }
-    planner.straight_attempts = candidates.len();
-    match planner.connect(checker, previous, &goal_set, stream) {
-        Ok(path) => {
-            // Which solution the reached configuration came from.
-            let origin = if path.target < candidates.len() {
-                path.target
-            } else {
-                candidates
-                    .iter()
-                    .position(|c| ik.same_configuration(c, &goal_set[path.target]))
-                    .unwrap_or(0)
-            };
-            reached(index, path, 0, origin >= from_given)
+impl GoalPlanner for RrtConnect {
+    fn step(&mut self, ik: &mut Ik<'_>, checker: &mut SegmentChecker<'_>, model: &Model, request: &Request<'_>) -> GoalStep {
+        let Request {
+            goal,
+            index,
+            given,
+            previous,
+            stream,
+        } = *request;
+        let fresh = ik.solve(goal, index, Some(previous));
+        let mut candidates = free_candidates(ik, model, given, previous, &[]);
+        let from_given = candidates.len();
+        candidates.extend(free_candidates(ik, model, &fresh.solutions, previous, &candidates));
+        if candidates.is_empty() {
+            return not_reached(checker, ik, index, 0, 0, previous, None);
         }
-        Err(failure) => {
-            let first = candidates[0].clone();
-            not_reached(
-                checker,
-                ik,
-                index,
-                goal_set.len(),
-                opts.planner.budget,
-                previous,
-                Some((failure, first)),
-            )
+        // The goal set: each candidate (nearest first) and then every whole-turn equivalent.
+        let mut goal_set = candidates.clone();
+        for candidate in &candidates {
+            goal_set.extend(
+                whole_turn_equivalents(model, candidate, previous)
+                    .into_iter()
+                    .filter(|e| e != candidate),
+            );
+        }
+        self.straight_attempts = candidates.len();
+        match self.connect(checker, previous, &goal_set, stream) {
+            Ok(path) => {
+                // Which solution the reached configuration came from.
+                let origin = if path.target < candidates.len() {
+                    path.target
+                } else {
+                    candidates
+                        .iter()
+                        .position(|c| ik.same_configuration(c, &goal_set[path.target]))
+                        .unwrap_or(0)
+                };
+                reached(index, path, 0, origin >= from_given)
+            }
+            Err(failure) => {
+                let first = candidates[0].clone();
+                not_reached(checker, ik, index, goal_set.len(), self.budget, previous, Some((failure, first)))
+            }
         }
     }
 }

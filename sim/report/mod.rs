@@ -345,10 +345,10 @@ pub fn build(validation: &Validation) -> Report {
         })
         .collect();
     let findings = findings::collect(validation, &engines, hold);
-    let budget = validation.trajectory.as_ref().map(|t| match t.planner.kind {
-        crate::plan::PlannerKind::Straight => 0,
-        crate::plan::PlannerKind::RrtConnect => t.planner.budget,
-    });
+    let budget = validation
+        .trajectory
+        .as_ref()
+        .map(|t| if t.planner.kind.samples() { t.planner.budget } else { 0 });
     let verdict = findings::verdict(&findings, settings, budget);
     Report {
         schema_version: SCHEMA_VERSION,

@@ -44,9 +44,10 @@ pub fn render(report: &Report) -> String {
             c.ik_seeds, c.seed
         );
     } else if let Some(planner) = &c.planner {
-        let budget = match planner.kind {
-            crate::plan::PlannerKind::Straight => String::new(),
-            crate::plan::PlannerKind::RrtConnect => format!(", budget {} samples per goal", planner.budget),
+        let budget = if planner.kind.samples() {
+            format!(", budget {} samples per goal", planner.budget)
+        } else {
+            String::new()
         };
         let _ = writeln!(out, "planner: {}{budget}, seed {}", planner.kind.name(), planner.seed);
     }
