@@ -78,16 +78,6 @@ pub enum Error {
         /// serde_json's message.
         message: String,
     },
-    /// A snapshot suite file is unusable.
-    #[error("{path}: {field}: {message}")]
-    Suite {
-        /// The suite file.
-        path: PathBuf,
-        /// The field.
-        field: String,
-        /// What is wrong and what was expected.
-        message: String,
-    },
     /// An SRDF file is unusable, or names a link the model does not have.
     #[error("{path}: {element}: {message}")]
     Srdf {

@@ -112,8 +112,26 @@ impl SuiteResult {
     }
 }
 
-fn invalid(path: &Path, field: &str, message: String) -> Error {
-    Error::Suite {
+/// Why a suite could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    /// The suite file is unusable.
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        /// The suite file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A design, scenario or run it names failed, or a snapshot could not be written.
+    #[error(transparent)]
+    Run(#[from] Error),
+}
+
+fn invalid(path: &Path, field: &str, message: String) -> SuiteError {
+    SuiteError::Invalid {
         path: path.to_path_buf(),
         field: field.into(),
         message,
@@ -121,7 +139,7 @@ fn invalid(path: &Path, field: &str, message: String) -> Error {
 }
 
 /// A run's options from the suite's `options`, checked as the command line checks them.
-fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
+fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, SuiteError> {
     let mut opts = ValidateOptions::default();
     if let Some(seed) = file.seed {
         opts.ik.seed = seed;
@@ -178,8 +196,9 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, Error> {
 /// Runs the suite at `suite_path`, compares with (or, with `accept`, records) its snapshots.
 ///
 /// # Errors
-/// [`Error::Suite`] for a bad suite file; any stage's error for a design or scenario it names.
-pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, Error> {
+/// [`SuiteError::Invalid`] for a bad suite file; any stage's error for a design or scenario it
+/// names ([`SuiteError::Run`]).
+pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
     let text = files::read_text(suite_path, limits::MAX_TEXT_BYTES)
         .map_err(|e| invalid(suite_path, "the file", format!("cannot read it: {e}")))?;
     let suite: SuiteFile = serde_json::from_str(&text).map_err(|e| invalid(suite_path, "the JSON", e.to_string()))?;

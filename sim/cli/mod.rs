@@ -102,6 +102,9 @@ pub(crate) enum Failure {
     /// A fine-tuning.
     #[error(transparent)]
     Optimize(#[from] proving_ground::optimize::OptimizeError),
+    /// A snapshot suite.
+    #[error(transparent)]
+    Suite(#[from] proving_ground::suite::SuiteError),
 }
 
 /// `--threads N`: the global pool's size (the reports do not depend on it).

@@ -1,6 +1,6 @@
 //! `validate-design snapshot`: a user's golden suite run and compared with its snapshots.
 
-use proving_ground::error::Error;
+use super::Failure;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -15,7 +15,7 @@ pub(crate) struct SnapshotArgs {
 }
 
 /// `validate-design snapshot --suite FILE [--accept]`.
-pub(crate) fn command(args: &SnapshotArgs) -> Result<ExitCode, Error> {
+pub(crate) fn command(args: &SnapshotArgs) -> Result<ExitCode, Failure> {
     use proving_ground::suite::{self, Outcome};
     let result = suite::run(&args.suite, args.accept)?;
     for entry in &result.entries {
