@@ -107,6 +107,68 @@ pub(crate) enum Failure {
     Suite(#[from] proving_ground::suite::SuiteError),
 }
 
+/// Progress on stderr (drawn only on a terminal): a spinner for a stage that cannot be counted,
+/// else the items done of all (`unit`: goals, pairs), the time taken and an estimate of the
+/// time left; and the notes about the input.
+pub(crate) struct Bar {
+    pub(crate) bar: indicatif::ProgressBar,
+    unit: &'static str,
+    /// Print the loader's choices and the SRDF's summary.
+    infos: bool,
+}
+
+impl Bar {
+    /// A bar counting `unit`; hidden with `quiet`, which also drops the notes.
+    pub(crate) fn new(unit: &'static str, quiet: bool, infos: bool) -> Self {
+        let bar = if quiet {
+            indicatif::ProgressBar::hidden()
+        } else {
+            indicatif::ProgressBar::new_spinner()
+        };
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        Self {
+            bar,
+            unit,
+            infos: infos && !quiet,
+        }
+    }
+}
+
+impl proving_ground::progress::Progress for Bar {
+    fn stage(&self, name: &str, total: Option<u64>) {
+        let style = match total {
+            Some(total) => {
+                self.bar.set_length(total);
+                self.bar.set_position(0);
+                self.bar.reset_eta();
+                indicatif::ProgressStyle::with_template(&format!(
+                    "{{spinner}} {{msg}}: {{pos}}/{{len}} {}, {{elapsed}} (about {{eta}} left)",
+                    self.unit
+                ))
+            }
+            None => indicatif::ProgressStyle::with_template("{spinner} {msg}"),
+        };
+        if let Ok(style) = style {
+            self.bar.set_style(style);
+        }
+        self.bar.set_message(name.to_string());
+    }
+
+    fn advance(&self) {
+        self.bar.inc(1);
+    }
+
+    fn warning(&self, line: &str) {
+        self.bar.suspend(|| eprintln!("{line}"));
+    }
+
+    fn info(&self, line: &str) {
+        if self.infos {
+            self.bar.suspend(|| eprintln!("info: {line}"));
+        }
+    }
+}
+
 /// `--threads N`: the global pool's size (the reports do not depend on it).
 pub(crate) fn threads(count: Option<u64>) {
     if let Some(threads) = count {

@@ -139,31 +139,6 @@ pub(crate) struct GaArgs {
     quiet: bool,
 }
 
-/// Pairs done of all, with the time taken and left, on stderr (drawn only on a terminal).
-struct PairBar(indicatif::ProgressBar);
-
-impl proving_ground::progress::Progress for PairBar {
-    fn stage(&self, name: &str, total: Option<u64>) {
-        self.0.set_length(total.unwrap_or(0));
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg}: {pos}/{len} pairs, {elapsed} (about {eta} left)") {
-            self.0.set_style(style);
-        }
-        self.0.set_message(name.to_string());
-    }
-
-    fn advance(&self) {
-        self.0.inc(1);
-    }
-}
-
-fn bar(quiet: bool) -> PairBar {
-    PairBar(if quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(0)
-    })
-}
-
 fn reference(dir: Option<&PathBuf>) -> Result<Option<sweep::Reference>, Failure> {
     Ok(match dir {
         Some(dir) => Some(sweep::read_reference(dir)?),
@@ -201,9 +176,9 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
         reference: reference(args.reference.as_ref())?,
         top: usize::try_from(args.top).unwrap_or(usize::MAX),
     };
-    let progress = bar(args.quiet);
+    let progress = super::Bar::new("pairs", args.quiet, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
-    progress.0.finish_and_clear();
+    progress.bar.finish_and_clear();
     let result = result?;
     if !args.quiet {
         print!("{}", result.table);
@@ -262,9 +237,9 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Failure> {
         reference: None,
         top: sweep::table::DEFAULT_TOP,
     };
-    let progress = bar(false);
+    let progress = super::Bar::new("pairs", false, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
-    progress.0.finish_and_clear();
+    progress.bar.finish_and_clear();
     let result = result?;
     print!("{}", sweep::paper::table_1(&result.records, scenarios.len()));
     Ok(ExitCode::SUCCESS)
@@ -305,9 +280,9 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
         .as_ref()
         .map(|r| sweep::reference_records(r, &mode, std::slice::from_ref(scenario)))
         .transpose()?;
-    let progress = bar(args.quiet);
+    let progress = super::Bar::new("pairs", args.quiet, false);
     let result = sweep::ga::run(scenario, &mode, &opts, &progress);
-    progress.0.finish_and_clear();
+    progress.bar.finish_and_clear();
     let result = result?;
     if let Some(path) = &args.out {
         let text = serde_json::to_string_pretty(&result).map_err(|e| Error::Report { message: e.to_string() })? + "\n";

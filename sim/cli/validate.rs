@@ -166,62 +166,13 @@ impl ValidateArgs {
     }
 }
 
-/// The run's progress on stderr: a spinner for a stage that cannot be counted, else the goals
-/// done of all, the time taken and an estimate of the time left; the notes about the input.
-struct StageBar {
-    bar: indicatif::ProgressBar,
-    /// Print the loader's choices and the SRDF's summary (not with --quiet, nor where
-    /// --describe lists them).
-    infos: bool,
-}
-
-impl proving_ground::progress::Progress for StageBar {
-    fn stage(&self, name: &str, total: Option<u64>) {
-        let style = match total {
-            Some(total) => {
-                self.bar.set_length(total);
-                self.bar.set_position(0);
-                self.bar.reset_eta();
-                indicatif::ProgressStyle::with_template("{spinner} {msg}: {pos}/{len} goals, {elapsed} (about {eta} left)")
-            }
-            None => indicatif::ProgressStyle::with_template("{spinner} {msg}"),
-        };
-        if let Ok(style) = style {
-            self.bar.set_style(style);
-        }
-        self.bar.set_message(name.to_string());
-    }
-
-    fn advance(&self) {
-        self.bar.inc(1);
-    }
-
-    fn warning(&self, line: &str) {
-        self.bar.suspend(|| eprintln!("{line}"));
-    }
-
-    fn info(&self, line: &str) {
-        if self.infos {
-            self.bar.suspend(|| eprintln!("info: {line}"));
-        }
-    }
-}
-
 /// Validates, prints and writes what was asked; the exit code of the outcome.
 pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     let input = args.design.as_deref().expect("clap requires DESIGN without a subcommand");
     super::threads(args.threads);
     let describing = args.describe || args.kinematics_only;
-    // On stderr; indicatif draws nothing when stderr is not a terminal.
-    let bar = StageBar {
-        bar: if args.quiet {
-            indicatif::ProgressBar::hidden()
-        } else {
-            indicatif::ProgressBar::new_spinner()
-        },
-        infos: !args.quiet && !describing,
-    };
-    bar.bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    // --describe prints the choices and the SRDF's pairs with the model.
+    let bar = super::Bar::new("goals", args.quiet, !describing);
     let run = proving_ground::validate(input, &args.options(), &bar);
     bar.bar.finish_and_clear();
     let run = run?;
