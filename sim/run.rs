@@ -277,6 +277,32 @@ pub fn validate_loaded(
     Ok(run)
 }
 
+/// [`validate_loaded`] to the end (`opts.stop` is not used): the validation and its report, as
+/// an experiment needs them per run (a sweep pair, a snapshot, a fine-tuning's before and after).
+///
+/// # Errors
+/// As [`validate`].
+pub fn validated(
+    input: &Path,
+    loaded: Loaded,
+    scenario: Scenario,
+    opts: &Options,
+    progress: &dyn Progress,
+) -> Result<(Validation, Report), Error> {
+    let opts = Options {
+        stop: Stop::Validated,
+        ..opts.clone()
+    };
+    let run = validate_loaded(input, loaded, scenario, &opts, progress)?;
+    match (run.validation, run.report) {
+        (Some(validation), Some(report)) => Ok((validation, report)),
+        // Only a kinematics disagreement stops a whole run early.
+        _ => Err(Error::Report {
+            message: "MuJoCo's kinematics disagree with ours; nothing was validated".into(),
+        }),
+    }
+}
+
 /// Whether the run checks our kinematics against MuJoCo's.
 fn kinematics_checked(opts: &Options) -> bool {
     opts.kinematics_checks > 0 && opts.stop != Stop::Described

@@ -266,10 +266,7 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
             ..Default::default()
         };
         for (scenario_name, scenario) in &scenarios {
-            let done = run::validate_loaded(&path, loaded.clone(), scenario.clone(), &run_opts, &crate::progress::Silent)?;
-            let built = done.report.ok_or_else(|| Error::Report {
-                message: "a whole run has a report".into(),
-            })?;
+            let (_, built) = run::validated(&path, loaded.clone(), scenario.clone(), &run_opts, &crate::progress::Silent)?;
             let body = snapshot::snapshot_text(&built).map_err(|message| Error::Report { message })?;
             let snapshot_name = format!("{name}__{scenario_name}");
             let file = folder.join(format!("{snapshot_name}.snap"));

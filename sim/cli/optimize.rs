@@ -211,12 +211,8 @@ fn validated(
         validate: opts.clone(),
         ..Default::default()
     };
-    let run = proving_ground::run::validate_loaded(path, loaded, scenario.clone(), &run_opts, &proving_ground::progress::Silent)?;
-    run.report.ok_or_else(|| {
-        Failure::from(Error::Report {
-            message: "a whole run has a report".into(),
-        })
-    })
+    let (_, report) = proving_ground::run::validated(path, loaded, scenario.clone(), &run_opts, &proving_ground::progress::Silent)?;
+    Ok(report)
 }
 
 /// Whether `--out` names a folder: several designs, an existing folder, or a trailing `/`.

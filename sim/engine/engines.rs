@@ -165,11 +165,6 @@ impl Engines {
         Ok(engines)
     }
 
-    /// Whether the engine called `name` runs.
-    pub fn contains(self, name: &str) -> bool {
-        self.selected().any(|e| e.name() == name)
-    }
-
     /// Whether no engine runs.
     pub fn is_empty(self) -> bool {
         self.chosen == 0

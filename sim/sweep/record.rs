@@ -93,12 +93,7 @@ pub fn evaluate(
         validate: opts,
         ..Default::default()
     };
-    let run = crate::run::validate_loaded(Path::new(design_id), loaded, scenario, &run_opts, &crate::progress::Silent)?;
-    let (Some(validation), Some(report)) = (run.validation, run.report) else {
-        return Err(crate::error::Error::Report {
-            message: "a whole run has a report".into(),
-        });
-    };
+    let (validation, report) = crate::run::validated(Path::new(design_id), loaded, scenario, &run_opts, &crate::progress::Silent)?;
     let goals = validation.scenario.goals.len();
     let best: Vec<_> = validation.solutions.iter().map(|g| g.solutions.first()).collect();
     let mean = |values: Vec<f64>| (values.len() == goals && goals > 0).then(|| values.iter().sum::<f64>() / goals as f64);
