@@ -67,6 +67,7 @@ pub mod export;
 pub mod files;
 pub mod frames;
 pub mod ik;
+pub mod json;
 pub mod limits;
 pub mod model;
 pub mod mujoco;

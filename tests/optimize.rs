@@ -260,7 +260,7 @@ fn fine_tuning_a_free_design_lowers_the_loss_keeps_its_goals_and_is_deterministi
     assert!(after < before, "objective {before} -> {after}");
     let tuned = optimize::tuned_design(&design, &batch, &optimized.params, 0, "tuned");
     assert_ne!(tuned.joints, design.joints, "the design parameters moved");
-    let text = optimize::write::design_json(&tuned, "test");
+    let text = design::to_json(&tuned, "test");
     let back = design::parse(&text, std::path::Path::new("tuned.json")).expect("tuned design reads back");
     assert_eq!(back.joints, tuned.joints);
     assert!(reached(&back, &scenario) >= reached(&design, &scenario), "a goal was lost");
@@ -269,7 +269,7 @@ fn fine_tuning_a_free_design_lowers_the_loss_keeps_its_goals_and_is_deterministi
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
     let (again, _) = pool.install(|| tune(&design, &scenario, 200));
     assert_eq!(again.params, optimized.params);
-    let again_text = optimize::write::design_json(&optimize::tuned_design(&design, &batch, &again.params, 0, "tuned"), "test");
+    let again_text = design::to_json(&optimize::tuned_design(&design, &batch, &again.params, 0, "tuned"), "test");
     assert_eq!(again_text, text);
 }
 
@@ -281,7 +281,7 @@ fn an_economic_design_stays_economic_and_a_modular_one_keeps_its_modules() {
         let (optimized, batch) = tune(&design, &scenario, 60);
         assert!(optimized.objective.1[0] <= optimized.objective.0[0], "{name}");
         let tuned = optimize::tuned_design(&design, &batch, &optimized.params, 0, "tuned");
-        let back = design::parse(&optimize::write::design_json(&tuned, "test"), std::path::Path::new("t.json")).expect("reads back");
+        let back = design::parse(&design::to_json(&tuned, "test"), std::path::Path::new("t.json")).expect("reads back");
         assert_eq!(back.mode, design.mode, "{name}");
         assert!(back.snapped.is_empty(), "{name}: {:?}", back.snapped);
         if design.mode == DesignMode::Modular {

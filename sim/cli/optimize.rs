@@ -122,7 +122,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
                 "{} fine-tuned on scenario `{}` by validate-design optimize ({} Adam steps, seed {})",
                 design.name, scenario.name, opts.steps, opts.seed
             );
-            let text = optimize::write::design_json(&tuned, &description);
+            let text = proving_ground::design::to_json(&tuned, &description);
             // The file must read back to exactly the design optimized.
             let back = proving_ground::design::parse(&text, &tuning.out).map_err(Error::from)?;
             if back.joints != tuned.joints {

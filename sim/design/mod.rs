@@ -3,6 +3,9 @@
 //! ratings, base pose and tool offset. Fails with [`DesignError`] naming the file and field.
 
 pub mod catalog;
+mod write;
+
+pub use write::to_json;
 
 use crate::frames::PoseSpec;
 use crate::limits;
@@ -198,53 +201,64 @@ struct ModeOnly {
     mode: String,
 }
 
-#[derive(Deserialize)]
+// The file schema, read by `parse` and written by `write::to_json`: one type per mode.
+
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct DhFile {
-    #[allow(dead_code)]
-    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     name: Option<String>,
-    #[allow(dead_code)]
+    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     description: Option<String>,
     joints: Vec<DhJointFile>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     base: Option<PoseSpec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     tool: Option<PoseSpec>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct DhJointFile {
     d: f64,
     a: f64,
     alpha: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
     limits: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     max_velocity: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     rated_torque: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct ModularFile {
-    #[allow(dead_code)]
-    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     name: Option<String>,
-    #[allow(dead_code)]
+    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     description: Option<String>,
     modules: Vec<SlotOption>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     base: Option<PoseSpec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     tool: Option<PoseSpec>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct PresetFile {
-    #[allow(dead_code)]
-    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     name: Option<String>,
-    #[allow(dead_code)]
+    mode: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     description: Option<String>,
     preset: Preset,
+    #[serde(skip_serializing_if = "Option::is_none")]
     base: Option<PoseSpec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     tool: Option<PoseSpec>,
 }
 

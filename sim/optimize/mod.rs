@@ -16,7 +16,6 @@ pub mod analytic;
 mod gaps;
 pub mod problem;
 pub mod tensor;
-pub mod write;
 
 pub use analytic::Analytic;
 pub use problem::{Batch, Evaluation, Params, Sample};

@@ -4,7 +4,7 @@ use super::{Floor, Goal, Obstacle, Provenance, Scenario, ScenarioError, Toleranc
 use crate::limits;
 use crate::model::{load_mesh, Shape};
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// How far a given quaternion's norm may be from 1, and how far `R^T R` of a given rotation
@@ -20,67 +20,87 @@ const UNIT_NORM_ROUNDING: f64 = 4.0 * f64::EPSILON;
 /// The obstacle types a file may name, as written.
 const OBSTACLE_TYPES: &str = "sphere, capsule, box, cylinder, mesh";
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ScenarioFile {
-    name: Option<String>,
-    provenance: Option<Provenance>,
-    base: Option<PoseFile>,
-    floor: Option<FloorFile>,
-    tolerance: Option<Tolerance>,
-    home: Option<Vec<f64>>,
+pub(super) struct ScenarioFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) name: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) provenance: Option<Provenance>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) base: Option<PoseFile>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) floor: Option<FloorFile>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) tolerance: Option<Tolerance>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) home: Option<Vec<f64>>,
     #[serde(default)]
-    obstacles: Vec<ObstacleFile>,
-    goals: Vec<GoalFile>,
+    pub(super) obstacles: Vec<ObstacleFile>,
+    pub(super) goals: Vec<GoalFile>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct PoseFile {
+pub(super) struct PoseFile {
     #[serde(default)]
-    position: [f64; 3],
-    rpy: Option<[f64; 3]>,
-    quaternion: Option<[f64; 4]>,
+    pub(super) position: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) rpy: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) quaternion: Option<[f64; 4]>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct FloorFile {
-    height: f64,
+pub(super) struct FloorFile {
+    pub(super) height: f64,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct ObstacleFile {
-    name: Option<String>,
+pub(super) struct ObstacleFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) name: Option<String>,
     #[serde(rename = "type")]
-    kind: String,
-    position: [f64; 3],
-    quaternion: Option<[f64; 4]>,
-    rpy: Option<[f64; 3]>,
-    radius: Option<f64>,
-    length: Option<f64>,
-    size: Option<[f64; 3]>,
-    file: Option<String>,
-    scale: Option<Scale>,
+    pub(super) kind: String,
+    pub(super) position: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) quaternion: Option<[f64; 4]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) rpy: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) radius: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) length: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) size: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) file: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) scale: Option<Scale>,
 }
 
 /// A mesh scale: one number for every axis, or one per axis.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(untagged)]
-enum Scale {
+pub(super) enum Scale {
     Uniform(f64),
     PerAxis([f64; 3]),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct GoalFile {
-    name: Option<String>,
-    position: [f64; 3],
-    quaternion: Option<[f64; 4]>,
-    rotation: Option<[[f64; 3]; 3]>,
-    tolerance: Option<Tolerance>,
+pub(super) struct GoalFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) name: Option<String>,
+    pub(super) position: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) quaternion: Option<[f64; 4]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) rotation: Option<[[f64; 3]; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) tolerance: Option<Tolerance>,
 }
 
 /// Reads and validates a scenario file.

@@ -1,111 +1,18 @@
-//! Scenario -> JSON text with deterministic bytes, the inverse of `file::parse`.
-//!
-//! Keys come in a fixed order (the schema's order, provenance parameters sorted), numbers in
-//! serde_json's shortest round-trip form (ryu), objects indented by two spaces, arrays of numbers
-//! on one line, and the text ends with a newline. Nothing depends on hash order or on serde_json's
-//! `preserve_order` feature.
+//! Scenario -> JSON text, the inverse of `file::parse`, written from the serde types that read
+//! it: keys in the schema's order (provenance parameters sorted), the layout of [`crate::json`].
 
-use super::file::{default_goal_name, default_obstacle_name};
+use super::file::{default_goal_name, default_obstacle_name, FloorFile, GoalFile, ObstacleFile, PoseFile, Scale, ScenarioFile};
 use super::{Scenario, ScenarioError, Tolerance};
 use crate::model::Shape;
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion};
 use std::path::Path;
 
-/// One JSON value under construction: scalars already formatted.
-enum Node {
-    Scalar(String),
-    Array(Vec<Node>),
-    Object(Vec<(String, Node)>),
-}
-
-impl Node {
-    fn number(value: f64) -> Node {
-        // serde_json writes every finite f64 in its shortest round-trip form; a validated or
-        // generated scenario holds only finite numbers.
-        Node::Scalar(serde_json::to_string(&value).expect("an f64 always serialises"))
-    }
-
-    fn string(value: &str) -> Node {
-        Node::Scalar(serde_json::to_string(value).expect("a string always serialises"))
-    }
-
-    fn numbers(values: &[f64]) -> Node {
-        Node::Array(values.iter().map(|&v| Node::number(v)).collect())
-    }
-
-    fn from_value(value: &serde_json::Value) -> Node {
-        match value {
-            serde_json::Value::Array(items) => Node::Array(items.iter().map(Node::from_value).collect()),
-            serde_json::Value::Object(map) => {
-                let mut entries: Vec<(String, Node)> = map.iter().map(|(k, v)| (k.clone(), Node::from_value(v))).collect();
-                entries.sort_by(|a, b| a.0.cmp(&b.0));
-                Node::Object(entries)
-            }
-            scalar => Node::Scalar(scalar.to_string()),
-        }
-    }
-
-    fn write(&self, out: &mut String, indent: usize) {
-        match self {
-            Node::Scalar(text) => out.push_str(text),
-            Node::Array(items) if items.is_empty() => out.push_str("[]"),
-            Node::Array(items) if items.iter().all(|i| matches!(i, Node::Scalar(_))) => {
-                out.push('[');
-                for (i, item) in items.iter().enumerate() {
-                    if i > 0 {
-                        out.push_str(", ");
-                    }
-                    item.write(out, indent);
-                }
-                out.push(']');
-            }
-            Node::Array(items) => {
-                out.push('[');
-                for (i, item) in items.iter().enumerate() {
-                    out.push_str(if i > 0 { ",\n" } else { "\n" });
-                    push_indent(out, indent + 1);
-                    item.write(out, indent + 1);
-                }
-                out.push('\n');
-                push_indent(out, indent);
-                out.push(']');
-            }
-            Node::Object(entries) if entries.is_empty() => out.push_str("{}"),
-            Node::Object(entries) => {
-                out.push('{');
-                for (i, (key, value)) in entries.iter().enumerate() {
-                    out.push_str(if i > 0 { ",\n" } else { "\n" });
-                    push_indent(out, indent + 1);
-                    out.push_str(&serde_json::to_string(key).expect("a string always serialises"));
-                    out.push_str(": ");
-                    value.write(out, indent + 1);
-                }
-                out.push('\n');
-                push_indent(out, indent);
-                out.push('}');
-            }
-        }
-    }
-}
-
-fn push_indent(out: &mut String, level: usize) {
-    for _ in 0..level {
-        out.push_str("  ");
-    }
-}
-
-fn quaternion(rotation: &UnitQuaternion<f64>) -> Node {
-    Node::numbers(&crate::frames::wxyz(rotation))
-}
-
-fn vector(v: &Vector3<f64>) -> Node {
-    Node::numbers(&crate::frames::xyz(v))
-}
-
-fn pose_entries(pose: &Isometry3<f64>, entries: &mut Vec<(String, Node)>, always_rotation: bool) {
-    entries.push(("position".into(), vector(&pose.translation.vector)));
-    if always_rotation || pose.rotation != UnitQuaternion::identity() {
-        entries.push(("quaternion".into(), quaternion(&pose.rotation)));
+/// `pose` in the file schema; the quaternion is left out at identity unless `always_rotation`.
+fn pose_file(pose: &Isometry3<f64>, always_rotation: bool) -> PoseFile {
+    PoseFile {
+        position: crate::frames::xyz(&pose.translation.vector),
+        rpy: None,
+        quaternion: (always_rotation || pose.rotation != UnitQuaternion::identity()).then(|| crate::frames::wxyz(&pose.rotation)),
     }
 }
 
@@ -129,88 +36,66 @@ fn common_tolerance(scenario: &Scenario) -> Tolerance {
 /// Goal orientations are written as `quaternion` `[w, x, y, z]`, obstacle orientations too (left
 /// out when identity); names equal to the default (`goal 3`, `obstacle 1`) are left out.
 pub fn to_json(scenario: &Scenario) -> String {
-    let mut root: Vec<(String, Node)> = vec![("name".into(), Node::string(&scenario.name))];
-    if let Some(provenance) = &scenario.provenance {
-        let parameters = provenance
-            .parameters
-            .iter()
-            .map(|(k, v)| (k.clone(), Node::from_value(v)))
-            .collect();
-        root.push((
-            "provenance".into(),
-            Node::Object(vec![
-                ("generator".into(), Node::string(&provenance.generator)),
-                ("seed".into(), Node::Scalar(provenance.seed.to_string())),
-                ("parameters".into(), Node::Object(parameters)),
-            ]),
-        ));
-    }
-    let mut base = Vec::new();
-    pose_entries(&scenario.world_from_base, &mut base, true);
-    root.push(("base".into(), Node::Object(base)));
-    if let Some(floor) = &scenario.floor {
-        root.push(("floor".into(), Node::Object(vec![("height".into(), Node::number(floor.height))])));
-    }
     let tolerance = common_tolerance(scenario);
-    root.push(("tolerance".into(), Node::string(tolerance.name())));
-    if let Some(home) = &scenario.home {
-        root.push(("home".into(), Node::numbers(home)));
-    }
-
     let obstacles = scenario
         .obstacles
         .iter()
         .enumerate()
         .map(|(index, obstacle)| {
-            let mut entries = Vec::new();
-            if obstacle.name != default_obstacle_name(index) {
-                entries.push(("name".into(), Node::string(&obstacle.name)));
-            }
-            entries.push(("type".into(), Node::string(obstacle.shape.kind())));
-            pose_entries(&obstacle.world_from_shape, &mut entries, false);
+            let pose = pose_file(&obstacle.world_from_shape, false);
+            let mut file = ObstacleFile {
+                name: (obstacle.name != default_obstacle_name(index)).then(|| obstacle.name.clone()),
+                kind: obstacle.shape.kind().to_string(),
+                position: pose.position,
+                quaternion: pose.quaternion,
+                rpy: None,
+                radius: None,
+                length: None,
+                size: None,
+                file: None,
+                scale: None,
+            };
             match &obstacle.shape {
-                Shape::Sphere { radius } => entries.push(("radius".into(), Node::number(*radius))),
+                Shape::Sphere { radius } => file.radius = Some(*radius),
                 Shape::Capsule { radius, length } | Shape::Cylinder { radius, length } => {
-                    entries.push(("radius".into(), Node::number(*radius)));
-                    entries.push(("length".into(), Node::number(*length)));
+                    file.radius = Some(*radius);
+                    file.length = Some(*length);
                 }
                 // Doubling is exact in binary floating point, so the halves read back unchanged.
-                Shape::Box { half_extents } => entries.push(("size".into(), Node::numbers(&half_extents.map(|h| 2.0 * h)))),
+                Shape::Box { half_extents } => file.size = Some(half_extents.map(|h| 2.0 * h)),
                 Shape::Mesh(mesh) => {
-                    entries.push(("file".into(), Node::string(&mesh.uri)));
-                    if mesh.scale != [1.0; 3] {
-                        entries.push(("scale".into(), Node::numbers(&mesh.scale)));
-                    }
+                    file.file = Some(mesh.uri.clone());
+                    file.scale = (mesh.scale != [1.0; 3]).then_some(Scale::PerAxis(mesh.scale));
                 }
             }
-            Node::Object(entries)
+            file
         })
         .collect();
-    root.push(("obstacles".into(), Node::Array(obstacles)));
-
     let goals = scenario
         .goals
         .iter()
         .enumerate()
-        .map(|(index, goal)| {
-            let mut entries = Vec::new();
-            if goal.name != default_goal_name(index) {
-                entries.push(("name".into(), Node::string(&goal.name)));
-            }
-            entries.push(("position".into(), vector(&goal.position)));
-            entries.push(("quaternion".into(), quaternion(&goal.rotation)));
-            if goal.tolerance != tolerance {
-                entries.push(("tolerance".into(), Node::string(goal.tolerance.name())));
-            }
-            Node::Object(entries)
+        .map(|(index, goal)| GoalFile {
+            name: (goal.name != default_goal_name(index)).then(|| goal.name.clone()),
+            position: crate::frames::xyz(&goal.position),
+            quaternion: Some(crate::frames::wxyz(&goal.rotation)),
+            rotation: None,
+            tolerance: (goal.tolerance != tolerance).then_some(goal.tolerance),
         })
         .collect();
-    root.push(("goals".into(), Node::Array(goals)));
-
-    let mut out = String::new();
-    Node::Object(root).write(&mut out, 0);
-    out.push('\n');
-    out
+    let file = ScenarioFile {
+        name: Some(scenario.name.clone()),
+        provenance: scenario.provenance.clone(),
+        base: Some(pose_file(&scenario.world_from_base, true)),
+        floor: scenario.floor.as_ref().map(|floor| FloorFile { height: floor.height }),
+        tolerance: Some(tolerance),
+        home: scenario.home.clone(),
+        obstacles,
+        goals,
+    };
+    // A validated or generated scenario holds only finite numbers and string keys, all that
+    // serde_json could refuse.
+    crate::json::to_text(&file).expect("a scenario file always serialises")
 }
 
 /// Writes [`to_json`] of `scenario` to `path`, creating missing parent folders. An existing file
