@@ -10,7 +10,7 @@ pub fn to_json(design: &Design, description: &str) -> String {
     let name = Some(design.name.clone());
     let mode = design.mode.name().to_string();
     let description = Some(description.to_string());
-    let (base, tool) = (Some(design.base.clone()), Some(design.tool.clone()));
+    let (base, tool) = (Some(design.base), Some(design.tool));
     let text = match (design.mode, &design.modules, design.preset) {
         (DesignMode::Modular, Some(modules), _) => crate::json::to_text(&ModularFile {
             name,

@@ -1,4 +1,4 @@
-//! Model -> MJCF text, written directly.
+//! Model -> MJCF text, written through quick-xml ([`crate::xml::Doc`]).
 //!
 //! One body per link, nested along the chain: the base body at `world_from_base` (static, no
 //! joint), every other body at its joint's `parent_from_joint` with a hinge or slide joint, its
@@ -23,7 +23,7 @@ use super::{check_chain, check_unique, ExportError};
 use crate::convex::ConvexPiece;
 use crate::frames::{wxyz, xyz};
 use crate::model::{Collider, JointKind, Model, Shape};
-use crate::xml::escape;
+use crate::xml::{Attributes, Doc};
 use nalgebra::Isometry3;
 use std::sync::Arc;
 
@@ -164,30 +164,27 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         link_geoms.iter().chain(&world_geoms).map(String::as_str).chain(floor),
     )?;
 
-    let mut out = String::new();
-    line(&mut out, 0, &format!(r#"<mujoco model="{}">"#, escape(&model.name)));
-    line(&mut out, 1, r#"<compiler angle="radian" autolimits="true"/>"#);
-    let timestep = opts.timestep;
-    let gravity = -opts.gravity_m_s2;
-    let integrator = match &opts.integrator {
-        Some(name) => format!(r#" integrator="{}""#, escape(name)),
-        None => String::new(),
-    };
-    line(
-        &mut out,
-        1,
-        &format!(r#"<option timestep="{timestep}" gravity="0 0 {gravity}"{integrator}/>"#),
-    );
-    write_assets(&mut out, model, &opts.world_colliders, &pieces);
-    write_bodies(&mut out, model, base_is_world, opts, &pieces);
+    let mut doc = Doc::new(2);
+    doc.open("mujoco", [("model", model.name.as_str())]);
+    doc.empty("compiler", [("angle", "radian"), ("autolimits", "true")]);
+    let mut option = vec![
+        ("timestep", opts.timestep.to_string()),
+        ("gravity", numbers([0.0, 0.0, -opts.gravity_m_s2])),
+    ];
+    if let Some(name) = &opts.integrator {
+        option.push(("integrator", name.clone()));
+    }
+    doc.empty("option", option);
+    write_assets(&mut doc, model, &opts.world_colliders, &pieces);
+    write_bodies(&mut doc, model, base_is_world, opts, &pieces);
     if opts.include_actuators && !model.joints.is_empty() {
-        line(&mut out, 1, "<actuator>");
+        doc.open("actuator", NO_ATTRIBUTES);
         for ((joint, kp), kv) in model.joints.iter().zip(&kp).zip(&kv) {
-            let name = escape(&joint.name);
-            let text = format!(r#"<position name="{name}" joint="{name}" kp="{kp}" kv="{kv}"/>"#);
-            line(&mut out, 2, &text);
+            let name = joint.name.as_str();
+            let (kp, kv) = (kp.to_string(), kv.to_string());
+            doc.empty("position", [("name", name), ("joint", name), ("kp", &kp), ("kv", &kv)]);
         }
-        line(&mut out, 1, "</actuator>");
+        doc.close("actuator");
     }
     // Adjacent pairs first, then the extra ones not already written (either order).
     let mut pairs: Vec<(&str, &str)> = model
@@ -202,24 +199,25 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         }
     }
     if !pairs.is_empty() || !opts.explicit_geom_pairs.is_empty() {
-        line(&mut out, 1, "<contact>");
+        doc.open("contact", NO_ATTRIBUTES);
         for (a, b) in &opts.explicit_geom_pairs {
             for geom1 in pieces.geoms_of(model, a) {
                 for geom2 in pieces.geoms_of(model, b) {
-                    let (geom1, geom2) = (escape(&geom1), escape(&geom2));
-                    line(&mut out, 2, &format!(r#"<pair geom1="{geom1}" geom2="{geom2}"/>"#));
+                    doc.empty("pair", [("geom1", &geom1), ("geom2", &geom2)]);
                 }
             }
         }
-        for (a, b) in pairs {
-            let (body1, body2) = (escape(a), escape(b));
-            line(&mut out, 2, &format!(r#"<exclude body1="{body1}" body2="{body2}"/>"#));
+        for (body1, body2) in pairs {
+            doc.empty("exclude", [("body1", body1), ("body2", body2)]);
         }
-        line(&mut out, 1, "</contact>");
+        doc.close("contact");
     }
-    line(&mut out, 0, "</mujoco>");
-    Ok(out)
+    doc.close("mujoco");
+    Ok(doc.finish())
 }
+
+/// The attributes of an element that has none.
+const NO_ATTRIBUTES: [(&str, &str); 0] = [];
 
 /// One gain per joint: the given ones (checked for length) or the default for all.
 fn gains(model: &Model, gain: &'static str, given: Option<&[f64]>, default: f64) -> Result<Vec<f64>, ExportError> {
@@ -291,82 +289,67 @@ fn piece_names_with(name: &str, separator: char, pieces: Option<&[ConvexPiece]>)
     }
 }
 
-fn write_assets(out: &mut String, model: &Model, world_colliders: &[Collider], pieces: &Pieces) {
-    let mesh_assets = |name: String, collider: &Collider, pieces: Option<&[ConvexPiece]>| {
-        let Shape::Mesh(mesh) = &collider.shape else {
-            return Vec::new();
-        };
-        let asset = |name: &str, vertices: &[[f64; 3]], triangles: &[[u32; 3]]| {
-            let vertex = numbers(vertices.iter().flatten().copied());
-            let face = triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
-            let name = escape(name);
-            format!(r#"<mesh name="{name}" vertex="{vertex}" face="{face}"/>"#)
-        };
-        match pieces {
-            None => vec![asset(&name, &mesh.vertices, &mesh.triangles)],
-            Some(pieces) => {
-                let comment = comment(&format!("{}: convex pieces of {}", collider.label, mesh.uri));
-                let names = piece_names_with(&name, '_', Some(pieces));
-                let assets = names.iter().zip(pieces).map(|(n, p)| asset(n, &p.vertices, &p.triangles));
-                std::iter::once(comment).chain(assets).collect()
-            }
-        }
-    };
-    let meshes: Vec<String> = model
-        .links
+fn write_assets(doc: &mut Doc, model: &Model, world_colliders: &[Collider], pieces: &Pieces) {
+    // (asset name, collider, its pieces) of every mesh collider, links first.
+    let link_meshes = model.links.iter().enumerate().flat_map(|(i, link)| {
+        link.colliders
+            .iter()
+            .enumerate()
+            .map(move |(k, collider)| (mesh_name(&link.name, k), collider, pieces.link(i, k)))
+    });
+    let world_meshes = world_colliders
         .iter()
         .enumerate()
-        .flat_map(|(i, link)| {
-            link.colliders
-                .iter()
-                .enumerate()
-                .flat_map(move |(k, collider)| mesh_assets(mesh_name(&link.name, k), collider, pieces.link(i, k)))
-        })
-        .chain(
-            world_colliders
-                .iter()
-                .enumerate()
-                .flat_map(|(k, collider)| mesh_assets(format!("{WORLD_MESH_PREFIX}{k}"), collider, pieces.world(k))),
-        )
+        .map(|(k, collider)| (format!("{WORLD_MESH_PREFIX}{k}"), collider, pieces.world(k)));
+    let meshes: Vec<_> = link_meshes
+        .chain(world_meshes)
+        .filter(|(_, collider, _)| matches!(collider.shape, Shape::Mesh(_)))
         .collect();
     if meshes.is_empty() {
         return;
     }
-    line(out, 1, "<asset>");
-    for mesh in &meshes {
-        line(out, 2, mesh);
+    let asset = |doc: &mut Doc, name: &str, vertices: &[[f64; 3]], triangles: &[[u32; 3]]| {
+        let vertex = numbers(vertices.iter().flatten().copied());
+        let face = triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
+        doc.empty("mesh", [("name", name), ("vertex", &vertex), ("face", &face)]);
+    };
+    doc.open("asset", NO_ATTRIBUTES);
+    for (name, collider, pieces) in meshes {
+        let Shape::Mesh(mesh) = &collider.shape else {
+            continue;
+        };
+        match pieces {
+            None => asset(doc, &name, &mesh.vertices, &mesh.triangles),
+            Some(pieces) => {
+                doc.comment(&format!("{}: convex pieces of {}", collider.label, mesh.uri));
+                for (piece_name, piece) in piece_names_with(&name, '_', Some(pieces)).iter().zip(pieces) {
+                    asset(doc, piece_name, &piece.vertices, &piece.triangles);
+                }
+            }
+        }
     }
-    line(out, 1, "</asset>");
-}
-
-/// An XML comment; `--` (not allowed inside one) is broken up.
-fn comment(text: &str) -> String {
-    format!("<!-- {} -->", text.replace("--", "- -"))
+    doc.close("asset");
 }
 
 /// The bodies, nested: each link's body is opened inside its parent's and all are closed at the
 /// end, innermost first.
-fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &MjcfOptions, pieces: &Pieces) {
-    line(out, 1, "<worldbody>");
+fn write_bodies(doc: &mut Doc, model: &Model, base_is_world: bool, opts: &MjcfOptions, pieces: &Pieces) {
+    doc.open("worldbody", NO_ATTRIBUTES);
     // The world's own geoms come first, outside any base frame: their poses are world poses.
     if let Some(height) = opts.floor_height {
-        line(
-            out,
-            2,
-            &format!(r#"<geom name="{FLOOR_GEOM}" type="plane" pos="0 0 {height}" size="0 0 1"/>"#),
-        );
+        let pos = numbers([0.0, 0.0, height]);
+        doc.empty("geom", [("name", FLOOR_GEOM), ("type", "plane"), ("pos", &pos), ("size", "0 0 1")]);
     }
     for (k, collider) in opts.world_colliders.iter().enumerate() {
         let mesh = format!("{WORLD_MESH_PREFIX}{k}");
-        for text in geom_texts(&collider.label, &mesh, collider, pieces.world(k)) {
-            line(out, 2, &text);
-        }
+        write_geoms(doc, &collider.label, &mesh, collider, pieces.world(k));
     }
     for (name, world_from_site) in &opts.world_sites {
-        let text = format!(r#"<site name="{}" {} size="0.01"/>"#, escape(name), pose(world_from_site));
-        line(out, 2, &text);
+        let mut site = vec![("name", name.clone())];
+        site.extend(pose(world_from_site));
+        site.push(("size", "0.01".into()));
+        doc.empty("site", site);
     }
-    let mut depth = 2;
     let mut closing = Vec::with_capacity(model.links.len());
     for (i, link) in model.links.iter().enumerate() {
         let parent_from_body = match i {
@@ -376,15 +359,14 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
         let is_world = i == 0 && base_is_world;
         if is_world {
             if *parent_from_body != Isometry3::identity() {
-                line(out, depth, &format!("<frame {}>", pose(parent_from_body)));
-                closing.push("</frame>");
-                depth += 1;
+                doc.open("frame", pose(parent_from_body));
+                closing.push("frame");
             }
         } else {
-            let name = escape(&link.name);
-            line(out, depth, &format!(r#"<body name="{name}" {}>"#, pose(parent_from_body)));
-            closing.push("</body>");
-            depth += 1;
+            let mut body = vec![("name", link.name.clone())];
+            body.extend(pose(parent_from_body));
+            doc.open("body", body);
+            closing.push("body");
         }
 
         if i > 0 {
@@ -394,58 +376,64 @@ fn write_bodies(out: &mut String, model: &Model, base_is_world: bool, opts: &Mjc
                 JointKind::Prismatic => "slide",
             };
             let limits = match (joint.kind, joint.limits) {
-                (JointKind::Continuous, _) | (_, None) => r#"limited="false""#.to_string(),
-                (_, Some([lower, upper])) => format!(r#"range="{lower} {upper}""#),
+                (JointKind::Continuous, _) | (_, None) => ("limited", "false".to_string()),
+                (_, Some([lower, upper])) => ("range", numbers([lower, upper])),
             };
-            let (name, axis) = (escape(&joint.name), numbers(joint.axis.iter().copied()));
-            let text = format!(r#"<joint name="{name}" type="{kind}" axis="{axis}" {limits}/>"#);
-            line(out, depth, &text);
+            let axis = numbers(joint.axis.iter().copied());
+            doc.empty(
+                "joint",
+                [
+                    ("name", joint.name.as_str()),
+                    ("type", kind),
+                    ("axis", &axis),
+                    (limits.0, &limits.1),
+                ],
+            );
         }
         if let (Some(inertial), false) = (&link.inertial, is_world) {
             let i = &inertial.inertia;
             let full = numbers([i[(0, 0)], i[(1, 1)], i[(2, 2)], i[(0, 1)], i[(0, 2)], i[(1, 2)]]);
-            let (pos, mass) = (numbers(xyz(&inertial.com)), inertial.mass);
-            let text = format!(r#"<inertial pos="{pos}" mass="{mass}" fullinertia="{full}"/>"#);
-            line(out, depth, &text);
+            let (pos, mass) = (numbers(xyz(&inertial.com)), inertial.mass.to_string());
+            doc.empty("inertial", [("pos", &pos), ("mass", &mass), ("fullinertia", &full)]);
         }
         for (k, collider) in link.colliders.iter().enumerate() {
             let (name, mesh) = (format!("{}/{k}", link.name), mesh_name(&link.name, k));
-            for text in geom_texts(&name, &mesh, collider, pieces.link(i, k)) {
-                line(out, depth, &text);
-            }
+            write_geoms(doc, &name, &mesh, collider, pieces.link(i, k));
         }
         if i == model.links.len() - 1 {
-            line(out, depth, &format!(r#"<site name="tool" {}/>"#, pose(&model.last_from_tool)));
+            let mut site = vec![("name", "tool".to_string())];
+            site.extend(pose(&model.last_from_tool));
+            doc.empty("site", site);
         }
     }
     while let Some(tag) = closing.pop() {
-        depth -= 1;
-        line(out, depth, tag);
+        doc.close(tag);
     }
-    line(out, 1, "</worldbody>");
+    doc.close("worldbody");
 }
 
 /// The geoms of one collider: itself, or one per convex piece (each on its own asset, all at
 /// the collider's pose: the pieces are in the mesh's frame).
-fn geom_texts(name: &str, mesh: &str, collider: &Collider, pieces: Option<&[ConvexPiece]>) -> Vec<String> {
+fn write_geoms(doc: &mut Doc, name: &str, mesh: &str, collider: &Collider, pieces: Option<&[ConvexPiece]>) {
     let names = piece_names(name, pieces);
     let meshes = piece_names_with(mesh, '_', pieces);
-    names.iter().zip(&meshes).map(|(n, m)| geom_text(n, m, collider)).collect()
+    for (name, mesh) in names.iter().zip(&meshes) {
+        doc.empty("geom", geom_attributes(name, mesh, collider));
+    }
 }
 
 /// A `<geom>` named `name` at the collider's pose; a mesh refers to the asset `mesh`.
-fn geom_text(name: &str, mesh: &str, collider: &Collider) -> String {
-    let shape = match &collider.shape {
-        Shape::Sphere { radius } => format!(r#"type="sphere" size="{radius}""#),
-        Shape::Cylinder { radius, length } => {
-            format!(r#"type="cylinder" size="{radius} {}""#, length / 2.0)
-        }
-        Shape::Capsule { radius, length } => format!(r#"type="capsule" size="{radius} {}""#, length / 2.0),
-        Shape::Box { half_extents } => format!(r#"type="box" size="{}""#, numbers(*half_extents)),
-        Shape::Mesh(_) => format!(r#"type="mesh" mesh="{}""#, escape(mesh)),
+fn geom_attributes(name: &str, mesh: &str, collider: &Collider) -> Attributes {
+    let (kind, shape) = match &collider.shape {
+        Shape::Sphere { radius } => ("sphere", ("size", radius.to_string())),
+        Shape::Cylinder { radius, length } => ("cylinder", ("size", numbers([*radius, length / 2.0]))),
+        Shape::Capsule { radius, length } => ("capsule", ("size", numbers([*radius, length / 2.0]))),
+        Shape::Box { half_extents } => ("box", ("size", numbers(*half_extents))),
+        Shape::Mesh(_) => ("mesh", ("mesh", mesh.to_string())),
     };
-    let name = escape(name);
-    format!(r#"<geom name="{name}" {shape} {}/>"#, pose(&collider.link_from_shape))
+    let mut attributes = vec![("name", name.to_string()), ("type", kind.to_string()), shape];
+    attributes.extend(pose(&collider.link_from_shape));
+    attributes
 }
 
 fn mesh_name(link: &str, k: usize) -> String {
@@ -453,23 +441,16 @@ fn mesh_name(link: &str, k: usize) -> String {
 }
 
 /// `pos="x y z" quat="w x y z"` of a pose in its parent frame.
-fn pose(parent_from_child: &Isometry3<f64>) -> String {
-    let pos = numbers(xyz(&parent_from_child.translation.vector));
-    let quat = numbers(wxyz(&parent_from_child.rotation));
-    format!(r#"pos="{pos}" quat="{quat}""#)
+fn pose(parent_from_child: &Isometry3<f64>) -> [(&'static str, String); 2] {
+    [
+        ("pos", numbers(xyz(&parent_from_child.translation.vector))),
+        ("quat", numbers(wxyz(&parent_from_child.rotation))),
+    ]
 }
 
 /// Space-separated numbers, each at full precision.
 fn numbers(values: impl IntoIterator<Item = f64>) -> String {
     values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
-}
-
-fn line(out: &mut String, depth: usize, text: &str) {
-    for _ in 0..depth {
-        out.push_str("  ");
-    }
-    out.push_str(text);
-    out.push('\n');
 }
 
 #[cfg(test)]

@@ -18,14 +18,6 @@ use std::path::PathBuf;
 /// Why a model could not be exported.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
-    /// urdf-rs could not serialise the robot, or wrote something the exporter did not expect.
-    #[error("robot `{robot}`: cannot write the URDF: {message}")]
-    UrdfWrite {
-        /// Robot name.
-        robot: String,
-        /// What urdf-rs (or the post-processing of its output) said.
-        message: String,
-    },
     /// A mesh collider whose file cannot be named in the output (no file, or a path that is not
     /// UTF-8).
     #[error("robot `{robot}`: link `{link}`: collider {collider} (`{label}`): mesh file `{}` cannot be referenced: {problem}", .file.display())]

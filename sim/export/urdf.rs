@@ -1,17 +1,18 @@
-//! Model -> URDF text, built as a `urdf_rs::Robot` and written by urdf-rs.
+//! Model -> URDF text, written through quick-xml ([`crate::xml::Doc`]).
 //!
 //! Layout: a link `world`, a fixed joint `world_to_<base>` carrying `world_from_base`, the chain's
 //! links (collision geometry and inertial, no `<visual>`) and joints, and a fixed joint
 //! `<last>_to_tool` to a link `tool` carrying `last_from_tool`. Links without mass properties
 //! (`world`, `tool`, usually the base) get no `<inertial>` at all, not a zero one.
 //!
-//! Numbers: urdf-rs writes through quick-xml, which formats every f64 with `{}` (the shortest text
-//! that parses back to the same bits), so positions, inertia, limits and mesh scales survive a
-//! round trip exactly. Orientations go through roll-pitch-yaw and come back within a few 1e-16 rad.
+//! Numbers are written with `{}` (the shortest text that parses back to the same bits), so
+//! positions, inertia, limits and mesh scales survive a round trip exactly. Orientations go
+//! through roll-pitch-yaw and come back within a few 1e-16 rad.
 
 use super::{check_chain, check_unique, ExportError};
-use crate::frames::rpy_of;
+use crate::frames::{rpy_of, xyz};
 use crate::model::{Collider, Joint, JointKind, Link, Model, Shape};
+use crate::xml::{Attributes, Doc};
 use nalgebra::Isometry3;
 
 /// Name of the root link the exporter adds.
@@ -20,12 +21,19 @@ const WORLD_LINK: &str = "world";
 const TOOL_LINK: &str = "tool";
 /// Compiler settings for MuJoCo's own URDF importer: keep every link as a body, keep our
 /// inertia as written, take angles in radians and mesh paths as they are.
-const MUJOCO_BLOCK: &str = r#"<mujoco><compiler angle="radian" fusestatic="false" discardvisual="true" strippath="false" balanceinertia="false" autolimits="true"/></mujoco>"#;
+const MUJOCO_COMPILER: [(&str, &str); 6] = [
+    ("angle", "radian"),
+    ("fusestatic", "false"),
+    ("discardvisual", "true"),
+    ("strippath", "false"),
+    ("balanceinertia", "false"),
+    ("autolimits", "true"),
+];
 
 /// Options for [`to_urdf`].
 #[derive(Debug, Clone, Default)]
 pub struct UrdfExportOptions {
-    /// Insert a `<mujoco><compiler .../></mujoco>` block right after `<robot>` so that MuJoCo's
+    /// Write a `<mujoco><compiler .../></mujoco>` block first in `<robot>` so that MuJoCo's
     /// URDF importer keeps every link as a body and reads angles in radians; default `false`.
     pub mujoco_block: bool,
     /// The folder the URDF will be written into: mesh files are then named relative to it, so
@@ -46,125 +54,110 @@ pub struct UrdfExportOptions {
 /// # Errors
 /// [`ExportError::ChainShape`] for a model that is not a serial chain,
 /// [`ExportError::DuplicateName`] when a link or joint name would occur twice,
-/// [`ExportError::MeshPath`] for a mesh without a file or with a non-UTF-8 path,
-/// [`ExportError::UrdfWrite`] when urdf-rs fails.
+/// [`ExportError::MeshPath`] for a mesh without a file or with a non-UTF-8 path.
 pub fn to_urdf(model: &Model, opts: &UrdfExportOptions) -> Result<String, ExportError> {
     check_chain(model)?;
     let base = &model.links[0];
     let last = &model.links[model.links.len() - 1];
-
-    // `has_inertial[k]` says whether `links[k]` keeps the `<inertial>` urdf-rs always writes.
-    let mut links = Vec::with_capacity(model.links.len() + 2);
-    let mut has_inertial = Vec::with_capacity(model.links.len() + 2);
-    let mut joints = Vec::with_capacity(model.joints.len() + 2);
     let base_is_world = base.name == WORLD_LINK && model.world_from_base == Isometry3::identity();
+    let world_joint = (!base_is_world).then(|| format!("{WORLD_LINK}_to_{}", base.name));
+    let tool_joint = format!("{}_to_{TOOL_LINK}", last.name);
+    let link_names = (!base_is_world)
+        .then_some(WORLD_LINK)
+        .into_iter()
+        .chain(model.links.iter().map(|l| l.name.as_str()))
+        .chain([TOOL_LINK]);
+    check_unique(model, "URDF", "link", link_names)?;
+    let joint_names = world_joint
+        .as_deref()
+        .into_iter()
+        .chain(model.joints.iter().map(|j| j.name.as_str()))
+        .chain([tool_joint.as_str()]);
+    check_unique(model, "URDF", "joint", joint_names)?;
+
+    let mut doc = Doc::new(2);
+    doc.open("robot", [("name", model.name.as_str())]);
+    if opts.mujoco_block {
+        doc.open("mujoco", no_attributes());
+        doc.empty("compiler", MUJOCO_COMPILER);
+        doc.close("mujoco");
+    }
     if !base_is_world {
-        links.push(bare_link(WORLD_LINK));
-        has_inertial.push(false);
-        let name = format!("{WORLD_LINK}_to_{}", base.name);
-        joints.push(fixed_joint(name, WORLD_LINK, &base.name, &model.world_from_base));
+        doc.empty("link", [("name", WORLD_LINK)]);
     }
     for link in &model.links {
-        links.push(urdf_link(model, link, opts)?);
-        has_inertial.push(link.inertial.is_some());
+        write_link(&mut doc, model, link, opts)?;
+    }
+    doc.empty("link", [("name", TOOL_LINK)]);
+    if let Some(name) = &world_joint {
+        write_fixed_joint(&mut doc, name, WORLD_LINK, &base.name, &model.world_from_base);
     }
     for (i, joint) in model.joints.iter().enumerate() {
-        joints.push(urdf_joint(joint, &model.links[i].name, &model.links[i + 1].name));
+        write_joint(&mut doc, joint, &model.links[i].name, &model.links[i + 1].name);
     }
-    links.push(bare_link(TOOL_LINK));
-    has_inertial.push(false);
-    let name = format!("{}_to_{TOOL_LINK}", last.name);
-    joints.push(fixed_joint(name, &last.name, TOOL_LINK, &model.last_from_tool));
-
-    check_unique(model, "URDF", "link", links.iter().map(|l| l.name.as_str()))?;
-    check_unique(model, "URDF", "joint", joints.iter().map(|j| j.name.as_str()))?;
-
-    let robot = urdf_rs::Robot {
-        name: model.name.clone(),
-        version: None,
-        links,
-        joints,
-        materials: vec![],
-    };
-    let write_error = |message: String| ExportError::UrdfWrite {
-        robot: model.name.clone(),
-        message,
-    };
-    let text = urdf_rs::write_to_string(&robot).map_err(|e| write_error(e.to_string()))?;
-    let mut text = strip_inertials(&text, &has_inertial)
-        .ok_or_else(|| write_error("urdf-rs output has fewer <link> or <inertial> elements than expected".into()))?;
-    if opts.mujoco_block {
-        text = insert_after_robot_tag(&text, MUJOCO_BLOCK).ok_or_else(|| write_error("urdf-rs output has no <robot> tag".into()))?;
-    }
-    Ok(text)
+    write_fixed_joint(&mut doc, &tool_joint, &last.name, TOOL_LINK, &model.last_from_tool);
+    doc.close("robot");
+    Ok(doc.finish())
 }
 
-/// A link with no geometry and (after [`strip_inertials`]) no inertial.
-fn bare_link(name: &str) -> urdf_rs::Link {
-    urdf_rs::Link {
-        name: name.to_string(),
-        inertial: urdf_rs::Inertial::default(),
-        visual: vec![],
-        collision: vec![],
-    }
+fn no_attributes() -> [(&'static str, &'static str); 0] {
+    []
 }
 
-fn urdf_link(model: &Model, link: &Link, opts: &UrdfExportOptions) -> Result<urdf_rs::Link, ExportError> {
-    let collision = link
+fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOptions) -> Result<(), ExportError> {
+    if link.inertial.is_none() && link.colliders.is_empty() {
+        doc.empty("link", [("name", link.name.as_str())]);
+        return Ok(());
+    }
+    // Every mesh is named before anything is written: a link fails whole.
+    let shapes = link
         .colliders
         .iter()
         .enumerate()
-        .map(|(k, collider)| {
-            Ok(urdf_rs::Collision {
-                name: Some(collider.label.clone()),
-                origin: pose(&collider.link_from_shape),
-                geometry: geometry(model, link, k, collider, opts)?,
-            })
-        })
+        .map(|(k, collider)| shape(model, link, k, collider, opts))
         .collect::<Result<Vec<_>, ExportError>>()?;
-    let inertial = match &link.inertial {
-        Some(inertial) => {
-            let i = &inertial.inertia;
-            urdf_rs::Inertial {
-                origin: urdf_rs::Pose {
-                    xyz: urdf_rs::Vec3([inertial.com.x, inertial.com.y, inertial.com.z]),
-                    rpy: urdf_rs::Vec3([0.0; 3]),
-                },
-                mass: urdf_rs::Mass { value: inertial.mass },
-                inertia: urdf_rs::Inertia {
-                    ixx: i[(0, 0)],
-                    ixy: i[(0, 1)],
-                    ixz: i[(0, 2)],
-                    iyy: i[(1, 1)],
-                    iyz: i[(1, 2)],
-                    izz: i[(2, 2)],
-                },
-            }
-        }
-        None => urdf_rs::Inertial::default(),
-    };
-    Ok(urdf_rs::Link {
-        name: link.name.clone(),
-        inertial,
-        visual: vec![],
-        collision,
-    })
+    doc.open("link", [("name", link.name.as_str())]);
+    if let Some(inertial) = &link.inertial {
+        let i = &inertial.inertia;
+        doc.open("inertial", no_attributes());
+        doc.empty("origin", [("xyz", numbers(xyz(&inertial.com))), ("rpy", numbers([0.0; 3]))]);
+        doc.empty("mass", [("value", inertial.mass.to_string())]);
+        let entries = [
+            ("ixx", (0, 0)),
+            ("ixy", (0, 1)),
+            ("ixz", (0, 2)),
+            ("iyy", (1, 1)),
+            ("iyz", (1, 2)),
+            ("izz", (2, 2)),
+        ];
+        doc.empty("inertia", entries.map(|(key, at)| (key, i[at].to_string())));
+        doc.close("inertial");
+    }
+    for (collider, (tag, attributes)) in link.colliders.iter().zip(&shapes) {
+        doc.open("collision", [("name", collider.label.as_str())]);
+        write_origin(doc, &collider.link_from_shape);
+        doc.open("geometry", no_attributes());
+        doc.empty(tag, attributes.iter().map(|(k, v)| (*k, v.as_str())));
+        doc.close("geometry");
+        doc.close("collision");
+    }
+    doc.close("link");
+    Ok(())
 }
 
-fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider, opts: &UrdfExportOptions) -> Result<urdf_rs::Geometry, ExportError> {
+/// The `<geometry>` element of a collider: its tag and attributes.
+fn shape(
+    model: &Model,
+    link: &Link,
+    k: usize,
+    collider: &Collider,
+    opts: &UrdfExportOptions,
+) -> Result<(&'static str, Attributes), ExportError> {
     Ok(match &collider.shape {
-        Shape::Sphere { radius } => urdf_rs::Geometry::Sphere { radius: *radius },
-        Shape::Cylinder { radius, length } => urdf_rs::Geometry::Cylinder {
-            radius: *radius,
-            length: *length,
-        },
-        Shape::Capsule { radius, length } => urdf_rs::Geometry::Capsule {
-            radius: *radius,
-            length: *length,
-        },
-        Shape::Box { half_extents } => urdf_rs::Geometry::Box {
-            size: urdf_rs::Vec3(half_extents.map(|h| 2.0 * h)),
-        },
+        Shape::Sphere { radius } => ("sphere", vec![("radius", radius.to_string())]),
+        Shape::Cylinder { radius, length } => ("cylinder", vec![("radius", radius.to_string()), ("length", length.to_string())]),
+        Shape::Capsule { radius, length } => ("capsule", vec![("radius", radius.to_string()), ("length", length.to_string())]),
+        Shape::Box { half_extents } => ("box", vec![("size", numbers(half_extents.map(|h| 2.0 * h)))]),
         Shape::Mesh(mesh) => {
             let mesh_error = |problem: &'static str| ExportError::MeshPath {
                 robot: model.name.clone(),
@@ -185,10 +178,7 @@ fn geometry(model: &Model, link: &Link, k: usize, collider: &Collider, opts: &Ur
                 .and_then(|base| relative_path(&absolute, base))
                 .unwrap_or(absolute);
             let filename = named.to_str().ok_or_else(|| mesh_error("the path is not valid UTF-8"))?;
-            urdf_rs::Geometry::Mesh {
-                filename: filename.to_string(),
-                scale: Some(urdf_rs::Vec3(mesh.scale)),
-            }
+            ("mesh", vec![("filename", filename.to_string()), ("scale", numbers(mesh.scale))])
         }
     })
 }
@@ -202,99 +192,50 @@ fn relative_path(file: &std::path::Path, base: &std::path::Path) -> Option<std::
     pathdiff::diff_paths(file, base)
 }
 
-fn urdf_joint(joint: &Joint, parent: &str, child: &str) -> urdf_rs::Joint {
-    let joint_type = match joint.kind {
-        JointKind::Revolute => urdf_rs::JointType::Revolute,
-        JointKind::Continuous => urdf_rs::JointType::Continuous,
-        JointKind::Prismatic => urdf_rs::JointType::Prismatic,
+fn write_joint(doc: &mut Doc, joint: &Joint, parent: &str, child: &str) {
+    let kind = match joint.kind {
+        JointKind::Revolute => "revolute",
+        JointKind::Continuous => "continuous",
+        JointKind::Prismatic => "prismatic",
     };
-    // urdf-rs leaves infinite bounds out of <limit>: that is how a continuous joint gets only
-    // effort and velocity.
-    let [lower, upper] = match joint.kind {
-        JointKind::Continuous => [f64::NEG_INFINITY, f64::INFINITY],
-        _ => joint.limits.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]),
-    };
-    let axis = joint.axis.into_inner();
-    urdf_rs::Joint {
-        name: joint.name.clone(),
-        joint_type,
-        origin: pose(&joint.parent_from_joint),
-        parent: urdf_rs::LinkName { link: parent.to_string() },
-        child: urdf_rs::LinkName { link: child.to_string() },
-        axis: urdf_rs::Axis {
-            xyz: urdf_rs::Vec3([axis.x, axis.y, axis.z]),
-        },
-        limit: urdf_rs::JointLimit {
-            lower,
-            upper,
-            effort: joint.max_effort.unwrap_or(0.0),
-            velocity: joint.max_velocity.unwrap_or(0.0),
-            ..urdf_rs::JointLimit::default()
-        },
-        calibration: None,
-        dynamics: None,
-        mimic: None,
-        safety_controller: None,
+    doc.open("joint", [("name", joint.name.as_str()), ("type", kind)]);
+    write_origin(doc, &joint.parent_from_joint);
+    doc.empty("parent", [("link", parent)]);
+    doc.empty("child", [("link", child)]);
+    doc.empty("axis", [("xyz", numbers(xyz(&joint.axis.into_inner())))]);
+    let mut limit = Vec::with_capacity(4);
+    // A continuous joint, and a joint without known bounds, get effort and velocity only.
+    if let (Some([lower, upper]), false) = (joint.limits, joint.kind == JointKind::Continuous) {
+        limit.push(("lower", lower.to_string()));
+        limit.push(("upper", upper.to_string()));
     }
+    limit.push(("effort", joint.max_effort.unwrap_or(0.0).to_string()));
+    limit.push(("velocity", joint.max_velocity.unwrap_or(0.0).to_string()));
+    doc.empty("limit", limit);
+    doc.close("joint");
 }
 
-fn fixed_joint(name: String, parent: &str, child: &str, parent_from_child: &Isometry3<f64>) -> urdf_rs::Joint {
-    urdf_rs::Joint {
-        name,
-        joint_type: urdf_rs::JointType::Fixed,
-        origin: pose(parent_from_child),
-        parent: urdf_rs::LinkName { link: parent.to_string() },
-        child: urdf_rs::LinkName { link: child.to_string() },
-        axis: urdf_rs::Axis::default(),
-        limit: urdf_rs::JointLimit::default(),
-        calibration: None,
-        dynamics: None,
-        mimic: None,
-        safety_controller: None,
-    }
+fn write_fixed_joint(doc: &mut Doc, name: &str, parent: &str, child: &str, parent_from_child: &Isometry3<f64>) {
+    doc.open("joint", [("name", name), ("type", "fixed")]);
+    write_origin(doc, parent_from_child);
+    doc.empty("parent", [("link", parent)]);
+    doc.empty("child", [("link", child)]);
+    doc.close("joint");
 }
 
-fn pose(pose: &Isometry3<f64>) -> urdf_rs::Pose {
-    let t = &pose.translation.vector;
-    urdf_rs::Pose {
-        xyz: urdf_rs::Vec3([t.x, t.y, t.z]),
-        rpy: urdf_rs::Vec3(rpy_of(&pose.rotation)),
-    }
+fn write_origin(doc: &mut Doc, pose: &Isometry3<f64>) {
+    doc.empty(
+        "origin",
+        [
+            ("xyz", numbers(xyz(&pose.translation.vector))),
+            ("rpy", numbers(rpy_of(&pose.rotation))),
+        ],
+    );
 }
 
-/// Removes the `<inertial>` element urdf-rs writes for every link from the links where
-/// `keep[k]` is false (urdf-rs has no optional inertial, and a reader must not mistake the zero
-/// it writes for a massless body). `None` when the text has fewer links or inertials than
-/// expected.
-///
-/// `<link `, `<inertial>` and `</inertial>` only occur as tags: quick-xml escapes `<` in names.
-fn strip_inertials(text: &str, keep: &[bool]) -> Option<String> {
-    let mut out = String::with_capacity(text.len());
-    let mut rest = text;
-    for &keep_inertial in keep {
-        let link_start = rest.find("<link ")?;
-        let after_link = link_start + "<link ".len();
-        out.push_str(&rest[..after_link]);
-        rest = &rest[after_link..];
-        if keep_inertial {
-            continue;
-        }
-        let open = rest.find("<inertial>")?;
-        let close = open + rest[open..].find("</inertial>")? + "</inertial>".len();
-        // Drop the element's whole line: its indentation before and the line break after.
-        out.push_str(rest[..open].trim_end_matches(' '));
-        rest = &rest[close..];
-        rest = rest.strip_prefix('\n').unwrap_or(rest);
-    }
-    out.push_str(rest);
-    Some(out)
-}
-
-/// Inserts `block` on its own line right after the `<robot ...>` opening tag.
-fn insert_after_robot_tag(text: &str, block: &str) -> Option<String> {
-    let start = text.find("<robot")?;
-    let end = start + text[start..].find('>')? + 1;
-    Some(format!("{}\n  {block}{}", &text[..end], &text[end..]))
+/// Space-separated numbers, each at full precision.
+fn numbers(values: impl IntoIterator<Item = f64>) -> String {
+    values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]
@@ -325,6 +266,10 @@ mod tests {
 
     fn link_block<'a>(text: &'a str, name: &str) -> &'a str {
         let start = text.find(&format!(r#"<link name="{name}""#)).expect("link written");
+        let tag_end = start + text[start..].find('>').expect("tag closed");
+        if text[..tag_end].ends_with('/') {
+            return &text[start..tag_end];
+        }
         let end = start + text[start..].find("</link>").expect("link closed");
         &text[start..end]
     }
@@ -464,7 +409,10 @@ mod tests {
         let text = to_urdf(&model, &opts).expect("exports");
         let robot_tag_end = text.find('>').expect("robot tag");
         let after = text[robot_tag_end + 1..].trim_start();
-        assert!(after.starts_with(MUJOCO_BLOCK), "{text}");
+        assert!(
+            after.starts_with("<mujoco>\n    <compiler angle=\"radian\" fusestatic=\"false\""),
+            "{text}"
+        );
         assert_eq!(parse(&text).links.len(), model.links.len() + 2);
     }
 
@@ -535,13 +483,6 @@ mod tests {
             matches!(&error, ExportError::DuplicateName { kind: "link", name, .. } if name == "tool"),
             "{error}"
         );
-    }
-
-    #[test]
-    fn strip_inertials_reports_missing_links() {
-        assert_eq!(strip_inertials("<robot/>", &[false]), None);
-        let text = "<link a>\n  <inertial>\n  </inertial>\n</link>\n";
-        assert_eq!(strip_inertials(text, &[false]).as_deref(), Some("<link a>\n</link>\n"));
     }
 
     #[test]

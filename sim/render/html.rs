@@ -6,10 +6,10 @@
 //! (`ok <ms> ms` or `error: ...`) for a headless browser to read.
 
 use super::scene::{surface, Surface};
-use super::svg::escape;
 use crate::frames::{wxyz, xyz};
 use crate::model::{JointKind, Model};
 use crate::report::{Report, Validation};
+use crate::xml::escape_text as escape;
 use nalgebra::Isometry3;
 use serde_json::{json, Value};
 

@@ -5,6 +5,7 @@
 
 use super::svg::{self, px};
 use crate::plan::ReplaySegment;
+use crate::xml::Doc;
 
 /// Picture size (px).
 pub(super) const WIDTH: u32 = 1280;
@@ -31,15 +32,16 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
     let x = |clock: f64| left + (right - left) * clock / count;
     let y = |metres: f64| bottom - (bottom - top) * (metres.clamp(low, high) - low) / (high - low);
 
-    let mut out = String::new();
-    out.push_str(&format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox=\"0 0 {WIDTH} {HEIGHT}\" font-family=\"{}\" data-left=\"{left}\" data-right=\"{right}\" data-segments=\"{}\">\n<rect width=\"{WIDTH}\" height=\"{HEIGHT}\" fill=\"#ffffff\"/>\n",
-        svg::FONT,
-        segments.len()
-    ));
-    svg::text(&mut out, left, 24.0, 18, "start", "#000000", title);
+    let extra = vec![
+        ("data-left", left.to_string()),
+        ("data-right", right.to_string()),
+        ("data-segments", segments.len().to_string()),
+    ];
+    let mut doc = svg::open(WIDTH, HEIGHT, extra);
+    let out = &mut doc;
+    svg::text(out, left, 24.0, 18, "start", "#000000", title);
     svg::text(
-        &mut out,
+        out,
         left,
         46.0,
         12,
@@ -48,31 +50,30 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         "per segment: certified lower bound (blue line), closest approach measured (orange dot), blocked at (red x); shaded: a blocked goal's attempt",
     );
     // Attempts (not on the trajectory) behind everything.
-    out.push_str("<g id=\"attempts\">\n");
+    out.open("g", [("id", "attempts")]);
     for (k, _) in segments.iter().enumerate().filter(|(_, s)| !s.planned) {
-        out.push_str(&format!(
-            "<rect x=\"{}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"#fbe3e3\"/>\n",
-            px(x(k as f64)),
-            px(x(1.0) - x(0.0)),
-            bottom - top
-        ));
+        let rect = [
+            ("x", px(x(k as f64))),
+            ("y", top.to_string()),
+            ("width", px(x(1.0) - x(0.0))),
+            ("height", (bottom - top).to_string()),
+            ("fill", "#fbe3e3".into()),
+        ];
+        out.empty("rect", rect);
     }
-    out.push_str("</g>\n<g id=\"grid\" stroke=\"#e2e2e2\" stroke-width=\"1\">\n");
+    out.close("g");
+    out.open("g", [("id", "grid"), ("stroke", "#e2e2e2"), ("stroke-width", "1")]);
     let mut tick = low;
     let mut labels = Vec::new();
     while tick <= high + step * 1e-6 {
-        out.push_str(&format!(
-            "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\"/>\n",
-            px(y(tick)),
-            px(y(tick))
-        ));
+        line(out, left.to_string(), px(y(tick)), right.to_string(), px(y(tick)), &[]);
         labels.push(tick);
         tick += step;
     }
-    out.push_str("</g>\n");
+    out.close("g");
     for tick in labels {
         svg::text(
-            &mut out,
+            out,
             left - 8.0,
             y(tick) + 4.0,
             11,
@@ -82,27 +83,24 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         );
     }
     // Goal arrivals: where the next segment heads for another goal.
-    out.push_str("<g id=\"goals\" stroke=\"#bbbbbb\" stroke-dasharray=\"2 3\">\n");
+    out.open("g", [("id", "goals"), ("stroke", "#bbbbbb"), ("stroke-dasharray", "2 3")]);
     let label_every = (segments.len() / 40).max(1);
     let mut arrivals = Vec::new();
     for (k, segment) in segments.iter().enumerate() {
         if segments.get(k + 1).is_none_or(|next| next.goal != segment.goal) {
             arrivals.push((k + 1, segment.goal));
-            out.push_str(&format!(
-                "<line x1=\"{}\" y1=\"{top}\" x2=\"{}\" y2=\"{bottom}\"/>\n",
-                px(x((k + 1) as f64)),
-                px(x((k + 1) as f64))
-            ));
+            let at = px(x((k + 1) as f64));
+            line(out, at.clone(), top.to_string(), at, bottom.to_string(), &[]);
         }
     }
-    out.push_str("</g>\n");
+    out.close("g");
     for (n, (end, goal)) in arrivals.iter().enumerate() {
         if n % label_every == 0 {
-            svg::text(&mut out, x(*end as f64), bottom + 16.0, 10, "end", "#555555", &goal.to_string());
+            svg::text(out, x(*end as f64), bottom + 16.0, 10, "end", "#555555", &goal.to_string());
         }
     }
     svg::text(
-        &mut out,
+        out,
         (left + right) / 2.0,
         bottom + 36.0,
         12,
@@ -111,19 +109,27 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         "replayed segment (goal index at each arrival)",
     );
     // Zero and the margin.
-    out.push_str(&format!(
-        "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\" stroke=\"#000000\" stroke-width=\"1\"/>\n",
-        px(y(0.0)),
-        px(y(0.0))
-    ));
+    let zero = px(y(0.0));
+    line(
+        out,
+        left.to_string(),
+        zero.clone(),
+        right.to_string(),
+        zero,
+        &[("stroke", "#000000"), ("stroke-width", "1")],
+    );
     if margin_m > 0.0 {
-        out.push_str(&format!(
-            "<line x1=\"{left}\" y1=\"{}\" x2=\"{right}\" y2=\"{}\" stroke=\"#d62728\" stroke-dasharray=\"6 4\"/>\n",
-            px(y(margin_m)),
-            px(y(margin_m))
-        ));
+        let at = px(y(margin_m));
+        line(
+            out,
+            left.to_string(),
+            at.clone(),
+            right.to_string(),
+            at,
+            &[("stroke", "#d62728"), ("stroke-dasharray", "6 4")],
+        );
         svg::text(
-            &mut out,
+            out,
             right,
             y(margin_m) - 4.0,
             11,
@@ -132,37 +138,35 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             &format!("margin {}", svg::mm(margin_m)),
         );
     }
-    out.push_str("<g id=\"certified\" stroke=\"#1f5fb4\" stroke-width=\"2\">\n");
+    out.open("g", [("id", "certified"), ("stroke", "#1f5fb4"), ("stroke-width", "2")]);
     for (k, segment) in segments.iter().enumerate() {
         let bound = segment.certified.certified_clearance_m;
         if !bound.is_finite() {
             continue;
         }
         let extent = segment.certified.touch.as_ref().map_or(1.0, |t| t.s);
-        out.push_str(&format!(
-            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>\n",
-            px(x(k as f64)),
-            px(y(bound)),
-            px(x(k as f64 + extent).max(x(k as f64) + 1.0)),
-            px(y(bound))
-        ));
+        let end = px(x(k as f64 + extent).max(x(k as f64) + 1.0));
+        line(out, px(x(k as f64)), px(y(bound)), end, px(y(bound)), &[]);
     }
-    out.push_str("</g>\n<g id=\"measured\" fill=\"#ff7f0e\">\n");
+    out.close("g");
+    out.open("g", [("id", "measured"), ("fill", "#ff7f0e")]);
     for (k, segment) in segments.iter().enumerate() {
         if let Some(closest) = segment.certified.closest.as_ref().filter(|c| c.distance_m.is_finite()) {
-            out.push_str(&format!(
-                "<circle cx=\"{}\" cy=\"{}\" r=\"2.5\"/>\n",
-                px(x(k as f64 + closest.s)),
-                px(y(closest.distance_m))
-            ));
+            let circle = [
+                ("cx", px(x(k as f64 + closest.s))),
+                ("cy", px(y(closest.distance_m))),
+                ("r", "2.5".into()),
+            ];
+            out.empty("circle", circle);
         }
     }
-    out.push_str("</g>\n<g id=\"blocked\" stroke=\"#d62728\" stroke-width=\"2.5\">\n");
+    out.close("g");
+    out.open("g", [("id", "blocked"), ("stroke", "#d62728"), ("stroke-width", "2.5")]);
     for (k, segment) in segments.iter().enumerate() {
         if let Some(touch) = &segment.certified.touch {
             let (cx, cy) = (x(k as f64 + touch.s), y(touch.distance_m));
-            out.push_str(&format!(
-                "<path d=\"M{} {}L{} {}M{} {}L{} {}\"/>\n",
+            let d = format!(
+                "M{} {}L{} {}M{} {}L{} {}",
                 px(cx - 5.0),
                 px(cy - 5.0),
                 px(cx + 5.0),
@@ -171,10 +175,11 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
                 px(cy + 5.0),
                 px(cx + 5.0),
                 px(cy - 5.0)
-            ));
+            );
+            out.empty("path", [("d", d)]);
         }
     }
-    out.push_str("</g>\n");
+    out.close("g");
     // The closest pair of the trajectory itself (planned segments), ties to the first.
     let closest = segments
         .iter()
@@ -185,11 +190,16 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         .min_by(|a, b| a.1.distance_m.total_cmp(&b.1.distance_m).then(a.0.cmp(&b.0)));
     if let Some((k, point)) = closest {
         let (cx, cy) = (x(k as f64 + point.s), y(point.distance_m));
-        out.push_str(&format!(
-            "<circle id=\"closest-pair\" cx=\"{}\" cy=\"{}\" r=\"7\" fill=\"none\" stroke=\"#000000\" stroke-width=\"1.5\"/>\n",
-            px(cx),
-            px(cy)
-        ));
+        let circle = [
+            ("id", "closest-pair".to_string()),
+            ("cx", px(cx)),
+            ("cy", px(cy)),
+            ("r", "7".into()),
+            ("fill", "none".into()),
+            ("stroke", "#000000".into()),
+            ("stroke-width", "1.5".into()),
+        ];
+        out.empty("circle", circle);
         let goal = goal_names.get(segments[k].goal).map_or("", String::as_str);
         let label = format!(
             "closest: {} and {}, {} (segment {k}, to {goal})",
@@ -199,11 +209,11 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         );
         let anchor = if cx > (left + right) / 2.0 { "end" } else { "start" };
         let dx = if anchor == "end" { -10.0 } else { 10.0 };
-        svg::text(&mut out, cx + dx, (cy - 10.0).max(top + 12.0), 12, anchor, "#000000", &label);
+        svg::text(out, cx + dx, (cy - 10.0).max(top + 12.0), 12, anchor, "#000000", &label);
     }
     if segments.is_empty() {
         svg::text(
-            &mut out,
+            out,
             (left + right) / 2.0,
             (top + bottom) / 2.0,
             14,
@@ -212,13 +222,23 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             "no segment: no goal has a path or an attempt",
         );
     }
-    out.push_str(&format!(
-        "<rect x=\"{left}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888888\"/>\n",
-        right - left,
-        bottom - top
-    ));
-    out.push_str("</svg>\n");
-    out
+    let frame = [
+        ("x", left.to_string()),
+        ("y", top.to_string()),
+        ("width", (right - left).to_string()),
+        ("height", (bottom - top).to_string()),
+        ("fill", "none".into()),
+        ("stroke", "#888888".into()),
+    ];
+    out.empty("rect", frame);
+    svg::finish(doc)
+}
+
+/// A `<line>` from `(x1, y1)` to `(x2, y2)` px, with `style` attributes.
+fn line(doc: &mut Doc, x1: String, y1: String, x2: String, y2: String, style: &[(&'static str, &str)]) {
+    let mut attributes = vec![("x1", x1), ("y1", y1), ("x2", x2), ("y2", y2)];
+    attributes.extend(style.iter().map(|&(k, v)| (k, v.to_string())));
+    doc.empty("line", attributes);
 }
 
 /// A range holding `[low, high]` whose ends are multiples of a 1, 2 or 5 step, about 6 steps.

@@ -1,5 +1,7 @@
-//! SVG text helpers: fixed-precision numbers (so a picture is the same bytes for the same input)
-//! and escaping.
+//! SVG helpers: fixed-precision numbers (so a picture is the same bytes for the same input), the
+//! root element and captions, written through [`crate::xml::Doc`].
+
+use crate::xml::{Attributes, Doc};
 
 /// Font family of every text element; the PNG renderer loads exactly this font.
 pub(super) const FONT: &str = "DejaVu Sans Mono";
@@ -14,28 +16,46 @@ pub(super) fn px(value: f64) -> String {
     }
 }
 
-pub(super) use crate::xml::escape_text as escape;
-
 /// A length in metres as millimetres with one decimal (`12.3 mm`).
 pub(super) fn mm(metres: f64) -> String {
     format!("{:.1} mm", metres * 1000.0)
 }
 
 /// `<text>` at `(x, y)` px with the given size, anchor and fill.
-pub(super) fn text(out: &mut String, x: f64, y: f64, size: u32, anchor: &str, fill: &str, content: &str) {
-    out.push_str(&format!(
-        "<text x=\"{}\" y=\"{}\" font-size=\"{size}\" text-anchor=\"{anchor}\" fill=\"{fill}\">{}</text>\n",
-        px(x),
-        px(y),
-        escape(content)
-    ));
+pub(super) fn text(doc: &mut Doc, x: f64, y: f64, size: u32, anchor: &str, fill: &str, content: &str) {
+    let size = size.to_string();
+    let attributes = [
+        ("x", px(x)),
+        ("y", px(y)),
+        ("font-size", size),
+        ("text-anchor", anchor.to_string()),
+        ("fill", fill.to_string()),
+    ];
+    doc.text("text", attributes, content);
 }
 
-/// The opening `<svg>` of a `width` x `height` px picture with a white background.
-pub(super) fn open(out: &mut String, width: u32, height: u32) {
-    out.push_str(&format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" font-family=\"{FONT}\">\n<rect width=\"{width}\" height=\"{height}\" fill=\"#ffffff\"/>\n"
-    ));
+/// A `width` x `height` px picture with a white background; `extra` attributes go on the root
+/// element. [`finish`] closes it.
+pub(super) fn open(width: u32, height: u32, extra: Attributes) -> Doc {
+    let (w, h) = (width.to_string(), height.to_string());
+    let mut root = vec![
+        ("xmlns", "http://www.w3.org/2000/svg".to_string()),
+        ("width", w.clone()),
+        ("height", h.clone()),
+        ("viewBox", format!("0 0 {width} {height}")),
+        ("font-family", FONT.to_string()),
+    ];
+    root.extend(extra);
+    let mut doc = Doc::new(0);
+    doc.open("svg", root);
+    doc.empty("rect", [("width", w.as_str()), ("height", h.as_str()), ("fill", "#ffffff")]);
+    doc
+}
+
+/// The picture's text.
+pub(super) fn finish(mut doc: Doc) -> String {
+    doc.close("svg");
+    doc.finish()
 }
 
 #[cfg(test)]

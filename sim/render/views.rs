@@ -5,6 +5,7 @@
 use super::scene::{Part, Triangle};
 use super::svg::{self, px};
 use crate::scenario::Scenario;
+use crate::xml::Doc;
 use nalgebra::{Point3, Vector3};
 
 /// Picture size (px).
@@ -149,10 +150,10 @@ pub(super) fn outcome_colour(outcome: &str) -> &'static str {
 
 /// The picture as SVG text.
 pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
-    let mut out = String::new();
-    svg::open(&mut out, WIDTH, HEIGHT);
-    svg::text(&mut out, PAD, 24.0, 18, "start", "#000000", &shot.title);
-    svg::text(&mut out, PAD, 46.0, 13, "start", "#333333", &shot.subtitle);
+    let mut doc = svg::open(WIDTH, HEIGHT, Vec::new());
+    let out = &mut doc;
+    svg::text(out, PAD, 24.0, 18, "start", "#000000", &shot.title);
+    svg::text(out, PAD, 46.0, 13, "start", "#333333", &shot.subtitle);
     let panel_w = f64::from(WIDTH) / 2.0;
     let panel_h = (f64::from(HEIGHT) - TITLE_H - LEGEND_H) / 2.0;
     // One scale for all four views, so lengths compare across them.
@@ -160,14 +161,17 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
     for (k, camera) in cameras().iter().enumerate() {
         let left = panel_w * (k % 2) as f64;
         let top = TITLE_H + panel_h * (k / 2) as f64;
-        out.push_str(&format!(
-            "<g class=\"view\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#f7f7f5\" stroke=\"#c8c8c8\"/>\n",
-            px(left + 4.0),
-            px(top + 4.0),
-            px(panel_w - 8.0),
-            px(panel_h - 8.0)
-        ));
-        svg::text(&mut out, left + 12.0, top + 20.0, 13, "start", "#444444", camera.name);
+        out.open("g", [("class", "view")]);
+        let panel = [
+            ("x", px(left + 4.0)),
+            ("y", px(top + 4.0)),
+            ("width", px(panel_w - 8.0)),
+            ("height", px(panel_h - 8.0)),
+            ("fill", "#f7f7f5".into()),
+            ("stroke", "#c8c8c8".into()),
+        ];
+        out.empty("rect", panel);
+        svg::text(out, left + 12.0, top + 20.0, 13, "start", "#444444", camera.name);
         let centre = [
             (stage.bounds.min[k][0] + stage.bounds.max[k][0]) / 2.0,
             (stage.bounds.min[k][1] + stage.bounds.max[k][1]) / 2.0,
@@ -179,21 +183,21 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
                 cy - scale * (p.coords.dot(&camera.up) - centre[1]),
             )
         };
-        view(&mut out, stage, shot, camera, &project);
-        out.push_str("</g>\n");
+        view(out, stage, shot, camera, &project);
+        out.close("g");
     }
-    legend(&mut out, scale);
-    out.push_str("</svg>\n");
-    out
+    legend(out, scale);
+    svg::finish(doc)
 }
 
-fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
+fn view(out: &mut Doc, stage: &Stage, shot: &Shot, camera: &Camera, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
     if let Some(floor) = &stage.floor {
         let points: Vec<String> = floor.iter().map(project).map(|(x, y)| format!("{},{}", px(x), px(y))).collect();
-        out.push_str(&format!(
-            "<polygon class=\"floor\" points=\"{}\" fill=\"#e4e1da\" stroke=\"#b9b4a8\"/>\n",
-            points.join(" ")
-        ));
+        let points = points.join(" ");
+        out.empty(
+            "polygon",
+            [("class", "floor"), ("points", &points), ("fill", "#e4e1da"), ("stroke", "#b9b4a8")],
+        );
     }
     let light = (-camera.forward + 0.6 * camera.up - 0.3 * camera.right).normalize();
     let mut faces: Vec<(f64, usize, &Triangle)> = stage
@@ -208,7 +212,7 @@ fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: 
         .collect();
     // Far to near; equal depths keep their order, so the output does not depend on the sort.
     faces.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    out.push_str("<g class=\"bodies\" stroke-width=\"0.6\" stroke-linejoin=\"round\">\n");
+    out.open("g", [("class", "bodies"), ("stroke-width", "0.6"), ("stroke-linejoin", "round")]);
     for (_, _, triangle) in faces {
         let [a, b, c] = &triangle.corners;
         let normal = (b - a).cross(&(c - a));
@@ -242,20 +246,14 @@ fn view(out: &mut String, stage: &Stage, shot: &Shot, camera: &Camera, project: 
         if ((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)).abs() < 0.02 {
             continue;
         }
-        let alpha = opacity
-            .map(|o| format!(" fill-opacity=\"{o}\" stroke-opacity=\"{o}\""))
-            .unwrap_or_default();
-        out.push_str(&format!(
-            "<path d=\"M{} {}L{} {}L{} {}Z\" fill=\"{colour}\" stroke=\"{colour}\"{alpha}/>\n",
-            px(x0),
-            px(y0),
-            px(x1),
-            px(y1),
-            px(x2),
-            px(y2)
-        ));
+        let d = format!("M{} {}L{} {}L{} {}Z", px(x0), px(y0), px(x1), px(y1), px(x2), px(y2));
+        let mut path = vec![("d", d), ("fill", colour.clone()), ("stroke", colour)];
+        if let Some(o) = opacity {
+            path.extend([("fill-opacity", o.to_string()), ("stroke-opacity", o.to_string())]);
+        }
+        out.empty("path", path);
     }
-    out.push_str("</g>\n");
+    out.close("g");
     goal_frames(out, stage, shot, project);
 }
 
@@ -265,10 +263,10 @@ const MANY_GOALS: usize = 60;
 
 /// Each goal's frame (x red, y green, z blue) and a dot in its outcome's colour; the shot's
 /// goal larger and named.
-fn goal_frames(out: &mut String, stage: &Stage, shot: &Shot, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
+fn goal_frames(out: &mut Doc, stage: &Stage, shot: &Shot, project: &dyn Fn(&Point3<f64>) -> (f64, f64)) {
     let axis_length = 0.04 * stage.bounds.size();
     let many = stage.scenario.goals.len() > MANY_GOALS;
-    out.push_str("<g class=\"goals\" stroke-width=\"1.2\">\n");
+    out.open("g", [("class", "goals"), ("stroke-width", "1.2")]);
     let mut dots: [(&str, String); 4] = ["reached", "no_path", "unreachable", ""].map(|o| (o, String::new()));
     for (index, goal) in stage.scenario.goals.iter().enumerate() {
         let focus = shot.goal == Some(index);
@@ -283,36 +281,39 @@ fn goal_frames(out: &mut String, stage: &Stage, shot: &Shot, project: &dyn Fn(&P
         let length = if focus { 2.0 * axis_length } else { axis_length };
         for (axis, colour) in [(Vector3::x(), "#d62728"), (Vector3::y(), "#2ca02c"), (Vector3::z(), "#1f77b4")] {
             let (ex, ey) = project(&(origin + goal.rotation * axis * length));
-            out.push_str(&format!(
-                "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{colour}\"/>\n",
-                px(ox),
-                px(oy),
-                px(ex),
-                px(ey)
-            ));
+            let line = [
+                ("x1", px(ox)),
+                ("y1", px(oy)),
+                ("x2", px(ex)),
+                ("y2", px(ey)),
+                ("stroke", colour.into()),
+            ];
+            out.empty("line", line);
         }
         let radius = if focus { 5.0 } else { 2.5 };
-        out.push_str(&format!(
-            "<circle cx=\"{}\" cy=\"{}\" r=\"{radius}\" fill=\"{}\" stroke=\"#000000\" stroke-width=\"{}\"/>\n",
-            px(ox),
-            px(oy),
-            outcome_colour(outcome),
-            if focus { "1.5" } else { "0.4" }
-        ));
+        let circle = [
+            ("cx", px(ox)),
+            ("cy", px(oy)),
+            ("r", radius.to_string()),
+            ("fill", outcome_colour(outcome).into()),
+            ("stroke", "#000000".into()),
+            ("stroke-width", if focus { "1.5" } else { "0.4" }.into()),
+        ];
+        out.empty("circle", circle);
         if focus {
             svg::text(out, ox + 8.0, oy - 8.0, 12, "start", "#000000", &goal.name);
         }
     }
     for (outcome, path) in dots.iter().filter(|(_, path)| !path.is_empty()) {
-        out.push_str(&format!(
-            "<path d=\"{path}\" fill=\"{}\" stroke=\"none\"/>\n",
-            outcome_colour(outcome)
-        ));
+        out.empty(
+            "path",
+            [("d", path.as_str()), ("fill", outcome_colour(outcome)), ("stroke", "none")],
+        );
     }
-    out.push_str("</g>\n");
+    out.close("g");
 }
 
-fn legend(out: &mut String, scale: f64) {
+fn legend(out: &mut Doc, scale: f64) {
     let y = f64::from(HEIGHT) - 10.0;
     let items = [
         ("#b8bdc4", "robot"),
@@ -325,24 +326,29 @@ fn legend(out: &mut String, scale: f64) {
     ];
     let mut x = PAD;
     for (colour, label) in items {
-        out.push_str(&format!(
-            "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"12\" fill=\"{colour}\"/>\n",
-            px(x),
-            px(y - 11.0)
-        ));
+        let swatch = [
+            ("x", px(x)),
+            ("y", px(y - 11.0)),
+            ("width", "12".into()),
+            ("height", "12".into()),
+            ("fill", colour.into()),
+        ];
+        out.empty("rect", swatch);
         svg::text(out, x + 16.0, y, 12, "start", "#333333", label);
         x += 16.0 + 8.0 * label.len() as f64 + 18.0;
     }
     // A scale bar: 0.1 m at the pictures' scale.
     let bar = 0.1 * scale;
     let right = f64::from(WIDTH) - PAD;
-    out.push_str(&format!(
-        "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"#000000\" stroke-width=\"2\"/>\n",
-        px(right - bar),
-        px(y - 4.0),
-        px(right),
-        px(y - 4.0)
-    ));
+    let line = [
+        ("x1", px(right - bar)),
+        ("y1", px(y - 4.0)),
+        ("x2", px(right)),
+        ("y2", px(y - 4.0)),
+        ("stroke", "#000000".into()),
+        ("stroke-width", "2".into()),
+    ];
+    out.empty("line", line);
     svg::text(out, right - bar - 6.0, y, 12, "end", "#333333", "0.1 m");
 }
 
