@@ -156,13 +156,7 @@ fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, SuiteErro
         opts.ik.seeds = k as usize;
     }
     if let Some(list) = &file.engines {
-        opts.engines = Engines::from_names(list.iter().map(String::as_str)).map_err(|other| {
-            invalid(
-                path,
-                "options.engines",
-                format!("unknown engine `{other}`; expected rapier or mujoco"),
-            )
-        })?;
+        opts.engines = Engines::from_names(list.iter().map(String::as_str)).map_err(|message| invalid(path, "options.engines", message))?;
     }
     if let Some(planner) = &file.planner {
         opts.planner.kind = planner.parse().map_err(|message| invalid(path, "options.planner", message))?;

@@ -31,7 +31,7 @@ pub(crate) struct OptimizeArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     seed: u64,
     /// Engines of the two validations.
-    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
+    #[arg(long, value_name = "LIST", default_value_t = Engines::all())]
     engines: Engines,
     /// Where the tensors live: cpu, or cuda (a build with the `cuda` feature and a GPU).
     #[arg(long, value_name = "DEVICE", default_value = "cpu", value_parser = ["cpu", "cuda"])]

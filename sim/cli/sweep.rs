@@ -31,7 +31,7 @@ pub(crate) struct SweepArgs {
     #[arg(long)]
     full: bool,
     /// With --full: the engines to run.
-    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco", requires = "full")]
+    #[arg(long, value_name = "LIST", default_value_t = Engines::all(), requires = "full")]
     engines: Engines,
     /// Run the K-th of N shards: every pair whose canonical index i has i mod N = K - 1.
     #[arg(long, value_name = "K/N")]

@@ -79,7 +79,7 @@ pub(crate) struct ValidateArgs {
     #[arg(long, value_name = "FILE")]
     pub(crate) json: Option<PathBuf>,
     /// Physics engines to run the trajectory in.
-    #[arg(long, value_name = "LIST", default_value = "rapier,mujoco")]
+    #[arg(long, value_name = "LIST", default_value_t = Engines::all())]
     pub(crate) engines: Engines,
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]

@@ -13,6 +13,25 @@ pub trait Engine: Sync {
     /// Its name on the command line and in reports.
     fn name(&self) -> &'static str;
 
+    /// Its name in prose (`MuJoCo`).
+    fn label(&self) -> &'static str {
+        self.name()
+    }
+
+    /// What it approximates that exact geometry does not, for findings that blame a contact or
+    /// a missed hold on the engine rather than the design.
+    fn approximation(&self) -> &'static str {
+        "the engine's geometric approximation"
+    }
+
+    /// What its peak effort in motion is.
+    fn effort(&self) -> Effort {
+        Effort {
+            estimate: false,
+            note: "the engine's actuator force",
+        }
+    }
+
     /// Follows the timed path under the gains' position control, gravity on.
     ///
     /// # Errors
@@ -56,12 +75,32 @@ pub trait Engine: Sync {
     }
 }
 
+/// What an engine's peak effort in motion is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Effort {
+    /// An estimate rather than the force the engine applied.
+    pub estimate: bool,
+    /// What the number is, for a reader comparing it with a rating.
+    pub note: &'static str,
+}
+
 /// rapier (multibody, f32); its contacts are re-measured in exact geometry before they count.
 pub struct Rapier;
 
 impl Engine for Rapier {
     fn name(&self) -> &'static str {
         "rapier"
+    }
+
+    fn approximation(&self) -> &'static str {
+        "rapier collides in f32, with up to centimetres of phantom depth on cylinders"
+    }
+
+    fn effort(&self) -> Effort {
+        Effort {
+            estimate: true,
+            note: "an estimate: rapier does not report multibody motor impulses, so this is the control law evaluated after each step, stiff gains and all",
+        }
     }
 
     fn run(
@@ -96,6 +135,21 @@ impl Engine for Mujoco {
         "mujoco"
     }
 
+    fn label(&self) -> &'static str {
+        "MuJoCo"
+    }
+
+    fn approximation(&self) -> &'static str {
+        "MuJoCo collides meshes as convex pieces (up to about 12 mm beyond a UR5 link's surface) and cylinders through its general convex solver"
+    }
+
+    fn effort(&self) -> Effort {
+        Effort {
+            estimate: false,
+            note: "MuJoCo's actuator force; the controller's stiffness in motion, not the static load",
+        }
+    }
+
     fn run(
         &self,
         model: &Model,
@@ -125,12 +179,21 @@ impl Engine for Mujoco {
         configurations: &mut dyn Iterator<Item = Vec<f64>>,
         gravity_m_s2: f64,
     ) -> Option<Result<StaticLoad, EngineError>> {
-        Some(super::static_load(model, configurations, gravity_m_s2))
+        let load = super::static_load(model, configurations, gravity_m_s2);
+        Some(load.map(|load| StaticLoad {
+            cross_checked_by: Some(self.label()),
+            ..load
+        }))
     }
 }
 
 /// Every engine, in the order reports list them.
 pub static ENGINES: &[&dyn Engine] = &[&Rapier, &Mujoco];
+
+/// The engine called `name` ([`Engine::name`]).
+pub fn find(name: &str) -> Option<&'static dyn Engine> {
+    ENGINES.iter().find(|e| e.name() == name).copied()
+}
 
 /// Which of [`ENGINES`] a validation runs (a set, kept in their order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -155,11 +218,14 @@ impl Engines {
     /// The engines named (each a [`Engine::name`]); no name gives no engine.
     ///
     /// # Errors
-    /// The first name that is not an engine.
+    /// A message naming the first name that is not an engine and what was expected.
     pub fn from_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Result<Self, String> {
         let mut engines = Self::none();
         for name in names {
-            let k = ENGINES.iter().position(|e| e.name() == name).ok_or_else(|| name.to_string())?;
+            let k = ENGINES.iter().position(|e| e.name() == name).ok_or_else(|| {
+                let each: Vec<&str> = ENGINES.iter().map(|e| e.name()).collect();
+                format!("unknown engine `{name}`; expected {}, {} or none", each.join(","), each.join(", "))
+            })?;
             engines.chosen |= 1 << k;
         }
         Ok(engines)
@@ -199,10 +265,14 @@ impl std::str::FromStr for Engines {
         } else {
             text.split(',').map(str::trim).collect()
         };
-        Self::from_names(names).map_err(|other| {
-            let each: Vec<&str> = ENGINES.iter().map(|e| e.name()).collect();
-            format!("unknown engine `{other}`; expected {}, {} or none", each.join(","), each.join(", "))
-        })
+        Self::from_names(names)
+    }
+}
+
+impl std::fmt::Display for Engines {
+    /// As [`Engines::name`]: what `from_str` reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
     }
 }
 

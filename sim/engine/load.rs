@@ -19,8 +19,12 @@ pub struct StaticLoad {
     /// Largest disagreement between MuJoCo's gravity torque (`qfrc_bias` at rest) and ours
     /// ([`Model::gravity_torques`]) over all samples and joints, relative to the largest
     /// torque magnitude of that sample (at least 1 N m); above 1e-9 it is a finding (a bug on
-    /// one side). `None` when MuJoCo did not run ([`static_load_without_mujoco`]).
+    /// one side). `None` when MuJoCo did not run ([`static_load_ours`]).
     pub max_relative_disagreement: Option<f64>,
+    /// The engine whose gravity torques were compared with ours ([`super::Engine::label`]);
+    /// `None` from [`static_load_ours`].
+    #[serde(skip)]
+    pub cross_checked_by: Option<&'static str>,
 }
 
 /// The static gravity load of one joint.
@@ -85,7 +89,7 @@ pub fn static_load<Q: AsRef<[f64]>>(
 ///
 /// # Errors
 /// [`EngineError::ConfigurationLength`] for a sample of the wrong length.
-pub fn static_load_without_mujoco<Q: AsRef<[f64]>>(
+pub fn static_load_ours<Q: AsRef<[f64]>>(
     model: &Model,
     samples: impl IntoIterator<Item = Q>,
     gravity_m_s2: f64,
@@ -136,6 +140,7 @@ fn judged(mut joints: Vec<JointLoad>, gravity_m_s2: f64, max_relative_disagreeme
         gravity_m_s2,
         joints,
         max_relative_disagreement,
+        cross_checked_by: None,
     }
 }
 

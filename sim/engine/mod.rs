@@ -15,9 +15,9 @@ mod run;
 
 pub use confirm::{confirm_contacts, measure_reference};
 pub use crosscheck::{check_kinematics, compare_kinematics, KinematicsAgreement, KinematicsCheck, ToolElement, KINEMATICS_AGREEMENT};
-pub use engines::{Engine, Engines, Mujoco, Rapier, ENGINES};
+pub use engines::{find, Effort, Engine, Engines, Mujoco, Rapier, ENGINES};
 pub use gains::{gains, GainOptions};
-pub use load::{static_load, static_load_without_mujoco, JointLoad, StaticLoad};
+pub use load::{static_load, static_load_ours, JointLoad, StaticLoad};
 pub use mujoco::{check_version, GeomDistance, MujocoGeomDistance, MujocoKinematics, MujocoSample, MUJOCO_VERSION};
 pub use mujoco_run::{replay_mujoco, run_mujoco};
 pub use rapier::{replay_rapier, run_rapier};

@@ -277,7 +277,7 @@ impl Motion {
         }
         let static_load = match static_load {
             Some(load) => load,
-            None => crate::engine::static_load_without_mujoco(model, configurations(), gravity)?,
+            None => crate::engine::static_load_ours(model, configurations(), gravity)?,
         };
         Ok(Self {
             trajectory: Some(trajectory),

@@ -155,7 +155,9 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
     for (name, runs) in engines {
         engine_findings(validation, name, runs, hold, &mut out);
     }
-    if let [(a, first), (b, second)] = engines {
+    // Each engine is compared with the first: a goal one holds and another misses.
+    let (first_engine, others) = engines.split_first().map_or((None, &[][..]), |(f, o)| (Some(f), o));
+    for ((a, first), (b, second)) in first_engine.into_iter().flat_map(|f| others.iter().map(move |o| (f, o))) {
         for hold_a in &first.dynamic.holds {
             let Some(hold_b) = second.dynamic.holds.iter().find(|h| h.goal == hold_a.goal) else {
                 continue;
@@ -210,7 +212,10 @@ pub(super) fn collect(validation: &Validation, engines: &[(&'static str, &Engine
                 Severity::Warn,
                 None,
                 None,
-                format!("our gravity torques and MuJoCo's differ by {disagreement:.2e} (relative)"),
+                format!(
+                    "our gravity torques and {}'s differ by {disagreement:.2e} (relative)",
+                    load.cross_checked_by.unwrap_or("the engine")
+                ),
                 &[("relative", disagreement)],
             ));
         }
@@ -355,11 +360,7 @@ fn segments_of(contact: &ContactInterval) -> std::ops::RangeInclusive<usize> {
 
 /// What an engine approximates, for findings that blame it.
 fn approximation(engine: &str) -> &'static str {
-    match engine {
-        "mujoco" => "MuJoCo collides meshes as convex pieces (up to about 12 mm beyond a UR5 link's surface) and cylinders through its general convex solver",
-        "rapier" => "rapier collides in f32, with up to centimetres of phantom depth on cylinders",
-        _ => "the engine's geometric approximation",
-    }
+    crate::engine::find(engine).map_or("the engine's geometric approximation", |e| e.approximation())
 }
 
 /// How exact geometry judges one engine contact of a dynamic run.
@@ -498,11 +499,7 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
                         "{name}: joint {} ({}) peaks at {peak:.1} N m in motion, rated {rated:.1} N m{}",
                         joint + 1,
                         model_joint.name,
-                        if name == "rapier" {
-                            " (an estimate: rapier does not report multibody motor impulses, so this is the control law evaluated after each step, stiff gains and all)"
-                        } else {
-                            " (MuJoCo's actuator force; the controller's stiffness in motion, not the static load)"
-                        }
+                        crate::engine::find(name).map_or_else(String::new, |e| format!(" ({})", e.effort().note))
                     ),
                     &[("peak", *peak), ("rated", rated)],
                 ));
