@@ -132,26 +132,30 @@ impl Run {
         if self.kinematics_check.as_ref().is_some_and(|c| !c.agree) {
             return Outcome::Fail;
         }
-        match &self.report {
-            None => Outcome::Pass,
-            Some(report) => match (report.verdict.passed, report.verdict.word) {
-                (true, _) => Outcome::Pass,
-                (false, "UNDECIDED") => Outcome::Undecided,
-                (false, _) => Outcome::Fail,
-            },
-        }
+        self.report.as_ref().map_or(Outcome::Pass, Outcome::of)
     }
 }
 
-/// How a run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How a run ended, ordered from best to worst (the worst of several runs is their `max`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Outcome {
     /// The design passes (or the model was built and agrees with MuJoCo).
     Pass,
-    /// The design fails, proven (or MuJoCo disagrees with our kinematics).
-    Fail,
     /// Nothing failed, but the harness's limits left something open.
     Undecided,
+    /// The design fails, proven (or MuJoCo disagrees with our kinematics).
+    Fail,
+}
+
+impl Outcome {
+    /// The outcome a report's verdict gives.
+    pub fn of(report: &Report) -> Self {
+        match (report.verdict.passed, report.verdict.word) {
+            (true, _) => Outcome::Pass,
+            (false, "UNDECIDED") => Outcome::Undecided,
+            (false, _) => Outcome::Fail,
+        }
+    }
 }
 
 /// Runs what `validate-design input` runs with `opts`, telling `progress` the stages and the

@@ -140,11 +140,7 @@ fn invalid(path: &Path, field: &str, message: String) -> SuiteError {
 
 /// A run's options from the suite's `options`, checked as the command line checks them.
 fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, SuiteError> {
-    let mut opts = ValidateOptions::default();
-    if let Some(seed) = file.seed {
-        opts.ik.seed = seed;
-        opts.planner.seed = seed;
-    }
+    let mut opts = file.seed.map_or_else(ValidateOptions::default, ValidateOptions::seeded);
     if let Some(k) = file.ik_seeds {
         if !(1..=limits::MAX_IK_SEEDS).contains(&k) {
             return Err(invalid(

@@ -178,3 +178,12 @@ pub(crate) fn threads(count: Option<u64>) {
             .build_global();
     }
 }
+
+/// The exit code of an outcome: 0 pass, 1 fail, 3 undecided (2 is a run that could not be made).
+pub(crate) fn exit_code(outcome: proving_ground::run::Outcome) -> std::process::ExitCode {
+    match outcome {
+        proving_ground::run::Outcome::Pass => std::process::ExitCode::SUCCESS,
+        proving_ground::run::Outcome::Fail => std::process::ExitCode::from(1),
+        proving_ground::run::Outcome::Undecided => std::process::ExitCode::from(3),
+    }
+}

@@ -1,7 +1,6 @@
 //! `validate-design sweep`, `merge` and `table1`: the command-line side of [`proving_ground::sweep`].
 
 use super::Failure;
-use proving_ground::error::Error;
 use proving_ground::pipeline::{Engines, LoadOptions};
 use proving_ground::sweep::{self, inputs, Shard, SweepMode, SweepOptions};
 use std::path::PathBuf;
@@ -218,25 +217,13 @@ pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Failure> {
 pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Failure> {
     super::threads(args.threads);
     let scenario_args = if args.scenarios.is_empty() {
-        vec!["scenarios/cluttered".to_string()]
+        vec![sweep::paper::TABLE_1_SCENARIOS.to_string()]
     } else {
         args.scenarios.clone()
     };
-    let designs = inputs::resolve_designs(&["catalog:table1".to_string()], &LoadOptions::default())?;
+    let designs = inputs::resolve_designs(&[sweep::paper::TABLE_1_DESIGNS.to_string()], &LoadOptions::default())?;
     let scenarios = inputs::resolve_scenarios(&scenario_args)?;
-    let opts = SweepOptions {
-        mode: SweepMode::ReachOnly {
-            ik: proving_ground::ik::IkOptions {
-                seed: args.seed,
-                ..Default::default()
-            },
-        },
-        out: args.out.clone(),
-        force: args.force,
-        shard: None,
-        reference: None,
-        top: sweep::table::DEFAULT_TOP,
-    };
+    let opts = sweep::paper::table_1_options(args.seed, args.out.clone(), args.force);
     let progress = super::Bar::new("pairs", false, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
     progress.bar.finish_and_clear();
@@ -269,13 +256,7 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
         seed: args.seed,
         ..Default::default()
     };
-    let mode = SweepMode::ReachOnly {
-        ik: proving_ground::ik::IkOptions {
-            seed: args.ik_seed,
-            search_boxes: proving_ground::ik::SWEEP_SEARCH_BOXES,
-            ..Default::default()
-        },
-    };
+    let mode = sweep::ga::mode(args.ik_seed);
     let reference_records = reference
         .as_ref()
         .map(|r| sweep::reference_records(r, &mode, std::slice::from_ref(scenario)))
@@ -285,14 +266,7 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
     progress.bar.finish_and_clear();
     let result = result?;
     if let Some(path) = &args.out {
-        let text = serde_json::to_string_pretty(&result).map_err(|e| Error::Report { message: e.to_string() })? + "\n";
-        proving_ground::files::write_atomic(path, text.as_bytes(), args.force).map_err(|e| sweep::SweepError::Write {
-            path: path.clone(),
-            message: match e {
-                proving_ground::files::WriteError::Exists => "the file exists; pass --force to replace it".into(),
-                other => other.to_string(),
-            },
-        })?;
+        result.save(path, args.force)?;
     }
     if !args.quiet {
         let best = &result.best;
@@ -308,21 +282,15 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
             best.goals,
             if best.task_solved { ", task solved" } else { "" }
         );
-        if let (Some(reference), Some(records)) = (&reference, &reference_records) {
-            let distributions = sweep::table::distributions(std::slice::from_ref(best), Some(records));
-            if let Some(distribution) = distributions.get(&best.scenario) {
-                println!(
-                    "against the {} designs of {}: score {}, percentile {}",
-                    distribution.len(),
-                    reference.dir.display(),
-                    distribution
-                        .score(best.task_loss)
-                        .map_or_else(|| "n/a".into(), |s| format!("{s:.4}")),
-                    distribution
-                        .percentile(best.task_loss)
-                        .map_or_else(|| "n/a".into(), |p| format!("{p:.1}"))
-                );
-            }
+        let standing = reference_records.as_ref().and_then(|records| result.standing(records));
+        if let (Some(reference), Some(standing)) = (&reference, standing) {
+            println!(
+                "against the {} designs of {}: score {}, percentile {}",
+                standing.designs,
+                reference.dir.display(),
+                standing.score.map_or_else(|| "n/a".into(), |s| format!("{s:.4}")),
+                standing.percentile.map_or_else(|| "n/a".into(), |p| format!("{p:.1}"))
+            );
         }
     }
     Ok(ExitCode::SUCCESS)

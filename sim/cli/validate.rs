@@ -5,7 +5,7 @@ use super::ToleranceArg;
 use proving_ground::error::Error;
 use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
 use proving_ground::plan::PlannerKind;
-use proving_ground::run::{self, Exports, Outcome, Run, Stop, Written};
+use proving_ground::run::{self, Exports, Run, Stop, Written};
 use proving_ground::{render, report};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -208,11 +208,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
         println!("{}: {} joints, model built", run.model.name, run.model.dof());
     }
     print_report(args, &run)?;
-    Ok(match run.outcome() {
-        Outcome::Pass => ExitCode::SUCCESS,
-        Outcome::Fail => ExitCode::from(1),
-        Outcome::Undecided => ExitCode::from(3),
-    })
+    Ok(super::exit_code(run.outcome()))
 }
 
 /// The report on stdout, and `--json`, `--svg`, `--png`, `--html`.

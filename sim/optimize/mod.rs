@@ -16,10 +16,12 @@ pub mod analytic;
 mod gaps;
 pub mod problem;
 pub mod tensor;
+mod tune;
 
 pub use analytic::Analytic;
 pub use problem::{Batch, Evaluation, Params, Sample};
 pub use tensor::Tensors;
+pub use tune::{batches, before_and_after, tune, Tuned};
 
 use crate::design::{Design, DesignMode};
 use crate::ik::HARDWARE_WEIGHT;

@@ -38,6 +38,17 @@ pub struct ValidateOptions {
     pub reach_only: bool,
 }
 
+impl ValidateOptions {
+    /// The defaults with IK and the planner both seeded by `seed`: what every experiment that
+    /// takes one seed validates with.
+    pub fn seeded(seed: u64) -> Self {
+        let mut opts = Self::default();
+        opts.ik.seed = seed;
+        opts.planner.seed = seed;
+        opts
+    }
+}
+
 /// Runs every stage on a loaded robot and a scenario: collision world, IK, trajectory with the
 /// certified continuous check, the engines' dynamic runs and kinematic replays (rapier and
 /// MuJoCo in parallel), and the static load.

@@ -106,7 +106,7 @@ pub fn render(report: &Report) -> String {
             engine.worst_hold_orientation_deg,
             engine.contacts.len(),
             engine.replay_contacts.len(),
-            if crate::engine::find(&engine.engine).is_some_and(|e| e.effort().estimate) {
+            if crate::engine::find(engine.engine).is_some_and(|e| e.effort().estimate) {
                 " (control-law estimate)"
             } else {
                 ""

@@ -89,6 +89,61 @@ fn fitness(record: &Record) -> f64 {
     record.task_loss.unwrap_or(f64::INFINITY)
 }
 
+/// The reach-only validation the GA scores designs with: IK seeded by `ik_seed`, with the
+/// sweeps' joint-space search budget.
+pub fn mode(ik_seed: u64) -> SweepMode {
+    SweepMode::ReachOnly {
+        ik: crate::ik::IkOptions {
+            seed: ik_seed,
+            search_boxes: crate::ik::SWEEP_SEARCH_BOXES,
+            ..Default::default()
+        },
+    }
+}
+
+/// Where a result's best design stands among a reference sweep's designs on its scenario.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Standing {
+    /// The reference designs on the scenario.
+    pub designs: usize,
+    /// Its score (1 at the reference's best loss, 0 at its worst); `None` without a loss.
+    pub score: Option<f64>,
+    /// Its percentile among them; `None` without a loss.
+    pub percentile: Option<f64>,
+}
+
+impl GaResult {
+    /// Where the best design stands among `reference` (a sweep's records on this scenario);
+    /// `None` when the reference has no design on it.
+    pub fn standing(&self, reference: &[Record]) -> Option<Standing> {
+        let distributions = super::table::distributions(std::slice::from_ref(&self.best), Some(reference));
+        let distribution = distributions.get(&self.best.scenario)?;
+        Some(Standing {
+            designs: distribution.len(),
+            score: distribution.score(self.best.task_loss),
+            percentile: distribution.percentile(self.best.task_loss),
+        })
+    }
+
+    /// Writes the result as pretty JSON to `path`; an existing file only with `force`.
+    ///
+    /// # Errors
+    /// [`SweepError::Write`] naming the file.
+    pub fn save(&self, path: &std::path::Path, force: bool) -> Result<(), SweepError> {
+        let error = |message: String| SweepError::Write {
+            path: path.to_path_buf(),
+            message,
+        };
+        let text = serde_json::to_string_pretty(self).map_err(|e| error(e.to_string()))? + "\n";
+        crate::files::write_atomic(path, text.as_bytes(), force).map_err(|e| {
+            error(match e {
+                crate::files::WriteError::Exists => "the file exists; pass --force to replace it".into(),
+                other => other.to_string(),
+            })
+        })
+    }
+}
+
 /// Runs the GA on `scenario` with reach-only validations of `ik` settings.
 ///
 /// # Errors

@@ -2,7 +2,31 @@
 
 use super::record::Record;
 use super::table::{self, percent};
+use super::{SweepMode, SweepOptions};
 use std::fmt::Write;
+use std::path::PathBuf;
+
+/// The scenarios of Table 1 when none are given: the paper's 36 cluttered tasks.
+pub const TABLE_1_SCENARIOS: &str = "scenarios/cluttered";
+/// The designs of Table 1: the paper's industrial presets.
+pub const TABLE_1_DESIGNS: &str = "catalog:table1";
+
+/// The sweep Table 1 is made of: reach-only, IK seeded by `seed`, written to `out` when given.
+pub fn table_1_options(seed: u64, out: Option<PathBuf>, force: bool) -> SweepOptions {
+    SweepOptions {
+        mode: SweepMode::ReachOnly {
+            ik: crate::ik::IkOptions {
+                seed,
+                ..Default::default()
+            },
+        },
+        out,
+        force,
+        shard: None,
+        reference: None,
+        top: table::DEFAULT_TOP,
+    }
+}
 
 /// One row of the paper's Table 1: solved tasks (%), solved goals (%), mean error (mm).
 struct PaperRow {

@@ -79,11 +79,7 @@ pub fn evaluate(
         SweepMode::Full { ik, engines } => pipeline::ValidateOptions {
             ik: ik.clone(),
             engines: *engines,
-            planner: crate::plan::PlannerOptions {
-                seed: ik.seed,
-                ..Default::default()
-            },
-            ..Default::default()
+            ..pipeline::ValidateOptions::seeded(ik.seed)
         },
     };
     let hardware_cost_m = loaded.design.as_ref().map(crate::design::Design::hardware_cost);
