@@ -208,8 +208,12 @@ fn help_options(subcommand: Option<&str>) -> std::collections::BTreeSet<String> 
         .lines()
         .filter_map(|l| {
             let l = l.trim_start();
-            let l = l.strip_prefix("-").filter(|r| r.chars().nth(1) == Some(',')).map_or(l, |r| r[2..].trim_start());
-            l.strip_prefix("--").map(|r| format!("--{}", r.split([' ', '=']).next().unwrap_or_default()))
+            let l = l
+                .strip_prefix("-")
+                .filter(|r| r.chars().nth(1) == Some(','))
+                .map_or(l, |r| r[2..].trim_start());
+            l.strip_prefix("--")
+                .map(|r| format!("--{}", r.split([' ', '=']).next().unwrap_or_default()))
         })
         .filter(|o| o != "--help" && o != "--version")
         .collect()

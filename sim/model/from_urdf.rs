@@ -14,7 +14,7 @@
 //! position.
 
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
-use super::names;
+use super::{arm, names};
 use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
 use crate::frames::isometry_from_xyz_rpy;
 use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
@@ -360,68 +360,37 @@ impl<'a> Builder<'a> {
     }
 
     /// The default tip below `base` and the sentences that say why: the arm is the longest
-    /// chain of movable joints that are not gripper joints (see [`Self::gripper_joints`]); the
+    /// chain of movable joints that are not gripper joints (the rule of [`arm`]); the
     /// tip is the link below the arm's last joint, followed down fixed joints to the link named
     /// like a tool frame ([`names::TOOL_NAMES`]) when exactly one name ranks first.
     fn default_tip(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> Result<(String, Vec<String>), ModelError> {
         let mut choices = Vec::new();
-        let mut grippers = self.gripper_joints(base, children);
-        let all_movable = {
-            let mut count = 0usize;
-            let mut stack = vec![base];
-            while let Some(link) = stack.pop() {
-                for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
-                    count += usize::from(is_movable(&joint.joint_type));
-                    stack.push(joint.child.link.as_str());
-                }
-            }
-            count
-        };
-        // A file that is all gripper (a gripper on its own) keeps the plain longest chain.
-        if grippers.len() == all_movable {
-            grippers.clear();
-        }
+        let (movers, joints) = self.movers(base, children);
+        let by_index = arm::grippers(&movers);
+        let grippers = Self::gripper_joints(&movers, &joints, &by_index);
         for (name, reason) in &grippers {
             choices.push(format!(
                 "{} is a gripper joint, not an arm joint: {reason}; it is held at 0 and what it moves is rigid geometry of the link it hangs from",
                 self.element("joint", name)
             ));
         }
-
-        let mut best: (usize, Vec<&str>) = (0, vec![]);
-        let mut stack = vec![(base, 0usize)];
-        while let Some((link, depth)) = stack.pop() {
-            for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
-                let child = joint.child.link.as_str();
-                if !is_movable(&joint.joint_type) {
-                    stack.push((child, depth));
-                } else if !grippers.contains_key(joint.name.as_str()) {
-                    let depth = depth + 1;
-                    if depth > best.0 {
-                        best = (depth, vec![child]);
-                    } else if depth == best.0 {
-                        best.1.push(child);
-                    }
-                    stack.push((child, depth));
-                }
-            }
-        }
-        let arm_end = match best.1.as_slice() {
-            [] => {
+        let (arm_end, length) = match arm::arm_end(&movers, &by_index) {
+            Ok((end, length)) => (movers[end].part.as_str(), length),
+            Err(arm::NoArmEnd::Nothing) => {
                 return Err(ModelError::NoMovableJoint {
                     path: self.path.to_path_buf(),
                     base: base.into(),
                     tip: base.into(),
                 })
             }
-            [one] => *one,
-            _ => {
-                best.1.sort_unstable();
+            Err(arm::NoArmEnd::Tie { ends, length }) => {
+                let mut candidates: Vec<&str> = ends.iter().map(|&m| movers[m].part.as_str()).collect();
+                candidates.sort_unstable();
                 return Err(ModelError::AmbiguousTip {
                     path: self.path.to_path_buf(),
                     base: base.into(),
-                    length: best.0,
-                    candidates: best.1.join(", "),
+                    length,
+                    candidates: candidates.join(", "),
                 });
             }
         };
@@ -439,8 +408,7 @@ impl<'a> Builder<'a> {
             at += 1;
         }
         let arm = format!(
-            "the arm is the longest chain of movable joints from `{base}` that are not gripper joints ({} joints, to link `{arm_end}`)",
-            best.0
+            "the arm is the longest chain of movable joints from `{base}` that are not gripper joints ({length} joints, to link `{arm_end}`)"
         );
         let tip = match names::pick_tool(&rigid) {
             Ok(Some(tool)) if tool == arm_end => {
@@ -474,99 +442,75 @@ impl<'a> Builder<'a> {
         Ok((tip.to_string(), choices))
     }
 
-    /// Movable joints below `base` that belong to a gripper, with the reason. A joint is a
-    /// gripper joint when every movable joint below it is one (it ends the tree) and it has a
-    /// `<mimic>`, a joint not below it mimics it, its name or its child link's has a gripper word
-    /// ([`names::GRIPPER_WORDS`]), or another such trailing joint branches from the same moving
-    /// body (two fingers on a hand). Joints hanging directly from the base's body never branch
-    /// as fingers: two arms on one torso are arms.
-    fn gripper_joints(&self, base: &str, children: &BTreeMap<&str, Vec<&urdf_rs::Joint>>) -> BTreeMap<String, String> {
-        let mut mimicked_by: HashMap<&str, Vec<&str>> = HashMap::new();
-        for joint in &self.robot.joints {
-            if let Some(mimic) = &joint.mimic {
-                mimicked_by.entry(mimic.joint.as_str()).or_default().push(joint.name.as_str());
-            }
-        }
-        // Movable joints with the movable joint above them (None: the base's body) and their
-        // depth in movable joints, parents first.
-        let mut movable: Vec<(&urdf_rs::Joint, Option<&str>, usize)> = Vec::new();
-        let mut stack: Vec<(&str, Option<&str>, usize)> = vec![(base, None, 0)];
-        while let Some((link, above, depth)) = stack.pop() {
+    /// The movable joints below `base` as [`arm::Mover`]s (parents first), with their joints.
+    /// A `<mimic>` couples a joint to the one it names whatever that is; a joint that mimics it
+    /// couples it to that joint (a joint its own descendant mimics is a linkage of the arm).
+    fn movers<'r>(&'r self, base: &str, children: &BTreeMap<&str, Vec<&'r urdf_rs::Joint>>) -> (Vec<arm::Mover>, Vec<&'r urdf_rs::Joint>) {
+        let mut joints: Vec<&urdf_rs::Joint> = Vec::new();
+        let mut above: Vec<Option<usize>> = Vec::new();
+        let mut stack: Vec<(&str, Option<usize>)> = vec![(base, None)];
+        while let Some((link, up)) = stack.pop() {
             for joint in children.get(link).map(Vec::as_slice).unwrap_or(&[]) {
                 if is_movable(&joint.joint_type) {
-                    movable.push((joint, above, depth + 1));
-                    stack.push((joint.child.link.as_str(), Some(joint.name.as_str()), depth + 1));
+                    joints.push(joint);
+                    above.push(up);
+                    stack.push((joint.child.link.as_str(), Some(joints.len() - 1)));
                 } else {
-                    stack.push((joint.child.link.as_str(), above, depth));
+                    stack.push((joint.child.link.as_str(), up));
                 }
             }
         }
-        let above_of: HashMap<&str, Option<&str>> = movable.iter().map(|(j, above, _)| (j.name.as_str(), *above)).collect();
-        let is_below = |joint: &str, ancestor: &str| {
-            let mut at = above_of.get(joint).copied().flatten();
-            while let Some(name) = at {
-                if name == ancestor {
-                    return true;
+        let index: HashMap<&str, usize> = joints.iter().enumerate().map(|(k, j)| (j.name.as_str(), k)).collect();
+        let movers = joints
+            .iter()
+            .zip(above)
+            .map(|(joint, above)| {
+                let mut couplings = Vec::new();
+                if let Some(mimic) = &joint.mimic {
+                    couplings.push((None, format!("it has <mimic joint=\"{}\">", mimic.joint)));
                 }
-                at = above_of.get(name).copied().flatten();
-            }
-            false
-        };
-        let deepest = movable.iter().map(|(_, _, d)| *d).max().unwrap_or(0);
-        let mut grippers: BTreeMap<String, String> = BTreeMap::new();
-        // Deepest first: whether a joint ends the tree depends on the joints below it, and
-        // siblings share a depth.
-        for depth in (1..=deepest).rev() {
-            let level: Vec<&(&urdf_rs::Joint, Option<&str>, usize)> = movable.iter().filter(|(_, _, d)| *d == depth).collect();
-            let trailing: HashMap<&str, bool> = level
-                .iter()
-                .map(|(joint, _, _)| {
-                    let ends = movable
-                        .iter()
-                        .filter(|(_, above, _)| *above == Some(joint.name.as_str()))
-                        .all(|(below, _, _)| grippers.contains_key(&below.name));
-                    (joint.name.as_str(), ends)
-                })
-                .collect();
-            for (joint, above, _) in &level {
-                if !trailing.get(joint.name.as_str()).copied().unwrap_or(false) {
-                    continue;
-                }
-                let child = joint.child.link.as_str();
-                let sibling = above.and_then(|above| {
-                    level
-                        .iter()
-                        .find(|(other, other_above, _)| {
-                            other.name != joint.name
-                                && *other_above == Some(above)
-                                && trailing.get(other.name.as_str()).copied().unwrap_or(false)
-                        })
-                        .map(|(other, _, _)| (other.name.as_str(), above))
-                });
-                let reason = if let Some(mimic) = &joint.mimic {
-                    Some(format!("it has <mimic joint=\"{}\">", mimic.joint))
-                } else if let Some(partners) = mimicked_by
-                    .get(joint.name.as_str())
-                    .map(|all| all.iter().copied().filter(|p| !is_below(p, &joint.name)).collect::<Vec<_>>())
-                    .filter(|off_branch| !off_branch.is_empty())
+                for other in self
+                    .robot
+                    .joints
+                    .iter()
+                    .filter(|o| o.mimic.as_ref().is_some_and(|m| m.joint == joint.name))
                 {
-                    // A joint its own descendant mimics is a linkage of the arm, not a finger pair.
-                    Some(format!("joint `{}` mimics it", partners.join("`, `")))
-                } else if let Some(word) = names::gripper_word(&joint.name) {
-                    Some(format!("its name has `{word}`"))
-                } else if let Some(word) = names::gripper_word(child) {
-                    Some(format!("its link `{child}` is named like a gripper part (`{word}`)"))
-                } else {
-                    sibling.map(|(other, above)| {
-                        format!("it and joint `{other}` branch from the body joint `{above}` moves and nothing moves below them (fingers)")
-                    })
-                };
-                if let Some(reason) = reason {
-                    grippers.insert(joint.name.clone(), reason);
+                    couplings.push((index.get(other.name.as_str()).copied(), format!("joint `{}` mimics it", other.name)));
                 }
-            }
-        }
-        grippers
+                arm::Mover {
+                    above,
+                    joints: vec![joint.name.clone()],
+                    part: joint.child.link.clone(),
+                    couplings,
+                }
+            })
+            .collect();
+        (movers, joints)
+    }
+
+    /// The gripper joints among `movers` (by joint name), each with the sentence that says why.
+    fn gripper_joints(
+        movers: &[arm::Mover],
+        joints: &[&urdf_rs::Joint],
+        found: &BTreeMap<usize, arm::GripperReason>,
+    ) -> BTreeMap<String, String> {
+        found
+            .iter()
+            .map(|(m, reason)| {
+                let sentence = match reason {
+                    arm::GripperReason::Coupled(sentence) => sentence.clone(),
+                    arm::GripperReason::JointWord(word) => format!("its name has `{word}`"),
+                    arm::GripperReason::PartWord(word) => {
+                        format!("its link `{}` is named like a gripper part (`{word}`)", movers[*m].part)
+                    }
+                    arm::GripperReason::Sibling { other, above } => format!(
+                        "it and joint `{}` branch from the body joint `{}` moves and nothing moves below them (fingers)",
+                        joints[*other].name, joints[*above].name
+                    ),
+                };
+                (joints[*m].name.clone(), sentence)
+            })
+            .collect()
     }
 
     fn origin(&self, pose: &urdf_rs::Pose, element: String) -> Result<Isometry3<f64>, ModelError> {

@@ -2,6 +2,7 @@
 //! Produces a [`Model`]: a serial chain of movable joints with exact collision geometry and
 //! inertia per link, plus forward kinematics and the geometric Jacobian. Fails with [`ModelError`].
 
+mod arm;
 mod chain;
 mod dynamics;
 mod from_design;

@@ -2,15 +2,15 @@
 //!
 //! With `--tip NAME` (a body, else a site), the chain is the moving bodies above that body. By
 //! default, the arm is the longest chain of moving bodies whose joints are not gripper joints (a
-//! tie is an error naming where the chains part); gripper joints follow the URDF rules (see
-//! `names`): they end the tree, and carry a gripper word, are coupled by an `<equality joint>` to
-//! a joint not below them, or branch as a pair from one moving body. The tool frame is the site
+//! tie is an error naming where the chains part); gripper joints follow the rule URDF input follows
+//! (`model::arm`): they end the tree, and are coupled by an `<equality joint>` to a joint not
+//! below them, carry a gripper word, or branch as a pair from one moving body. The tool frame is the site
 //! named [`TOOL_SITE`](super::TOOL_SITE) when there is one, else the body or site rigidly below
 //! the arm's last body named like a tool frame, else the last body's frame. Moving bodies off the
 //! chain are held at their joints' reference position, like jointless bodies.
 
 use super::Reader;
-use crate::model::{names, ModelError};
+use crate::model::{arm, names, ModelError};
 use mujoco_rs::mujoco_c::mjtEq;
 use mujoco_rs::prelude::*;
 use std::collections::BTreeMap;
@@ -114,11 +114,9 @@ impl Reader<'_> {
     /// [`ModelError::UnsupportedMjcf`] when the longest chains tie.
     pub(super) fn default_chain(&self, all_moving: &[usize], choices: &mut Vec<String>) -> Result<(Vec<usize>, Tool), ModelError> {
         let mj = self.mj;
-        let mut grippers = self.gripper_bodies(all_moving);
-        if grippers.len() == all_moving.len() {
-            // A gripper on its own: its joints are the chain.
-            grippers.clear();
-        }
+        let movers = self.movers(all_moving);
+        let found = arm::grippers(&movers);
+        let grippers = self.gripper_bodies(all_moving, &found);
         for (body, reason) in &grippers {
             choices.push(format!(
                 "joint `{}` of {} is a gripper joint, not an arm joint: {reason}; it is held at its reference position and its body is rigid geometry of the link it hangs from",
@@ -126,14 +124,14 @@ impl Reader<'_> {
                 self.body(*body)
             ));
         }
-        let arm: Vec<usize> = all_moving.iter().copied().filter(|b| !grippers.contains_key(b)).collect();
-        let depth = |body: usize| self.moving_chain(body).len();
-        let longest = arm.iter().map(|&b| depth(b)).max().unwrap_or(0);
-        let ends: Vec<usize> = arm.iter().copied().filter(|&b| depth(b) == longest).collect();
-        let arm_end = match *ends.as_slice() {
-            [] => return Err(self.unsupported("<worldbody>".into(), "has no hinge or slide joint: nothing moves".into())),
-            [one] => one,
-            [a, b, ..] => {
+        let arm_end = match arm::arm_end(&movers, &found) {
+            Ok((end, _)) => all_moving[end],
+            Err(arm::NoArmEnd::Nothing) => {
+                return Err(self.unsupported("<worldbody>".into(), "has no hinge or slide joint: nothing moves".into()))
+            }
+            Err(arm::NoArmEnd::Tie { ends, length }) => {
+                let ends: Vec<usize> = ends.iter().map(|&m| all_moving[m]).collect();
+                let (a, b) = (ends[0], ends[1]);
                 // Name where the first two chains part: their lowest common ancestor.
                 let mut fork = mj.body_parentid()[b] as usize;
                 while fork != 0 && !self.is_below(a, fork) {
@@ -146,7 +144,7 @@ impl Reader<'_> {
                 return Err(self.unsupported(
                     self.body(b),
                     format!(
-                        "is not below {}, the end of another chain of {longest} moving bodies: the moving bodies branch at {} into chains that tie (ending at {}); choose the chain's end with --tip (a body or a site)",
+                        "is not below {}, the end of another chain of {length} moving bodies: the moving bodies branch at {} into chains that tie (ending at {}); choose the chain's end with --tip (a body or a site)",
                         self.body(a),
                         self.body(fork),
                         names.join(", ")
@@ -234,9 +232,11 @@ impl Reader<'_> {
         }
     }
 
-    /// Moving bodies whose joints are gripper joints, with the reason.
-    fn gripper_bodies(&self, all_moving: &[usize]) -> BTreeMap<usize, String> {
+    /// The moving bodies as [`arm::Mover`]s, in `all_moving`'s order; an `<equality joint>`
+    /// couples a body to the body of the joint at its other end.
+    fn movers(&self, all_moving: &[usize]) -> Vec<arm::Mover> {
         let mj = self.mj;
+        let index: BTreeMap<usize, usize> = all_moving.iter().enumerate().map(|(k, &b)| (b, k)).collect();
         // Joints coupled by an <equality joint>, both ways.
         let mut coupled: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
         for eq in 0..mj.ffi().neq as usize {
@@ -249,68 +249,50 @@ impl Reader<'_> {
                 coupled.entry(b).or_default().push(a);
             }
         }
-        let depth: BTreeMap<usize, usize> = all_moving.iter().map(|&b| (b, self.moving_chain(b).len())).collect();
-        let deepest = depth.values().copied().max().unwrap_or(0);
-        let mut grippers: BTreeMap<usize, String> = BTreeMap::new();
-        // Deepest first: whether a body ends the tree depends on the bodies below it, and
-        // siblings share a depth.
-        for level in (1..=deepest).rev() {
-            let bodies: Vec<usize> = all_moving.iter().copied().filter(|b| depth[b] == level).collect();
-            let trailing: BTreeMap<usize, bool> = bodies
-                .iter()
-                .map(|&b| {
-                    let ends = all_moving
-                        .iter()
-                        .filter(|&&below| self.moving_parent(below) == b)
-                        .all(|below| grippers.contains_key(below));
-                    (b, ends)
-                })
-                .collect();
-            for &body in &bodies {
-                if !trailing[&body] {
-                    continue;
-                }
-                let joints: Vec<usize> = {
-                    let first = mj.body_jntadr()[body] as usize;
-                    (first..first + mj.body_jntnum()[body] as usize).collect()
-                };
-                let word = joints
-                    .iter()
-                    .find_map(|&j| names::gripper_word(&self.name(MjtObjBase::mjOBJ_JOINT, j)));
-                let partner = joints.iter().find_map(|&j| {
-                    coupled.get(&j)?.iter().copied().find(|&other| {
-                        let other_body = mj.jnt_bodyid()[other] as usize;
-                        other_body != body && !self.is_below(other_body, body)
+        all_moving
+            .iter()
+            .map(|&body| {
+                let first = mj.body_jntadr()[body] as usize;
+                let joints = first..first + mj.body_jntnum()[body] as usize;
+                let couplings = joints
+                    .clone()
+                    .flat_map(|j| coupled.get(&j).into_iter().flatten().copied())
+                    .filter_map(|other| {
+                        let partner = index.get(&(mj.jnt_bodyid()[other] as usize)).copied()?;
+                        let sentence = format!(
+                            "an <equality joint> couples it to joint `{}`",
+                            self.name(MjtObjBase::mjOBJ_JOINT, other)
+                        );
+                        Some((Some(partner), sentence))
                     })
-                });
-                let above = self.moving_parent(body);
-                let sibling = bodies
-                    .iter()
-                    .copied()
-                    .find(|&other| other != body && above != 0 && self.moving_parent(other) == above && trailing[&other]);
-                let reason = if let Some(word) = word {
-                    Some(format!("its name has `{word}`"))
-                } else if let Some(word) = names::gripper_word(&self.name(MjtObjBase::mjOBJ_BODY, body)) {
-                    Some(format!("its body is named like a gripper part (`{word}`)"))
-                } else if let Some(partner) = partner {
-                    Some(format!(
-                        "an <equality joint> couples it to joint `{}`",
-                        self.name(MjtObjBase::mjOBJ_JOINT, partner)
-                    ))
-                } else {
-                    sibling.map(|other| {
-                        format!(
-                            "it and {} branch from {} and nothing moves below them (fingers)",
-                            self.body(other),
-                            self.body(above)
-                        )
-                    })
-                };
-                if let Some(reason) = reason {
-                    grippers.insert(body, reason);
+                    .collect();
+                arm::Mover {
+                    above: index.get(&self.moving_parent(body)).copied(),
+                    joints: joints.map(|j| self.name(MjtObjBase::mjOBJ_JOINT, j)).collect(),
+                    part: self.name(MjtObjBase::mjOBJ_BODY, body),
+                    couplings,
                 }
-            }
-        }
-        grippers
+            })
+            .collect()
+    }
+
+    /// The gripper bodies among `found` (by body), each with the sentence that says why.
+    fn gripper_bodies(&self, all_moving: &[usize], found: &BTreeMap<usize, arm::GripperReason>) -> BTreeMap<usize, String> {
+        found
+            .iter()
+            .map(|(&m, reason)| {
+                let sentence = match reason {
+                    arm::GripperReason::Coupled(sentence) => sentence.clone(),
+                    arm::GripperReason::JointWord(word) => format!("its name has `{word}`"),
+                    arm::GripperReason::PartWord(word) => format!("its body is named like a gripper part (`{word}`)"),
+                    arm::GripperReason::Sibling { other, above } => format!(
+                        "it and {} branch from {} and nothing moves below them (fingers)",
+                        self.body(all_moving[*other]),
+                        self.body(all_moving[*above])
+                    ),
+                };
+                (all_moving[m], sentence)
+            })
+            .collect()
     }
 }
