@@ -79,15 +79,8 @@ pub enum Error {
         message: String,
     },
     /// An SRDF file is unusable, or names a link the model does not have.
-    #[error("{path}: {element}: {message}")]
-    Srdf {
-        /// The SRDF file.
-        path: PathBuf,
-        /// The element and its line (or `the file`, `the XML`).
-        element: String,
-        /// What is wrong and what was expected.
-        message: String,
-    },
+    #[error(transparent)]
+    Srdf(#[from] crate::srdf::SrdfError),
     /// Warnings were found and `--strict` was given.
     #[error("{count} warning(s) and --strict was given:\n{list}")]
     Strict {

@@ -191,11 +191,11 @@ pub fn validate_loaded(
     }
     let srdf = match &opts.srdf {
         Some(path) if pipeline::input_kind(input)? != InputKind::Urdf => {
-            return Err(Error::Srdf {
+            return Err(Error::Srdf(crate::srdf::SrdfError {
                 path: path.clone(),
                 element: "--srdf".into(),
                 message: format!("is for URDF input; {} is not a URDF", input.display()),
-            })
+            }))
         }
         Some(path) => Some(crate::srdf::exclusions(path, model)?),
         None => None,

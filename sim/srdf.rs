@@ -11,11 +11,22 @@
 //! model does not already do (one rigid body never collides with itself).
 
 use crate::collide::ExcludedPair;
-use crate::error::Error;
 use crate::model::Model;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
+
+/// An SRDF file is unusable, or names a link the model does not have.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {element}: {message}")]
+pub struct SrdfError {
+    /// The SRDF file.
+    pub path: PathBuf,
+    /// The element and its line (or `the file`, `the XML`).
+    pub element: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
 
 /// The self pairs an SRDF disables, on a model.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -60,11 +71,11 @@ struct Disabled {
 /// Reads the `<disable_collisions>` of the SRDF at `path` and maps them onto `model`'s links.
 ///
 /// # Errors
-/// [`Error::Srdf`] naming the file, and the element and line: an unreadable file, malformed XML,
+/// [`SrdfError`] naming the file, and the element and line: an unreadable file, malformed XML,
 /// a root other than `<robot>`, a `<disable_collisions>` without `link1` or `link2`, or a link
 /// name the model does not have (neither a model link nor a link merged into one).
-pub fn exclusions(path: &Path, model: &Model) -> Result<SrdfExclusions, Error> {
-    let error = |element: String, message: String| Error::Srdf {
+pub fn exclusions(path: &Path, model: &Model) -> Result<SrdfExclusions, SrdfError> {
+    let error = |element: String, message: String| SrdfError {
         path: path.to_path_buf(),
         element,
         message,
