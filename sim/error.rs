@@ -78,6 +78,14 @@ pub enum Error {
         /// serde_json's message.
         message: String,
     },
+    /// A run option has a value it does not allow (`options` of the library's callers).
+    #[error("option `{name}`: {message}")]
+    Option {
+        /// The option, named as on the command line with `_` for `-` (`ik_seeds`).
+        name: &'static str,
+        /// The value and what was expected.
+        message: String,
+    },
     /// An SRDF file is unusable, or names a link the model does not have.
     #[error(transparent)]
     Srdf(#[from] crate::srdf::SrdfError),

@@ -321,3 +321,152 @@ pub fn report_json(report: &Report) -> Result<String, Error> {
         .map(|text| text + "\n")
         .map_err(|e| Error::Report { message: e.to_string() })
 }
+
+/// A run's options by the names `validate-design` gives them (`_` for `-`): what the CLI's
+/// arguments and the Python API's keywords set, mapped to [`Options`] in one place. A name left
+/// out keeps the default; every value is checked as the command line checks it.
+#[derive(Debug, Clone, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Named {
+    /// URDF: first link of the chain.
+    pub base: Option<String>,
+    /// URDF: last link of the chain; MJCF: a body or a site, the tool frame.
+    pub tip: Option<String>,
+    /// URDF: roots for `package://` mesh URIs.
+    #[serde(default)]
+    pub package_path: Vec<PathBuf>,
+    /// URDF: an SRDF whose `<disable_collisions>` pairs are left out.
+    pub srdf: Option<PathBuf>,
+    /// Warnings about the input are errors.
+    #[serde(default)]
+    pub strict: bool,
+    /// Judge every goal by this tolerance mode instead of the scenario's.
+    pub tolerance: Option<Tolerance>,
+    /// Random configurations of MuJoCo's kinematics check (0 skips it).
+    pub mujoco_checks: Option<u64>,
+    /// Seed of IK, of the planner and of the kinematics check.
+    pub seed: Option<u64>,
+    /// IK starts per goal.
+    pub ik_seeds: Option<u64>,
+    /// Boxes the joint-space search visits at most for an open goal.
+    pub search_boxes: Option<usize>,
+    /// Clearance (m) every configuration and segment must keep.
+    pub margin: Option<f64>,
+    /// Engine contacts shallower than this (m) are not counted.
+    pub contact_depth: Option<f64>,
+    /// Engines, as `--engines` reads them (`rapier,mujoco`, `mujoco`, `none`) or a list.
+    #[serde(default, deserialize_with = "by_name")]
+    pub engines: Option<crate::engine::Engines>,
+    /// The planner, as `--planner` reads it.
+    #[serde(default, deserialize_with = "by_name")]
+    pub planner: Option<crate::plan::PlannerKind>,
+    /// Random samples per goal before the planner reports `no_path`.
+    pub plan_budget: Option<u64>,
+    /// The paper's static metric only.
+    #[serde(default)]
+    pub reach_only: bool,
+}
+
+/// A value read by its `FromStr` (a list of names is joined with commas first).
+fn by_name<'de, D, T>(deserializer: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: std::str::FromStr<Err = String>,
+{
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Text {
+        One(String),
+        List(Vec<String>),
+    }
+    let text = match <Option<Text> as serde::Deserialize>::deserialize(deserializer)? {
+        None => return Ok(None),
+        Some(Text::One(text)) => text,
+        Some(Text::List(names)) if names.is_empty() => "none".into(),
+        Some(Text::List(names)) => names.join(","),
+    };
+    text.parse().map(Some).map_err(serde::de::Error::custom)
+}
+
+impl Named {
+    /// The run's options: these names set, the defaults elsewhere.
+    ///
+    /// # Errors
+    /// [`Error::Option`] for a value out of its range (`ik_seeds` 1 to
+    /// [`limits::MAX_IK_SEEDS`](crate::limits::MAX_IK_SEEDS), `plan_budget` 1 to
+    /// [`limits::MAX_PLAN_BUDGET`](crate::limits::MAX_PLAN_BUDGET), a negative or non-finite
+    /// `margin` or `contact_depth`, `mujoco_checks` over 100 000), or `reach_only` with
+    /// `engines`, `planner` or `plan_budget`.
+    pub fn options(&self) -> Result<Options, Error> {
+        let invalid = |name: &'static str, message: String| Error::Option { name, message };
+        let within = |name: &'static str, value: u64, low: u64, high: u64| {
+            if (low..=high).contains(&value) {
+                Ok(usize::try_from(value).unwrap_or(usize::MAX))
+            } else {
+                Err(invalid(name, format!("{value} is out of range; expected {low} to {high}")))
+            }
+        };
+        let length = |name: &'static str, value: f64| {
+            if value.is_finite() && value >= 0.0 {
+                Ok(value)
+            } else {
+                Err(invalid(
+                    name,
+                    format!("{value} is not a length; expected a finite number of metres, 0 or more"),
+                ))
+            }
+        };
+        if self.reach_only {
+            let planning = [
+                ("engines", self.engines.is_some()),
+                ("planner", self.planner.is_some()),
+                ("plan_budget", self.plan_budget.is_some()),
+            ];
+            if let Some((name, _)) = planning.iter().find(|(_, given)| *given) {
+                return Err(invalid(name, "does not apply with reach_only (no trajectory, no engines)".into()));
+            }
+        }
+        let mut opts = Options {
+            load: LoadOptions {
+                base_link: self.base.clone(),
+                tip_link: self.tip.clone(),
+                package_paths: self.package_path.clone(),
+            },
+            srdf: self.srdf.clone(),
+            strict: self.strict,
+            tolerance: self.tolerance,
+            ..Options::default()
+        };
+        if let Some(n) = self.mujoco_checks {
+            opts.kinematics_checks = within("mujoco_checks", n, 0, 100_000)?;
+        }
+        let validate = &mut opts.validate;
+        if let Some(seed) = self.seed {
+            validate.ik.seed = seed;
+            validate.planner.seed = seed;
+        }
+        if let Some(k) = self.ik_seeds {
+            validate.ik.seeds = within("ik_seeds", k, 1, crate::limits::MAX_IK_SEEDS)?;
+        }
+        if let Some(boxes) = self.search_boxes {
+            validate.ik.search_boxes = boxes;
+        }
+        if let Some(margin) = self.margin {
+            validate.certify.threshold_m = length("margin", margin)?;
+        }
+        if let Some(depth) = self.contact_depth {
+            validate.engine.contact_depth_m = length("contact_depth", depth)?;
+        }
+        if let Some(engines) = self.engines {
+            validate.engines = engines;
+        }
+        if let Some(planner) = self.planner {
+            validate.planner.kind = planner;
+        }
+        if let Some(budget) = self.plan_budget {
+            validate.planner.budget = within("plan_budget", budget, 1, crate::limits::MAX_PLAN_BUDGET)?;
+        }
+        validate.reach_only = self.reach_only;
+        Ok(opts)
+    }
+}

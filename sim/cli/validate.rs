@@ -3,7 +3,7 @@
 
 use super::ToleranceArg;
 use proving_ground::error::Error;
-use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
+use proving_ground::pipeline::{self, Engines};
 use proving_ground::plan::PlannerKind;
 use proving_ground::run::{self, Exports, Run, Stop, Written};
 use proving_ground::{render, report};
@@ -116,7 +116,7 @@ pub(crate) struct ValidateArgs {
 
 impl ValidateArgs {
     /// The library's options for these arguments.
-    fn options(&self) -> proving_ground::Options {
+    fn options(&self) -> Result<proving_ground::Options, Error> {
         let stop = if self.describe {
             Stop::Described
         } else if self.kinematics_only {
@@ -124,45 +124,36 @@ impl ValidateArgs {
         } else {
             Stop::Validated
         };
-        proving_ground::Options {
-            load: LoadOptions {
-                base_link: self.base.clone(),
-                tip_link: self.tip.clone(),
-                package_paths: self.package_paths.clone(),
-            },
+        // clap gives every default; reach-only runs plan nothing, so their defaults stay out.
+        let planning = !self.reach_only;
+        let named = run::Named {
+            base: self.base.clone(),
+            tip: self.tip.clone(),
+            package_path: self.package_paths.clone(),
             srdf: self.srdf.clone(),
             strict: self.strict,
-            scenario: self.scenario.clone(),
             tolerance: self.tolerance.map(Into::into),
-            kinematics_checks: usize::try_from(self.mujoco_checks).unwrap_or(usize::MAX),
+            mujoco_checks: Some(self.mujoco_checks),
+            seed: Some(self.seed),
+            ik_seeds: Some(self.ik_seeds),
+            search_boxes: Some(self.search_boxes),
+            margin: Some(self.margin),
+            contact_depth: Some(self.contact_depth),
+            engines: planning.then_some(self.engines),
+            planner: planning.then_some(self.planner),
+            plan_budget: planning.then_some(self.plan_budget),
+            reach_only: self.reach_only,
+        };
+        Ok(proving_ground::Options {
+            scenario: self.scenario.clone(),
             stop,
             exports: Exports {
                 urdf: self.export_urdf.clone(),
                 mjcf: self.export_mjcf.clone(),
                 scene: self.scene,
             },
-            validate: ValidateOptions {
-                ik: proving_ground::ik::IkOptions {
-                    seeds: usize::try_from(self.ik_seeds).unwrap_or(usize::MAX),
-                    search_boxes: self.search_boxes,
-                    seed: self.seed,
-                    ..Default::default()
-                },
-                certify: proving_ground::plan::CertifyOptions { threshold_m: self.margin },
-                engines: self.engines,
-                planner: proving_ground::plan::PlannerOptions {
-                    kind: self.planner,
-                    budget: usize::try_from(self.plan_budget).unwrap_or(usize::MAX),
-                    seed: self.seed,
-                },
-                reach_only: self.reach_only,
-                engine: proving_ground::engine::RunOptions {
-                    contact_depth_m: self.contact_depth,
-                    ..Default::default()
-                },
-                ..Default::default()
-            },
-        }
+            ..named.options()?
+        })
     }
 }
 
@@ -173,7 +164,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     let describing = args.describe || args.kinematics_only;
     // --describe prints the choices and the SRDF's pairs with the model.
     let bar = super::Bar::new("goals", args.quiet, !describing);
-    let run = proving_ground::validate(input, &args.options(), &bar);
+    let run = proving_ground::validate(input, &args.options()?, &bar);
     bar.bar.finish_and_clear();
     let run = run?;
     if !args.quiet && describing {

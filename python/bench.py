@@ -1,0 +1,70 @@
+"""Times the Python binding against the command line on the same work.
+
+    python python/bench.py [DESIGNS] [THREADS]
+
+`reach` on DESIGNS free 6-joint designs (default 200) on cluttered task 03 against
+`validate-design sweep` of the same designs written as files (one process: its start-up and
+file writing included), median of 5 runs each; then the per-pair cost of `reach`.
+"""
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import proving_ground as pg
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+TASK = os.path.join(REPO, "scenarios", "cluttered", "task-03.json")
+
+
+def designs(count):
+    rng = np.random.default_rng(0)
+    rows = np.zeros((count, 6, 3))
+    rows[:, :, 0] = rng.choice([0.0, 0.1, 0.2, 0.3], size=(count, 6))
+    rows[:, :, 1] = rng.choice([0.0, 0.2, 0.3, 0.4], size=(count, 6))
+    rows[:, :, 2] = rng.choice([0.0, np.pi / 2, -np.pi / 2], size=(count, 6))
+    return rows
+
+
+def median_time(run, repeats=5):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main():
+    count = int(sys.argv[1]) if len(sys.argv) > 1 else 200
+    threads = int(sys.argv[2]) if len(sys.argv) > 2 else None
+    rows = designs(count)
+    batch = [pg.Design.from_dh(r, name=f"design-{k:04}") for k, r in enumerate(rows)]
+    with tempfile.TemporaryDirectory() as folder:
+        paths = []
+        for design in batch:
+            path = os.path.join(folder, design.data["name"] + ".json")
+            with open(path, "w", encoding="utf-8") as f:
+                json.dump(design.data, f)
+            paths.append(path)
+        binary = os.path.join(REPO, "target", "release", "validate-design")
+        thread_args = ["--threads", str(threads)] if threads else []
+
+        def cli():
+            out = os.path.join(folder, "sweep")
+            subprocess.run([binary, "sweep", *paths, "--scenarios", TASK, "--out", out, "--force", "--quiet", *thread_args], check=True)
+
+        python = median_time(lambda: pg.reach(batch, TASK, threads=threads))
+        command = median_time(cli)
+    print(f"{count} designs x 1 task, threads {threads or 'all'}: reach {python:.3f} s "
+          f"({python / count * 1e3:.2f} ms per pair), validate-design sweep {command:.3f} s; ratio {python / command:.3f}")
+
+
+if __name__ == "__main__":
+    main()
