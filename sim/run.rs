@@ -355,11 +355,9 @@ pub struct Named {
     /// Engine contacts shallower than this (m) are not counted.
     pub contact_depth: Option<f64>,
     /// Engines, as `--engines` reads them (`rapier,mujoco`, `mujoco`, `none`) or a list.
-    #[serde(default, deserialize_with = "by_name")]
-    pub engines: Option<crate::engine::Engines>,
-    /// The planner, as `--planner` reads it.
-    #[serde(default, deserialize_with = "by_name")]
-    pub planner: Option<crate::plan::PlannerKind>,
+    pub engines: Option<Names>,
+    /// The planner, as `--planner` reads it (`rrt-connect`, `straight`).
+    pub planner: Option<String>,
     /// Random samples per goal before the planner reports `no_path`.
     pub plan_budget: Option<u64>,
     /// The paper's static metric only.
@@ -367,25 +365,14 @@ pub struct Named {
     pub reach_only: bool,
 }
 
-/// A value read by its `FromStr` (a list of names is joined with commas first).
-fn by_name<'de, D, T>(deserializer: D) -> Result<Option<T>, D::Error>
-where
-    D: serde::Deserializer<'de>,
-    T: std::str::FromStr<Err = String>,
-{
-    #[derive(serde::Deserialize)]
-    #[serde(untagged)]
-    enum Text {
-        One(String),
-        List(Vec<String>),
-    }
-    let text = match <Option<Text> as serde::Deserialize>::deserialize(deserializer)? {
-        None => return Ok(None),
-        Some(Text::One(text)) => text,
-        Some(Text::List(names)) if names.is_empty() => "none".into(),
-        Some(Text::List(names)) => names.join(","),
-    };
-    text.parse().map(Some).map_err(serde::de::Error::custom)
+/// Names given as one comma-separated text or as a list.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Names {
+    /// `rapier,mujoco`.
+    Text(String),
+    /// `["rapier", "mujoco"]`; empty is none.
+    List(Vec<String>),
 }
 
 impl Named {
@@ -395,7 +382,8 @@ impl Named {
     /// [`Error::Option`] for a value out of its range (`ik_seeds` 1 to
     /// [`limits::MAX_IK_SEEDS`](crate::limits::MAX_IK_SEEDS), `plan_budget` 1 to
     /// [`limits::MAX_PLAN_BUDGET`](crate::limits::MAX_PLAN_BUDGET), a negative or non-finite
-    /// `margin` or `contact_depth`, `mujoco_checks` over 100 000), or `reach_only` with
+    /// `margin` or `contact_depth` or one over [`limits::MAX_LENGTH_M`](crate::limits::MAX_LENGTH_M),
+    /// `mujoco_checks` over 100 000), an unknown engine or planner, or `reach_only` with
     /// `engines`, `planner` or `plan_budget`.
     pub fn options(&self) -> Result<Options, Error> {
         let invalid = |name: &'static str, message: String| Error::Option { name, message };
@@ -457,11 +445,16 @@ impl Named {
         if let Some(depth) = self.contact_depth {
             validate.engine.contact_depth_m = length("contact_depth", depth)?;
         }
-        if let Some(engines) = self.engines {
-            validate.engines = engines;
+        match &self.engines {
+            Some(Names::Text(text)) => validate.engines = text.parse().map_err(|message| invalid("engines", message))?,
+            Some(Names::List(names)) => {
+                validate.engines =
+                    crate::engine::Engines::from_names(names.iter().map(String::as_str)).map_err(|message| invalid("engines", message))?;
+            }
+            None => {}
         }
-        if let Some(planner) = self.planner {
-            validate.planner.kind = planner;
+        if let Some(planner) = &self.planner {
+            validate.planner.kind = planner.parse().map_err(|message| invalid("planner", message))?;
         }
         if let Some(budget) = self.plan_budget {
             validate.planner.budget = within("plan_budget", budget, 1, crate::limits::MAX_PLAN_BUDGET)?;

@@ -16,7 +16,7 @@
 //! MuJoCo's kinematics check.
 
 use crate::error::Error;
-use crate::pipeline::{self, Engines, LoadOptions, ValidateOptions};
+use crate::pipeline::{self, LoadOptions};
 use crate::report::{self, snapshot};
 use crate::{files, limits, run};
 use serde::Deserialize;
@@ -30,7 +30,7 @@ struct SuiteFile {
     designs: Vec<DesignEntry>,
     scenarios: Vec<PathBuf>,
     #[serde(default)]
-    options: OptionsFile,
+    options: run::Named,
 }
 
 #[derive(Debug, Deserialize)]
@@ -50,21 +50,6 @@ struct DesignFull {
     #[serde(default)]
     package_paths: Vec<PathBuf>,
     srdf: Option<PathBuf>,
-}
-
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct OptionsFile {
-    seed: Option<u64>,
-    ik_seeds: Option<u64>,
-    engines: Option<Vec<String>>,
-    planner: Option<String>,
-    plan_budget: Option<u64>,
-    margin: Option<f64>,
-    contact_depth: Option<f64>,
-    reach_only: Option<bool>,
-    tolerance: Option<crate::scenario::Tolerance>,
-    search_boxes: Option<usize>,
 }
 
 /// Most runs one suite may ask for.
@@ -138,49 +123,33 @@ fn invalid(path: &Path, field: &str, message: String) -> SuiteError {
     }
 }
 
-/// A run's options from the suite's `options`, checked as the command line checks them.
-fn options(path: &Path, file: &OptionsFile) -> Result<ValidateOptions, SuiteError> {
-    let mut opts = file.seed.map_or_else(ValidateOptions::default, ValidateOptions::seeded);
-    if let Some(k) = file.ik_seeds {
-        if !(1..=limits::MAX_IK_SEEDS).contains(&k) {
-            return Err(invalid(
-                path,
-                "options.ik_seeds",
-                format!("{k}: expected 1 to {}", limits::MAX_IK_SEEDS),
-            ));
-        }
-        opts.ik.seeds = k as usize;
+/// A run's options from the suite's `options` (named as on the command line), checked as the
+/// command line checks them.
+fn options(path: &Path, named: &run::Named) -> Result<run::Options, SuiteError> {
+    let per_design = [
+        ("base", "base", named.base.is_some()),
+        ("tip", "tip", named.tip.is_some()),
+        ("srdf", "srdf", named.srdf.is_some()),
+        ("package_path", "package_paths", !named.package_path.is_empty()),
+    ];
+    if let Some((name, field, _)) = per_design.iter().find(|(_, _, given)| *given) {
+        return Err(invalid(
+            path,
+            &format!("options.{name}"),
+            format!("is given per design (`designs[k].{field}`), not for the whole suite"),
+        ));
     }
-    if let Some(list) = &file.engines {
-        opts.engines = Engines::from_names(list.iter().map(String::as_str)).map_err(|message| invalid(path, "options.engines", message))?;
+    if named.mujoco_checks.is_some() {
+        return Err(invalid(
+            path,
+            "options.mujoco_checks",
+            "snapshots do not run MuJoCo's kinematics check; run `validate-design` for it".into(),
+        ));
     }
-    if let Some(planner) = &file.planner {
-        opts.planner.kind = planner.parse().map_err(|message| invalid(path, "options.planner", message))?;
-    }
-    if let Some(budget) = file.plan_budget {
-        if !(1..=limits::MAX_PLAN_BUDGET).contains(&budget) {
-            return Err(invalid(
-                path,
-                "options.plan_budget",
-                format!("{budget}: expected 1 to {}", limits::MAX_PLAN_BUDGET),
-            ));
-        }
-        opts.planner.budget = budget as usize;
-    }
-    for (field, value) in [("options.margin", file.margin), ("options.contact_depth", file.contact_depth)] {
-        if let Some(v) = value {
-            if !(v.is_finite() && (0.0..=limits::MAX_LENGTH_M).contains(&v)) {
-                return Err(invalid(path, field, format!("{v} m: expected a finite length of at least 0")));
-            }
-        }
-    }
-    opts.certify.threshold_m = file.margin.unwrap_or(0.0);
-    opts.engine.contact_depth_m = file.contact_depth.unwrap_or(0.0);
-    opts.reach_only = file.reach_only.unwrap_or(false);
-    if let Some(boxes) = file.search_boxes {
-        opts.ik.search_boxes = boxes;
-    }
-    Ok(opts)
+    named.options().map_err(|e| match e {
+        Error::Option { name, message } => invalid(path, &format!("options.{name}"), message),
+        other => SuiteError::from(other),
+    })
 }
 
 /// Runs the suite at `suite_path`, compares with (or, with `accept`, records) its snapshots.
@@ -250,10 +219,8 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
         // The snapshot is the report: no exports, and MuJoCo's kinematics check is the CLI's.
         let run_opts = run::Options {
             srdf,
-            tolerance: suite.options.tolerance,
             kinematics_checks: 0,
-            validate: opts.clone(),
-            ..Default::default()
+            ..opts.clone()
         };
         for (scenario_name, scenario) in &scenarios {
             let (_, built) = run::validated(&path, loaded.clone(), scenario.clone(), &run_opts, &crate::progress::Silent)?;

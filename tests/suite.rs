@@ -105,6 +105,18 @@ fn a_bad_suite_exits_2_naming_the_field() {
             r#"{"designs": ["d.json"], "scenarios": ["s.json"], "extra": 1}"#,
             "unknown field `extra`",
         ),
+        (
+            r#"{"designs": ["d.json"], "scenarios": ["s.json"], "options": {"srdf": "r.srdf"}}"#,
+            "options.srdf",
+        ),
+        (
+            r#"{"designs": ["d.json"], "scenarios": ["s.json"], "options": {"mujoco_checks": 5}}"#,
+            "options.mujoco_checks",
+        ),
+        (
+            r#"{"designs": ["d.json"], "scenarios": ["s.json"], "options": {"margin": -1}}"#,
+            "options.margin",
+        ),
     ] {
         std::fs::write(dir.path().join("suite.json"), suite).expect("write");
         let (code, text) = snapshot(dir.path(), &[]);

@@ -139,8 +139,8 @@ impl ValidateArgs {
             search_boxes: Some(self.search_boxes),
             margin: Some(self.margin),
             contact_depth: Some(self.contact_depth),
-            engines: planning.then_some(self.engines),
-            planner: planning.then_some(self.planner),
+            engines: planning.then(|| run::Names::Text(self.engines.name())),
+            planner: planning.then(|| self.planner.name().to_string()),
             plan_budget: planning.then_some(self.plan_budget),
             reach_only: self.reach_only,
         };
