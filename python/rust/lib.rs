@@ -228,7 +228,30 @@ fn loss_and_grad<'py>(
         .detach(|| proving_ground::optimize::Analytic.evaluate(&batch, &params))
         .map_err(error)?;
     let count = batch.samples.len();
+    let (objective, chosen) = proving_ground::optimize::design_objective(&batch, &params, &evaluation);
+    // The design objective's gradient: its goals' chosen samples, plus w_c times the signs of d
+    // and a (the hardware cost's subgradient; a zero offset stays zero and gets none).
+    let designs_count = designs.len();
+    let mut objective_d = vec![0.0; designs_count * n];
+    let mut objective_a = vec![0.0; designs_count * n];
+    for (b, sample) in batch.samples.iter().enumerate().filter(|(b, _)| chosen[*b]) {
+        for j in 0..n {
+            objective_d[sample.design * n + j] += evaluation.grad_d[b * n + j];
+            objective_a[sample.design * n + j] += evaluation.grad_a[b * n + j];
+        }
+    }
+    let weight = proving_ground::ik::HARDWARE_WEIGHT;
+    for (k, (&d, &a)) in params.d.iter().zip(&params.a).enumerate() {
+        objective_d[k] += weight * d.signum() * f64::from(u8::from(d != 0.0));
+        objective_a[k] += weight * a.signum() * f64::from(u8::from(a != 0.0));
+    }
     let out = PyDict::new(py);
+    out.set_item("objective", PyArray1::from_vec(py, objective))?;
+    out.set_item("chosen", PyArray1::from_vec(py, chosen))?;
+    for (name, values) in [("objective_grad_d", objective_d), ("objective_grad_a", objective_a)] {
+        let array: Bound<'py, PyArray2<f64>> = PyArray1::from_vec(py, values).reshape([designs_count, n])?;
+        out.set_item(name, array)?;
+    }
     out.set_item(
         "loss",
         PyArray1::from_vec(py, (0..count).map(|b| evaluation.loss(b)).collect::<Vec<f64>>()),

@@ -145,3 +145,27 @@ def test_the_readme_example_runs(capsys):
     printed = capsys.readouterr().out.splitlines()
     assert printed[0] in ("PASS", "FAIL", "UNDECIDED")
     assert printed[1].startswith("[")
+
+
+def test_the_design_objective_is_the_least_loss_per_goal_plus_the_hardware_cost():
+    design = pg.Design.load("designs/free-offset-6dof.json")
+    rng = np.random.default_rng(5)
+    starts = 3
+    q = rng.uniform(-2.0, 2.0, size=(8 * starts, 6))
+    samples = [(0, g) for g in range(8) for _ in range(starts)]
+    out = pg.loss_and_grad(design, TASK, q, samples)
+    with open(repo("designs/free-offset-6dof.json"), encoding="utf-8") as f:
+        data = json.load(f)
+    hardware = 0.1 * sum(abs(j["d"]) + abs(j["a"]) for j in data["joints"])
+    least = out["loss"].reshape(8, starts).min(axis=1).sum()
+    assert out["objective"][0] == pytest.approx(least + hardware, rel=1e-12)
+    assert out["chosen"].sum() == 8
+    step = 1e-6
+    for j in range(6):
+        if data["joints"][j]["a"] == 0:
+            continue
+        plus, minus = json.loads(json.dumps(data)), json.loads(json.dumps(data))
+        plus["joints"][j]["a"] += step
+        minus["joints"][j]["a"] -= step
+        numeric = (pg.loss_and_grad(plus, TASK, q, samples)["objective"][0] - pg.loss_and_grad(minus, TASK, q, samples)["objective"][0]) / (2 * step)
+        assert numeric == pytest.approx(out["objective_grad_a"][0, j], rel=1e-5, abs=1e-5), j

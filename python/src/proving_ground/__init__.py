@@ -214,7 +214,11 @@ def loss_and_grad(
     ``(design index, goal index)`` pairs (default: every goal of every design, design-major) and
     ``q`` holds one row of joint values per sample. Returns ``loss`` (``w_d d + w_col c_col``
     per sample), ``distance``, ``collision``, and ``grad_q``, ``grad_d``, ``grad_a`` of each
-    sample's loss (rows per sample). The designs share one dof count and capsule structure.
+    sample's loss (rows per sample); and the paper's design objective, ``objective`` per design
+    (per goal the least loss over its samples, summed, plus ``w_c`` times the hardware cost),
+    ``chosen`` (the samples it takes) and its gradients ``objective_grad_d``,
+    ``objective_grad_a`` (rows per design). The designs share one dof count and capsule
+    structure.
     """
     if isinstance(designs, (Design, dict, str, os.PathLike)):
         designs = [designs]
