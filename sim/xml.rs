@@ -7,6 +7,9 @@ use quick_xml::Writer;
 /// Attributes computed at run time, in the order written.
 pub type Attributes = Vec<(&'static str, String)>;
 
+/// The attributes of an element that has none.
+pub const NO_ATTRIBUTES: [(&str, &str); 0] = [];
+
 /// An XML document being written: one element per line, children indented by `indent` spaces
 /// (0 keeps every line flush left, the layout of the SVG pictures).
 pub struct Doc {

@@ -191,7 +191,7 @@ fn loss_and_grad<'py>(
     py: Python<'py>,
     designs: Vec<Source>,
     scenario: Source,
-    samples: Vec<(usize, usize)>,
+    samples: Option<Vec<(usize, usize)>>,
     q: PyReadonlyArray2<'py, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use proving_ground::optimize::{Batch, Objective, Params, Sample};
@@ -206,6 +206,12 @@ fn loss_and_grad<'py>(
         })
         .collect::<PyResult<_>>()?;
     let q = q.as_array();
+    // Default: every goal of every design, design-major.
+    let samples = samples.unwrap_or_else(|| {
+        (0..designs.len())
+            .flat_map(|d| (0..scenario.goals.len()).map(move |g| (d, g)))
+            .collect()
+    });
     let samples: Vec<Sample> = samples.into_iter().map(|(design, goal)| Sample { design, goal }).collect();
     let batch = Batch::new(&designs, &scenario, samples).map_err(error)?;
     let n = batch.dof;
@@ -274,8 +280,7 @@ fn loss_and_grad<'py>(
 #[pyfunction]
 #[pyo3(signature = (index))]
 fn modular6(index: usize) -> PyResult<String> {
-    let options = proving_ground::design::catalog::SlotOption::ALL.len();
-    let count = options.pow(proving_ground::sweep::inputs::CATALOG_SLOTS as u32);
+    let count = modular6_count();
     if index >= count {
         return Err(error(format!(
             "modular6 index {index} is out of range; expected 0 to {}",
@@ -288,12 +293,16 @@ fn modular6(index: usize) -> PyResult<String> {
     Ok(proving_ground::design::to_json(&design, "the modular6 catalog"))
 }
 
+/// Robots in the `modular6` catalog: every option in each of its slots.
+fn modular6_count() -> usize {
+    let options = proving_ground::design::catalog::SlotOption::ALL.len();
+    options.pow(proving_ground::sweep::inputs::CATALOG_SLOTS as u32)
+}
+
 /// The ids of the `modular6` catalog's robots, in catalog order.
 #[pyfunction]
 fn modular6_ids() -> Vec<String> {
-    let options = proving_ground::design::catalog::SlotOption::ALL.len();
-    let count = options.pow(proving_ground::sweep::inputs::CATALOG_SLOTS as u32);
-    (0..count)
+    (0..modular6_count())
         .map(|k| proving_ground::sweep::inputs::catalog_entry(&proving_ground::sweep::inputs::modular6_slots(k)).id)
         .collect()
 }

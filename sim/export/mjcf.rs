@@ -19,11 +19,12 @@
 //! for the engine runs ([`MjcfOptions::convex_pieces`]) a mesh is written as its convex pieces
 //! ([`crate::convex`]), each piece its own hull.
 
+use super::numbers;
 use super::{check_chain, check_unique, ExportError};
 use crate::convex::ConvexPiece;
 use crate::frames::{wxyz, xyz};
 use crate::model::{Collider, JointKind, Model, Shape};
-use crate::xml::{Attributes, Doc};
+use crate::xml::{Attributes, Doc, NO_ATTRIBUTES};
 use nalgebra::Isometry3;
 use std::sync::Arc;
 
@@ -215,9 +216,6 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     doc.close("mujoco");
     Ok(doc.finish())
 }
-
-/// The attributes of an element that has none.
-const NO_ATTRIBUTES: [(&str, &str); 0] = [];
 
 /// One gain per joint: the given ones (checked for length) or the default for all.
 fn gains(model: &Model, gain: &'static str, given: Option<&[f64]>, default: f64) -> Result<Vec<f64>, ExportError> {
@@ -446,11 +444,6 @@ fn pose(parent_from_child: &Isometry3<f64>) -> [(&'static str, String); 2] {
         ("pos", numbers(xyz(&parent_from_child.translation.vector))),
         ("quat", numbers(wxyz(&parent_from_child.rotation))),
     ]
-}
-
-/// Space-separated numbers, each at full precision.
-fn numbers(values: impl IntoIterator<Item = f64>) -> String {
-    values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]

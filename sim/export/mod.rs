@@ -83,6 +83,12 @@ pub enum ExportError {
 }
 
 /// Checks the serial-chain invariant every writer indexes by.
+/// Space-separated numbers, each at full precision (`{}`: the shortest text that reads back to
+/// the same bits), as URDF and MJCF attributes hold them.
+fn numbers(values: impl IntoIterator<Item = f64>) -> String {
+    values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
+}
+
 fn check_chain(model: &Model) -> Result<(), ExportError> {
     if model.links.len() == model.joints.len() + 1 {
         Ok(())

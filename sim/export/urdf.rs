@@ -9,10 +9,11 @@
 //! positions, inertia, limits and mesh scales survive a round trip exactly. Orientations go
 //! through roll-pitch-yaw and come back within a few 1e-16 rad.
 
+use super::numbers;
 use super::{check_chain, check_unique, ExportError};
 use crate::frames::{rpy_of, xyz};
 use crate::model::{Collider, Joint, JointKind, Link, Model, Shape};
-use crate::xml::{Attributes, Doc};
+use crate::xml::{Attributes, Doc, NO_ATTRIBUTES};
 use nalgebra::Isometry3;
 
 /// Name of the root link the exporter adds.
@@ -78,7 +79,7 @@ pub fn to_urdf(model: &Model, opts: &UrdfExportOptions) -> Result<String, Export
     let mut doc = Doc::new(2);
     doc.open("robot", [("name", model.name.as_str())]);
     if opts.mujoco_block {
-        doc.open("mujoco", no_attributes());
+        doc.open("mujoco", NO_ATTRIBUTES);
         doc.empty("compiler", MUJOCO_COMPILER);
         doc.close("mujoco");
     }
@@ -100,10 +101,6 @@ pub fn to_urdf(model: &Model, opts: &UrdfExportOptions) -> Result<String, Export
     Ok(doc.finish())
 }
 
-fn no_attributes() -> [(&'static str, &'static str); 0] {
-    []
-}
-
 fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOptions) -> Result<(), ExportError> {
     if link.inertial.is_none() && link.colliders.is_empty() {
         doc.empty("link", [("name", link.name.as_str())]);
@@ -119,7 +116,7 @@ fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOption
     doc.open("link", [("name", link.name.as_str())]);
     if let Some(inertial) = &link.inertial {
         let i = &inertial.inertia;
-        doc.open("inertial", no_attributes());
+        doc.open("inertial", NO_ATTRIBUTES);
         doc.empty("origin", [("xyz", numbers(xyz(&inertial.com))), ("rpy", numbers([0.0; 3]))]);
         doc.empty("mass", [("value", inertial.mass.to_string())]);
         let entries = [
@@ -136,7 +133,7 @@ fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOption
     for (collider, (tag, attributes)) in link.colliders.iter().zip(&shapes) {
         doc.open("collision", [("name", collider.label.as_str())]);
         write_origin(doc, &collider.link_from_shape);
-        doc.open("geometry", no_attributes());
+        doc.open("geometry", NO_ATTRIBUTES);
         doc.empty(tag, attributes.iter().map(|(k, v)| (*k, v.as_str())));
         doc.close("geometry");
         doc.close("collision");
@@ -231,11 +228,6 @@ fn write_origin(doc: &mut Doc, pose: &Isometry3<f64>) {
             ("rpy", numbers(rpy_of(&pose.rotation))),
         ],
     );
-}
-
-/// Space-separated numbers, each at full precision.
-fn numbers(values: impl IntoIterator<Item = f64>) -> String {
-    values.into_iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]

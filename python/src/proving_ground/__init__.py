@@ -38,8 +38,10 @@ __all__ = [
 ]
 
 
-class Design:
-    """A design (the JSON a design file holds), or a robot file (design JSON, URDF, MJCF)."""
+class _Input:
+    """A file, read when it is used, or the JSON object such a file holds."""
+
+    _default_name = "input"
 
     def __init__(self, source: Union[str, os.PathLike, Dict[str, Any]]):
         if isinstance(source, dict):
@@ -50,14 +52,32 @@ class Design:
             self.data = None
 
     @classmethod
-    def load(cls, path: Union[str, os.PathLike]) -> "Design":
-        """A design file, URDF or MJCF robot, read when it is used."""
+    def load(cls, path: Union[str, os.PathLike]):
+        """The file at ``path``, read when it is used."""
         return cls(path)
 
     @classmethod
-    def from_dict(cls, data: Dict[str, Any]) -> "Design":
-        """A design given as the JSON object of a design file."""
+    def from_dict(cls, data: Dict[str, Any]):
+        """The JSON object of such a file."""
         return cls(dict(data))
+
+    def _name(self) -> str:
+        return str(self.data.get("name", self._default_name)) if self.data is not None else str(self.path)
+
+    def _source(self) -> Any:
+        """What the native module takes: the path, or `(name.json, JSON text)`."""
+        if self.data is not None:
+            return (f"{self._name()}.json", json.dumps(self.data, allow_nan=False, indent=1))
+        return self.path
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._name()!r})"
+
+
+class Design(_Input):
+    """A design (the JSON a design file holds), or a robot file (design JSON, URDF, MJCF)."""
+
+    _default_name = "design"
 
     @classmethod
     def from_dh(
@@ -79,36 +99,11 @@ class Design:
             joints.append(joint)
         return cls({"name": name, "mode": mode, "joints": joints})
 
-    def _source(self) -> Any:
-        if self.data is not None:
-            name = str(self.data.get("name", "design"))
-            return (f"{name}.json", json.dumps(self.data, allow_nan=False, indent=1))
-        return self.path
 
-    def __repr__(self) -> str:
-        return f"Design({self.path!r})" if self.path is not None else f"Design({self.data.get('name', 'design')!r})"
-
-
-class Scenario:
+class Scenario(_Input):
     """A scenario (goals, obstacles, floor): a file, the JSON of one, or a generator's."""
 
-    def __init__(self, source: Union[str, os.PathLike, Dict[str, Any]]):
-        if isinstance(source, dict):
-            self.path: Optional[str] = None
-            self.data: Optional[Dict[str, Any]] = source
-        else:
-            self.path = os.fspath(source)
-            self.data = None
-
-    @classmethod
-    def load(cls, path: Union[str, os.PathLike]) -> "Scenario":
-        """A scenario file, read when it is used."""
-        return cls(path)
-
-    @classmethod
-    def from_dict(cls, data: Dict[str, Any]) -> "Scenario":
-        """A scenario given as the JSON object of a scenario file."""
-        return cls(dict(data))
+    _default_name = "scenario"
 
     @classmethod
     def generate(
@@ -122,36 +117,14 @@ class Scenario:
         (``count`` poses) or ``course``; ``seed`` defaults to the generator's."""
         return cls(json.loads(_native.generate(generator, seed, task, count)))
 
-    def _source(self) -> Any:
-        if self.data is not None:
-            name = str(self.data.get("name", "scenario"))
-            return (f"{name}.json", json.dumps(self.data, allow_nan=False, indent=1))
-        return self.path
 
-    def __repr__(self) -> str:
-        return f"Scenario({self.path!r})" if self.path is not None else f"Scenario({self.data.get('name', 'scenario')!r})"
-
-
-def _design(value: Any) -> Any:
-    if isinstance(value, Design):
+def _source(value: Any, kind: type) -> Any:
+    """A design or scenario (the object, a dict or a path) as the native module takes it."""
+    if isinstance(value, kind):
         return value._source()
-    if isinstance(value, dict):
-        return Design.from_dict(value)._source()
-    if isinstance(value, (str, os.PathLike)):
-        return os.fspath(value)
-    raise ProvingGroundError(f"a design is a Design, a dict or a path; got {type(value).__name__}")
-
-
-def _scenario(value: Any) -> Any:
-    if value is None:
-        return None
-    if isinstance(value, Scenario):
-        return value._source()
-    if isinstance(value, dict):
-        return Scenario.from_dict(value)._source()
-    if isinstance(value, (str, os.PathLike)):
-        return os.fspath(value)
-    raise ProvingGroundError(f"a scenario is a Scenario, a dict or a path; got {type(value).__name__}")
+    if isinstance(value, (dict, str, os.PathLike)):
+        return kind(value)._source()
+    raise ProvingGroundError(f"a {kind.__name__.lower()} is a {kind.__name__}, a dict or a path; got {type(value).__name__}")
 
 
 def validate(design: Any, scenario: Any = None, **options: Any) -> Dict[str, Any]:
@@ -165,7 +138,7 @@ def validate(design: Any, scenario: Any = None, **options: Any) -> Dict[str, Any
     ``mujoco_checks``, ``base``, ``tip``, ``package_path``).
     """
     options = {k: os.fspath(v) if isinstance(v, os.PathLike) else v for k, v in options.items()}
-    return json.loads(_native.validate(_design(design), _scenario(scenario), json.dumps(options)))
+    return json.loads(_native.validate(_source(design, Design), None if scenario is None else _source(scenario, Scenario), json.dumps(options)))
 
 
 def reach(
@@ -192,10 +165,8 @@ def reach(
         if array.ndim != 3 or array.shape[2] != 3:
             raise ProvingGroundError(f"DH batch: shape {array.shape}; expected (designs, joints, 3)")
         designs = [Design.from_dh(rows, name=f"design-{k}") for k, rows in enumerate(array)]
-    sources = [_design(d) for d in designs]
-    source = _scenario(scenario)
-    if source is None:
-        raise ProvingGroundError("reach needs a scenario")
+    sources = [_source(d, Design) for d in designs]
+    source = _source(scenario, Scenario)
     boxes = _native.sweep_search_boxes() if search_boxes is None else int(search_boxes)
     out = _native.reach(sources, source, int(ik_seeds), int(seed), boxes, threads)
     out["records"] = [json.loads(r) for r in out["records"]]
@@ -222,28 +193,13 @@ def loss_and_grad(
     """
     if isinstance(designs, (Design, dict, str, os.PathLike)):
         designs = [designs]
-    sources = [_design(d) for d in designs]
-    source = _scenario(scenario)
-    if source is None:
-        raise ProvingGroundError("loss_and_grad needs a scenario")
+    sources = [_source(d, Design) for d in designs]
+    source = _source(scenario, Scenario)
     q = np.ascontiguousarray(q, dtype=float)
-    if samples is None:
-        goals = _goal_count(scenario)
-        samples = [(d, g) for d in range(len(sources)) for g in range(goals)]
-    pairs = [(int(d), int(g)) for d, g in samples]
+    pairs = None if samples is None else [(int(d), int(g)) for d, g in samples]
     if q.ndim == 1:
         q = q.reshape(1, -1)
     return _native.loss_and_grad(sources, source, pairs, q)
-
-
-def _goal_count(scenario: Any) -> int:
-    if isinstance(scenario, Scenario) and scenario.data is not None:
-        return len(scenario.data["goals"])
-    if isinstance(scenario, dict):
-        return len(scenario["goals"])
-    path = scenario.path if isinstance(scenario, Scenario) else os.fspath(scenario)
-    with open(path, encoding="utf-8") as f:
-        return len(json.load(f)["goals"])
 
 
 def catalog(name: str = "modular6") -> List[str]:

@@ -21,7 +21,7 @@ def reach(
 def loss_and_grad(
     designs: Sequence[Source],
     scenario: Source,
-    samples: Sequence[Tuple[int, int]],
+    samples: Optional[Sequence[Tuple[int, int]]],
     q: np.ndarray,
 ) -> Dict[str, np.ndarray]: ...
 def modular6(index: int) -> str: ...
