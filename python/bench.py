@@ -4,7 +4,10 @@
 
 `reach` on DESIGNS free 6-joint designs (default 200) on cluttered task 03 against
 `validate-design sweep` of the same designs written as files (one process: its start-up and
-file writing included), median of 5 runs each; then the per-pair cost of `reach`.
+file writing included), median of 5 runs each; then the per-pair cost of `reach`, and the
+binding's overhead: `reach` against the same library call made from Rust
+(`cargo run --release --example reach_batch`, which times parsing the designs' JSON and
+`sweep::record::evaluate_batch`, median of 5).
 """
 
 import json
@@ -21,6 +24,7 @@ import proving_ground as pg
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 TASK = os.path.join(REPO, "scenarios", "cluttered", "task-03.json")
+ROUNDS = 5
 
 
 def designs(count):
@@ -60,10 +64,28 @@ def main():
             out = os.path.join(folder, "sweep")
             subprocess.run([binary, "sweep", *paths, "--scenarios", TASK, "--out", out, "--force", "--quiet", *thread_args], check=True)
 
-        python = median_time(lambda: pg.reach(batch, TASK, threads=threads))
+        env = dict(os.environ, **({"RAYON_NUM_THREADS": str(threads)} if threads else {}))
+
+        def library():
+            out = subprocess.run(
+                ["cargo", "run", "--release", "--quiet", "--example", "reach_batch", "--", TASK, *paths],
+                cwd=REPO, env=env, check=True, capture_output=True, text=True,
+            ).stdout
+            return float(out.split(": ")[1].split(" s ")[0])
+
+        # Interleaved rounds: this machine's speed drifts by tens of per cent over a minute, so
+        # each round compares the two measured side by side and the median of the rounds is kept.
+        rounds = []
+        for _ in range(ROUNDS):
+            python = median_time(lambda: pg.reach(batch, TASK, threads=threads))
+            rust = library()
+            rounds.append((python / rust, python, rust))
         command = median_time(cli)
+    overhead, python, rust = sorted(rounds)[ROUNDS // 2]
     print(f"{count} designs x 1 task, threads {threads or 'all'}: reach {python:.3f} s "
           f"({python / count * 1e3:.2f} ms per pair), validate-design sweep {command:.3f} s; ratio {python / command:.3f}")
+    print(f"binding overhead over the library called from Rust ({rust:.3f} s), median of {ROUNDS} interleaved rounds: "
+          f"{100 * (overhead - 1):+.1f} % (rounds: {', '.join(f'{100 * (r - 1):+.1f}' for r, _, _ in rounds)})")
 
 
 if __name__ == "__main__":

@@ -12,8 +12,8 @@ use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 create_exception!(
     _proving_ground,
@@ -81,8 +81,40 @@ fn validate(py: Python<'_>, design: Source, scenario: Option<Source>, options: &
     .map_err(error)
 }
 
-/// Designs evaluated between two checks for Ctrl-C.
-const REACH_CHUNK: usize = 64;
+/// How often the caller's thread looks for Ctrl-C while a batch runs.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// Runs `work` on a thread of its own with the GIL released while the caller's thread checks for
+/// Ctrl-C (Python handles signals on the main thread only); on Ctrl-C it sets the stop flag `work`
+/// reads, waits for the designs already started and raises `KeyboardInterrupt`.
+fn run_interruptibly<T: Send>(py: Python<'_>, work: impl FnOnce(&AtomicBool) -> Result<Option<T>, String> + Send) -> PyResult<T> {
+    let stop = AtomicBool::new(false);
+    let mut interrupt = None;
+    let done = py.detach(|| {
+        std::thread::scope(|scope| {
+            let worker = scope.spawn(|| work(&stop));
+            while !worker.is_finished() {
+                std::thread::sleep(SIGNAL_POLL);
+                if interrupt.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        interrupt = Some(e);
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                }
+            }
+            worker.join()
+        })
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    match done {
+        Ok(Ok(Some(value))) => Ok(value),
+        Ok(Ok(None)) => Err(error("the batch was stopped")),
+        Ok(Err(e)) => Err(error(e)),
+        Err(_) => Err(error("the batch's worker thread panicked; please report this with the inputs")),
+    }
+}
 
 /// The reach-only records `sweep` writes, one per design, in order, computed in parallel.
 #[pyfunction]
@@ -128,31 +160,18 @@ fn reach<'py>(
             ..Default::default()
         },
     };
-    // In chunks, so that Ctrl-C (checked between them) stops a long batch; each record depends
-    // on its design alone, so the chunks change no number.
     let pool = match threads {
         Some(n) => Some(rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().map_err(error)?),
         None => None,
     };
-    let mut records = Vec::with_capacity(robots.len());
-    let mut robots = robots.into_iter().peekable();
-    while robots.peek().is_some() {
-        let chunk: Vec<(String, Loaded)> = robots.by_ref().take(REACH_CHUNK).collect();
-        let evaluate = || {
-            chunk
-                .into_par_iter()
-                .map(|(id, loaded)| {
-                    proving_ground::sweep::record::evaluate(&id, &scenario_name, loaded, scenario.clone(), &mode).map_err(|e| e.to_string())
-                })
-                .collect::<Result<Vec<_>, String>>()
-        };
-        let done = py.detach(|| match &pool {
+    let records = run_interruptibly(py, |stop| {
+        let evaluate =
+            || proving_ground::sweep::record::evaluate_batch(robots, &scenario_name, &scenario, &mode, stop).map_err(|e| e.to_string());
+        match &pool {
             Some(pool) => pool.install(evaluate),
             None => evaluate(),
-        });
-        records.extend(done.map_err(error)?);
-        py.check_signals()?;
-    }
+        }
+    })?;
     let out = PyDict::new(py);
     let column = |f: &dyn Fn(&proving_ground::sweep::record::Record) -> f64| records.iter().map(f).collect::<Vec<f64>>();
     let count = |f: &dyn Fn(&proving_ground::sweep::record::Record) -> usize| records.iter().map(|r| f(r) as i64).collect::<Vec<i64>>();

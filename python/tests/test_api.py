@@ -4,8 +4,11 @@ count. Run from the repository root's `python/` (see `python/test.sh`)."""
 
 import json
 import os
+import signal
 import subprocess
 import tempfile
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -76,6 +79,25 @@ def test_reach_is_the_same_for_any_thread_count_and_takes_dh_arrays():
     assert one["records"] == two["records"]
     assert one["goals"].tolist() == [8, 8]
     assert np.allclose(one["hardware_cost"], np.abs(rows[:, :, :2]).sum(axis=(1, 2)))
+
+
+def test_ctrl_c_stops_a_long_batch():
+    # 600 designs take several seconds; a SIGINT 0.3 s in must raise KeyboardInterrupt long before.
+    rng = np.random.default_rng(1)
+    rows = np.zeros((600, 6, 3))
+    rows[:, :, 0] = rng.choice([0.0, 0.1, 0.2, 0.3], size=(600, 6))
+    rows[:, :, 1] = rng.choice([0.0, 0.2, 0.3, 0.4], size=(600, 6))
+    rows[:, :, 2] = rng.choice([0.0, np.pi / 2, -np.pi / 2], size=(600, 6))
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        pg.reach(rows, TASK)
+    stopped = time.perf_counter() - start
+    whole = pg.reach(rows[:60], TASK)
+    assert len(whole["records"]) == 60
+    # The designs already started finish: well under the whole batch, which is ten times this.
+    assert stopped < 1.0 + 0.5 * (time.perf_counter() - start - stopped), stopped
 
 
 def test_gradients_match_central_differences():

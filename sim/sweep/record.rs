@@ -126,3 +126,32 @@ pub fn evaluate(
         verdict,
     })
 }
+
+/// [`evaluate`] for each of `designs` (an id and the robot) on one scenario, in parallel on
+/// rayon's current pool; the records in the order of `designs`, each depending on its design
+/// alone, so the thread count changes no number. `stop` is read before each design: once it is
+/// set the designs not yet started are skipped and the batch gives `None` (a front end's
+/// Ctrl-C), without a barrier that would idle threads while the batch runs.
+///
+/// # Errors
+/// The first design's error in the order of `designs`, as [`evaluate`].
+pub fn evaluate_batch(
+    designs: Vec<(String, Loaded)>,
+    scenario_id: &str,
+    scenario: &Scenario,
+    mode: &SweepMode,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Option<Vec<Record>>, crate::error::Error> {
+    use rayon::prelude::*;
+    use std::sync::atomic::Ordering;
+    let records: Vec<Option<Record>> = designs
+        .into_par_iter()
+        .map(|(id, loaded)| {
+            if stop.load(Ordering::Relaxed) {
+                return Ok(None);
+            }
+            evaluate(&id, scenario_id, loaded, scenario.clone(), mode).map(Some)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(records.into_iter().collect())
+}
