@@ -31,10 +31,12 @@ pub enum Error {
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
     /// An input file type proving-ground does not read.
-    #[error("{path}: unknown input type; expected a design (.json) or a URDF (.urdf) file")]
+    #[error("{path}: {reason}")]
     UnknownInput {
         /// The file.
         path: PathBuf,
+        /// What the input is, and what would be read.
+        reason: String,
     },
     /// An output file could not be written.
     #[error("cannot write {path}: {source}")]

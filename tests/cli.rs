@@ -331,10 +331,33 @@ fn rejects_mimic_joint_on_the_chain() {
 }
 
 #[test]
+fn reads_a_urdf_saved_as_xml_as_the_urdf_it_is() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let copy = dir.path().join("arm.xml");
+    std::fs::copy(repo().join("tests/fixtures/mimic_on_chain.urdf"), &copy).expect("copy");
+    let output = validate_design().arg(&copy).arg("--describe").output().expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("read as a URDF: its root element is <robot>"), "{stdout}");
+}
+
+#[test]
 fn rejects_unknown_input_type_and_missing_file() {
-    let output = validate_design().arg("Cargo.toml").output().expect("runs");
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("Cargo.toml: unknown input type"));
+    // Each names what the input is and what would be read instead.
+    for (input, says) in [
+        (
+            "Cargo.toml",
+            "Cargo.toml: unknown extension `.toml`; expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file",
+        ),
+        ("designs", "designs: is a directory; expected a design"),
+        ("-", "-: a robot is not read from standard input: save it to a file"),
+        (".ci/run", ".ci/run: no extension to tell the input type"),
+    ] {
+        let output = validate_design().arg(input).output().expect("runs");
+        assert_eq!(output.status.code(), Some(2), "{input}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(says), "{input}: {stderr}");
+    }
     let output = validate_design().arg("designs/no-such-design.json").output().expect("runs");
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("cannot read design designs/no-such-design.json"));

@@ -240,7 +240,10 @@ impl<'a> Builder<'a> {
             Some(name) => (name.clone(), vec![]),
             None => self.default_tip(base, &children)?,
         };
-        let (tip, choices) = tip;
+        let (tip, mut choices) = tip;
+        if self.path.extension().is_some_and(|e| !e.eq_ignore_ascii_case("urdf")) {
+            choices.insert(0, "read as a URDF: its root element is <robot>".to_string());
+        }
 
         // Walk up from the tip to the base.
         let mut path_joints: Vec<&urdf_rs::Joint> = Vec::new();
@@ -765,6 +768,7 @@ impl<'a> Builder<'a> {
                     link: link.into(),
                     uri: filename.clone(),
                     searched: searched.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+                    hint: super::mesh::missing_mesh_hint(filename),
                 })?;
                 let mesh = load_mesh(filename, &file, scale).map_err(|message| ModelError::BadMesh {
                     path: self.path.to_path_buf(),

@@ -56,6 +56,21 @@ pub fn resolve_mesh_uri(uri: &str, description_dir: &Path, package_paths: &[Path
     candidates.iter().find(|path| path.exists()).cloned().ok_or(candidates)
 }
 
+/// What to do about a mesh `uri` that is not where the URDF says: the end of a
+/// [`super::ModelError::MissingMesh`] message.
+pub(super) fn missing_mesh_hint(uri: &str) -> String {
+    if let Some(rest) = uri.strip_prefix("package://") {
+        let package = rest.split_once('/').map_or(rest, |(package, _)| package);
+        format!(
+            "give the folder that holds the package `{package}` (for a ROS workspace, its `src`) with --package-path DIR, or list it in ROS_PACKAGE_PATH"
+        )
+    } else if Path::new(uri.strip_prefix("file://").unwrap_or(uri)).is_absolute() {
+        "the URDF names an absolute path that does not exist on this machine: edit its filename, or copy the mesh there".into()
+    } else {
+        "the path is relative to the URDF's folder: keep the meshes where they were beside the URDF, or edit its filename".into()
+    }
+}
+
 /// Package search roots from a `ROS_PACKAGE_PATH`-style variable (`:`-separated).
 pub fn package_paths_from_env(value: Option<&str>) -> Vec<PathBuf> {
     value

@@ -288,7 +288,7 @@ pub enum ModelError {
         message: String,
     },
     /// A mesh file could not be found.
-    #[error("{path}: link `{link}`: mesh `{uri}` not found; searched {searched}")]
+    #[error("{path}: link `{link}`: mesh `{uri}` not found; searched {searched}; {hint}")]
     MissingMesh {
         /// The URDF.
         path: PathBuf,
@@ -298,6 +298,8 @@ pub enum ModelError {
         uri: String,
         /// Every place searched.
         searched: String,
+        /// What to do about it.
+        hint: String,
     },
     /// A mesh file exists but could not be read.
     #[error("{path}: link `{link}`: cannot load mesh {mesh}: {message}")]

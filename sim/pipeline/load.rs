@@ -28,16 +28,66 @@ pub enum InputKind {
     Mjcf,
 }
 
-/// The kind of a robot description file.
+/// The robot files read, for messages.
+const ROBOT_FILES: &str = "expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file";
+
+/// The kind of a robot description file: from its extension, and for `.xml` and `.mjcf` from
+/// its root element (a URDF saved as `.xml` is read as the URDF it is).
 ///
 /// # Errors
-/// [`Error::UnknownInput`] for an extension other than `.json`, `.urdf`, `.xml` or `.mjcf`.
+/// [`Error::UnknownInput`] for standard input (`-`), a directory, a xacro file, an XML file
+/// whose root is neither `<mujoco>` nor `<robot>`, or another extension.
 pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+    let unknown = |reason: String| {
+        Err(Error::UnknownInput {
+            path: path.to_path_buf(),
+            reason,
+        })
+    };
+    if path == Path::new("-") {
+        return unknown(format!("a robot is not read from standard input: save it to a file; {ROBOT_FILES}"));
+    }
+    if path.is_dir() {
+        return unknown(format!(
+            "is a directory; {ROBOT_FILES} (for many designs: validate-design sweep DIR/*.json)"
+        ));
+    }
+    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match extension.as_deref() {
         Some("json") => Ok(InputKind::Design),
         Some("urdf") => Ok(InputKind::Urdf),
-        Some("xml" | "mjcf") => Ok(InputKind::Mjcf),
-        _ => Err(Error::UnknownInput { path: path.to_path_buf() }),
+        Some("xml" | "mjcf") => match root_element(path).as_deref() {
+            Some("robot") => Ok(InputKind::Urdf),
+            // Unreadable or not XML: MuJoCo's loader says what is wrong with it.
+            Some("mujoco") | None => Ok(InputKind::Mjcf),
+            Some(other) => unknown(format!(
+                "the root element is <{other}>, neither MJCF's <mujoco> nor URDF's <robot>; {ROBOT_FILES}"
+            )),
+        },
+        Some("xacro") => unknown(
+            "a xacro macro file, not a URDF: expand it first (`xacro FILE > robot.urdf`, ROS's xacro package) and give the URDF".into(),
+        ),
+        Some(other) => unknown(format!("unknown extension `.{other}`; {ROBOT_FILES}")),
+        None => unknown(format!("no extension to tell the input type; {ROBOT_FILES}")),
+    }
+}
+
+/// The name of an XML file's root element, from its first 64 KiB; `None` where the file cannot be
+/// read or the root is not found there.
+fn root_element(path: &Path) -> Option<String> {
+    use std::io::Read;
+    let mut head = Vec::new();
+    std::fs::File::open(path).ok()?.take(64 * 1024).read_to_end(&mut head).ok()?;
+    let mut reader = quick_xml::Reader::from_reader(head.as_slice());
+    let mut buffer = Vec::new();
+    loop {
+        match reader.read_event_into(&mut buffer).ok()? {
+            quick_xml::events::Event::Start(e) | quick_xml::events::Event::Empty(e) => {
+                return Some(String::from_utf8_lossy(e.local_name().as_ref()).into_owned());
+            }
+            quick_xml::events::Event::Eof => return None,
+            _ => buffer.clear(),
+        }
     }
 }
 
