@@ -57,7 +57,9 @@ def main():
             with open(path, "w", encoding="utf-8") as f:
                 json.dump(design.data, f)
             paths.append(path)
-        binary = os.path.join(REPO, "target", "release", "validate-design")
+        target = json.loads(subprocess.run(["cargo", "metadata", "--format-version", "1", "--no-deps", "--offline"],
+                                           cwd=REPO, capture_output=True, text=True, check=True).stdout)["target_directory"]
+        binary = os.path.join(target, "release", "validate-design")
         thread_args = ["--threads", str(threads)] if threads else []
 
         def cli():

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the Python package as a user does (`pip install ./python`, into a fresh virtual
 # environment) and runs its tests against the release binary the Rust tests built
-# (target/release/validate-design). Used by .ci/run; run from anywhere.
+# (cargo's target folder: target/, or CARGO_TARGET_DIR's). Used by .ci/run; run from anywhere.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 scratch="$(mktemp -d)"

@@ -107,6 +107,57 @@ fn an_interrupted_sweep_resumes_without_running_its_finished_pairs() {
 }
 
 #[test]
+fn a_killed_sweep_keeps_every_pair_it_finished() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let whole = dir.path().join("whole");
+    sweep(&whole, &["--threads", "1"]);
+    let killed = dir.path().join("killed");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("validate-design"))
+        .current_dir(repo())
+        .arg("sweep")
+        .args(DESIGNS)
+        .arg("--scenarios")
+        .args(SCENARIOS)
+        .arg("--out")
+        .arg(&killed)
+        .args(["--threads", "1", "--quiet"])
+        .spawn()
+        .expect("starts");
+    let partial = killed.join("pairs.partial.jsonl");
+    let logged = || std::fs::read_to_string(&partial).map_or(0, |t| t.lines().count());
+    let start = std::time::Instant::now();
+    while logged() < 3 && start.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().expect("killed");
+    child.wait().expect("reaped");
+    // Pairs are logged as they finish: three of ten are on disk while the sweep runs.
+    let text = read(&partial);
+    let kept = text.lines().count();
+    assert!((3..10).contains(&kept), "{kept} pairs logged when killed:\n{text}");
+    assert!(text.ends_with('\n'), "only whole lines: {text}");
+    let output = sweep(&killed, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains(&format!("10 pairs ({} computed now, {kept} resumed)", 10 - kept)),
+        "{stderr}"
+    );
+    assert_same_files(&whole, &killed);
+}
+
+#[test]
+fn quiet_without_a_folder_is_refused_rather_than_throwing_the_results_away() {
+    for command in [
+        &["sweep", "designs/ur5e.json", "--scenarios", SCENARIOS[0], "--quiet"][..],
+        &["ga", "--quiet"],
+    ] {
+        let output = validate_design().args(command).output().expect("runs");
+        assert_eq!(output.status.code(), Some(2), "{command:?}");
+        assert!(String::from_utf8_lossy(&output.stderr).contains("--out"), "{command:?}");
+    }
+}
+
+#[test]
 fn a_folder_holding_another_sweep_or_other_files_is_not_taken_over() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("out");

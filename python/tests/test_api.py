@@ -16,7 +16,16 @@ import pytest
 import proving_ground as pg
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-BINARY = os.path.join(REPO, "target", "release", "validate-design")
+
+
+def target_dir():
+    """Cargo's target folder (target/, or CARGO_TARGET_DIR's), as cargo says."""
+    done = subprocess.run(["cargo", "metadata", "--format-version", "1", "--no-deps", "--offline"],
+                          cwd=REPO, capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)["target_directory"]
+
+
+BINARY = os.path.join(target_dir(), "release", "validate-design")
 TASK = "scenarios/cluttered/task-03.json"
 
 

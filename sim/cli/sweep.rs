@@ -56,8 +56,8 @@ pub(crate) struct SweepArgs {
     /// Worker threads [default: the number of cores]; the results are the same for any number.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
     threads: Option<u64>,
-    /// Print nothing but errors.
-    #[arg(long)]
+    /// Print nothing but errors (with --out: the results go nowhere else).
+    #[arg(long, requires = "out")]
     quiet: bool,
 }
 
@@ -78,8 +78,8 @@ pub(crate) struct MergeArgs {
     /// Rows of each ranked table.
     #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     top: u64,
-    /// Print nothing but errors.
-    #[arg(long)]
+    /// Print nothing but errors (with --out: the results go nowhere else).
+    #[arg(long, requires = "out")]
     quiet: bool,
 }
 
@@ -133,8 +133,8 @@ pub(crate) struct GaArgs {
     /// Worker threads [default: the number of cores]; the run is the same for any number.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
     threads: Option<u64>,
-    /// Print nothing but errors.
-    #[arg(long)]
+    /// Print nothing but errors (with --out: the results go nowhere else).
+    #[arg(long, requires = "out")]
     quiet: bool,
 }
 

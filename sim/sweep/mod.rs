@@ -192,10 +192,6 @@ pub struct SweepResult {
     pub computed: usize,
 }
 
-/// Pairs computed between two writes of the partial log: enough to keep every core busy, few
-/// enough that an interruption loses seconds.
-const PAIRS_PER_BATCH: usize = 256;
-
 fn manifest(designs: &[DesignEntry], scenarios: &[ScenarioEntry], opts: &SweepOptions) -> store::Manifest {
     let (mode, engines) = match &opts.mode {
         SweepMode::ReachOnly { .. } => ("reach_only", None),
@@ -281,28 +277,31 @@ pub fn run(
         progress.advance();
     }
     let computed = todo.len();
-    for batch in todo.chunks(PAIRS_PER_BATCH) {
-        let records: Vec<Record> = batch
-            .par_iter()
-            .map(|&(d, s)| {
-                let (design, scenario) = (&designs[d], &scenarios[s]);
-                let record =
-                    record::evaluate(&design.id, &scenario.id, design.load(), scenario.scenario.clone(), &opts.mode).map_err(|e| {
-                        SweepError::Pair {
-                            design: design.id.clone(),
-                            scenario: scenario.id.clone(),
-                            source: Box::new(e),
-                        }
-                    });
-                progress.advance();
-                record
-            })
-            .collect::<Result<_, _>>()?;
-        if let Some(dir) = &opts.out {
-            store::append(dir, &records)?;
-        }
-        done.extend(records);
+    // Each record is logged as its pair finishes (no batches: a killed sweep loses only the
+    // pairs still running, and no core waits for a batch's slowest pair).
+    let log = opts.out.as_deref().map(store::Log::open).transpose()?.map(std::sync::Mutex::new);
+    let records: Vec<Record> = todo
+        .par_iter()
+        .map(|&(d, s)| {
+            let (design, scenario) = (&designs[d], &scenarios[s]);
+            let record = record::evaluate(&design.id, &scenario.id, design.load(), scenario.scenario.clone(), &opts.mode).map_err(|e| {
+                SweepError::Pair {
+                    design: design.id.clone(),
+                    scenario: scenario.id.clone(),
+                    source: Box::new(e),
+                }
+            })?;
+            if let Some(log) = &log {
+                log.lock().unwrap_or_else(std::sync::PoisonError::into_inner).write(&record)?;
+            }
+            progress.advance();
+            Ok(record)
+        })
+        .collect::<Result<_, SweepError>>()?;
+    if let Some(log) = log {
+        log.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).sync()?;
     }
+    done.extend(records);
     let records = canonical(done, designs, scenarios, &pairs);
     let reference_name = reference_name(opts.reference.as_ref());
     let distributions = table::distributions(&records, reference.as_deref());

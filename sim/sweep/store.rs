@@ -262,23 +262,68 @@ fn rewrite_log(path: &Path, text: &str) -> Result<(), SweepError> {
     std::fs::rename(&temporary, path).map_err(error)
 }
 
-/// Appends finished records to the partial log, flushed: an interrupted sweep keeps them.
-///
-/// # Errors
-/// [`SweepError::Write`].
-pub fn append(dir: &Path, records: &[Record]) -> Result<(), SweepError> {
-    let path = dir.join(PARTIAL);
-    let error = |e: std::io::Error| SweepError::Write {
-        path: path.clone(),
-        message: e.to_string(),
-    };
-    let mut file = std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(error)?;
-    let mut text = String::new();
-    for record in records {
-        text.push_str(&record_line(record)?);
+/// How often the partial log is synced to disk while records are written as they finish.
+const SYNC_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// The partial log of a running sweep: each record is one `write` of its whole line as it
+/// finishes, so a killed sweep loses only the pairs still running; synced to disk at most once a
+/// second (and when the log is closed) so that a quick sweep does not wait on the disk per pair.
+pub struct Log {
+    path: PathBuf,
+    file: std::fs::File,
+    synced: std::time::Instant,
+}
+
+impl Log {
+    /// Opens `dir`'s partial log for appending.
+    ///
+    /// # Errors
+    /// [`SweepError::Write`].
+    pub fn open(dir: &Path) -> Result<Self, SweepError> {
+        let path = dir.join(PARTIAL);
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(|e| SweepError::Write {
+                path: path.clone(),
+                message: e.to_string(),
+            })?;
+        Ok(Self {
+            path,
+            file,
+            synced: std::time::Instant::now(),
+        })
     }
-    file.write_all(text.as_bytes()).map_err(error)?;
-    file.sync_data().map_err(error)
+
+    /// Appends `record`'s line.
+    ///
+    /// # Errors
+    /// [`SweepError::Write`].
+    pub fn write(&mut self, record: &Record) -> Result<(), SweepError> {
+        self.file.write_all(record_line(record)?.as_bytes()).map_err(|e| self.error(&e))?;
+        if self.synced.elapsed() >= SYNC_EVERY {
+            self.sync()?;
+        }
+        Ok(())
+    }
+
+    /// Syncs what was written to disk.
+    ///
+    /// # Errors
+    /// [`SweepError::Write`].
+    pub fn sync(&mut self) -> Result<(), SweepError> {
+        self.file.sync_data().map_err(|e| self.error(&e))?;
+        self.synced = std::time::Instant::now();
+        Ok(())
+    }
+
+    fn error(&self, e: &std::io::Error) -> SweepError {
+        SweepError::Write {
+            path: self.path.clone(),
+            message: e.to_string(),
+        }
+    }
 }
 
 fn record_line(record: &Record) -> Result<String, SweepError> {
@@ -478,13 +523,16 @@ mod tests {
     fn a_resumed_partial_log_loses_its_cut_line_so_the_next_batch_appends_after_whole_lines() {
         let dir = tempfile::tempdir().expect("temp dir");
         assert!(open(dir.path(), &manifest(), false).expect("new folder").is_empty());
-        append(dir.path(), &[record("a"), record("b")]).expect("append");
+        let mut log = Log::open(dir.path()).expect("log");
+        log.write(&record("a")).expect("append");
+        log.write(&record("b")).expect("append");
+        drop(log);
         let partial = dir.path().join(PARTIAL);
         let mut text = std::fs::read_to_string(&partial).expect("read");
         text.push_str("{\"design\":\"c\",\"sce");
         std::fs::write(&partial, &text).expect("write");
         assert_eq!(open(dir.path(), &manifest(), false).expect("resumed").len(), 2);
-        append(dir.path(), &[record("c")]).expect("append");
+        Log::open(dir.path()).expect("log").write(&record("c")).expect("append");
         assert_eq!(open(dir.path(), &manifest(), false).expect("resumed again").len(), 3);
     }
 
