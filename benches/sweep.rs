@@ -26,6 +26,7 @@ fn main() {
         shard: None,
         reference: None,
         top: 5,
+        ranking: Default::default(),
     };
     let start = Instant::now();
     let result = run(&designs, &scenarios, &opts, &Silent).expect("the brute force runs");

@@ -53,6 +53,10 @@ pub(crate) struct SweepArgs {
     /// Rows of each ranked table.
     #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     top: u64,
+    /// Order of the per-task tables: `loss` (the paper's: task loss alone) or `solved-first`
+    /// (designs that solve the task, then goals solved, then task loss).
+    #[arg(long, value_name = "RANKING", default_value = "loss")]
+    rank: sweep::table::Ranking,
     /// Worker threads [default: the number of cores]; the results are the same for any number.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=256))]
     threads: Option<u64>,
@@ -78,6 +82,10 @@ pub(crate) struct MergeArgs {
     /// Rows of each ranked table.
     #[arg(long, value_name = "N", default_value_t = sweep::table::DEFAULT_TOP as u64, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     top: u64,
+    /// Order of the per-task tables: `loss` (the paper's: task loss alone) or `solved-first`
+    /// (designs that solve the task, then goals solved, then task loss).
+    #[arg(long, value_name = "RANKING", default_value = "loss")]
+    rank: sweep::table::Ranking,
     /// Print nothing but errors (with --out: the results go nowhere else).
     #[arg(long, requires = "out")]
     quiet: bool,
@@ -174,6 +182,7 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
         shard,
         reference: reference(args.reference.as_ref())?,
         top: usize::try_from(args.top).unwrap_or(usize::MAX),
+        ranking: args.rank,
     };
     let progress = super::Bar::new("pairs", args.quiet, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
@@ -200,6 +209,7 @@ pub(crate) fn merge_command(args: &MergeArgs) -> Result<ExitCode, Failure> {
         args.force,
         reference(args.reference.as_ref())?,
         usize::try_from(args.top).unwrap_or(usize::MAX),
+        args.rank,
     )?;
     if !args.quiet {
         print!("{}", result.table);

@@ -179,6 +179,8 @@ pub struct SweepOptions {
     pub reference: Option<Reference>,
     /// Rows per ranked table.
     pub top: usize,
+    /// How the per-task tables order designs (the tables only: records are the same).
+    pub ranking: table::Ranking,
 }
 
 /// A finished sweep.
@@ -305,7 +307,7 @@ pub fn run(
     let records = canonical(done, designs, scenarios, &pairs);
     let reference_name = reference_name(opts.reference.as_ref());
     let distributions = table::distributions(&records, reference.as_deref());
-    let text = table::text(&records, &distributions, &reference_name, opts.top);
+    let text = table::text(&records, &distributions, &reference_name, opts.top, opts.ranking);
     if let Some(dir) = &opts.out {
         store::finish(dir, &records, &table::csv(&records, &distributions), &text)?;
     }
@@ -431,7 +433,14 @@ pub fn reference_records(reference: &Reference, mode: &SweepMode, scenarios: &[S
 /// [`SweepError::Merge`] for folders that are not the finished shards of one sweep, or a
 /// reference other than the shards'; [`SweepError::Folder`] for an `out` that holds something
 /// else (unless `force`) or is one of the shards.
-pub fn merge(dirs: &[PathBuf], out: &Path, force: bool, reference: Option<Reference>, top: usize) -> Result<SweepResult, SweepError> {
+pub fn merge(
+    dirs: &[PathBuf],
+    out: &Path,
+    force: bool,
+    reference: Option<Reference>,
+    top: usize,
+    ranking: table::Ranking,
+) -> Result<SweepResult, SweepError> {
     let (manifest, records) = store::read_shards(dirs)?;
     let merge_error = |message: String| SweepError::Merge {
         dir: out.to_path_buf(),
@@ -478,7 +487,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool, reference: Option<Refere
     });
     store::open(out, &manifest, force)?;
     let distributions = table::distributions(&records, reference_records.as_deref());
-    let text = table::text(&records, &distributions, &reference_name(reference.as_ref()), top);
+    let text = table::text(&records, &distributions, &reference_name(reference.as_ref()), top, ranking);
     store::finish(out, &records, &table::csv(&records, &distributions), &text)?;
     Ok(SweepResult {
         records,

@@ -25,6 +25,7 @@ pub fn table_1_options(seed: u64, out: Option<PathBuf>, force: bool) -> SweepOpt
         shard: None,
         reference: None,
         top: table::DEFAULT_TOP,
+        ranking: table::Ranking::Loss,
     }
 }
 

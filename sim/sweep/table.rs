@@ -213,9 +213,51 @@ pub(super) fn percent(part: usize, whole: usize) -> f64 {
     }
 }
 
-/// The ranked tables: per scenario (by task loss, best first) and over all scenarios (tasks
-/// solved, then goals solved, then mean score), `top` rows each.
-pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, reference: &str, top: usize) -> String {
+/// How the per-task tables order designs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Ranking {
+    /// The paper's: by task loss alone (a design that misses a goal can rank above one that
+    /// solves the task when its other goals score better).
+    #[default]
+    Loss,
+    /// Designs that solve the task first, then by goals solved, then by task loss.
+    SolvedFirst,
+}
+
+impl Ranking {
+    /// The name `--rank` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ranking::Loss => "loss",
+            Ranking::SolvedFirst => "solved-first",
+        }
+    }
+
+    fn words(self) -> &'static str {
+        match self {
+            Ranking::Loss => "by task loss",
+            Ranking::SolvedFirst => "solving designs first, then by goals solved, then by task loss",
+        }
+    }
+}
+
+impl std::str::FromStr for Ranking {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        [Ranking::Loss, Ranking::SolvedFirst]
+            .into_iter()
+            .find(|r| r.name() == text)
+            .ok_or_else(|| format!("`{text}` is not a ranking; expected `loss` or `solved-first`"))
+    }
+}
+
+/// Width of the design column: the longest name shown, at least [`NAME_WIDTH`].
+const NAME_WIDTH: usize = 32;
+
+/// The ranked tables: per scenario (by `ranking`) and over all scenarios (tasks solved, then
+/// goals solved, then mean score), `top` rows each. Full sweeps show each pair's verdict.
+pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, reference: &str, top: usize, ranking: Ranking) -> String {
     let mut out = String::new();
     let designs = records
         .iter()
@@ -233,29 +275,44 @@ pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, 
             scenarios.push(&record.scenario);
         }
     }
+    let width = |names: &mut dyn Iterator<Item = &str>| names.map(|n| n.chars().count()).max().unwrap_or(0).max(NAME_WIDTH);
     for scenario in &scenarios {
         let mut rows: Vec<&Record> = records.iter().filter(|r| r.scenario == *scenario).collect();
+        let loss = |r: &Record| r.task_loss.unwrap_or(f64::INFINITY);
         rows.sort_by(|a, b| {
-            let loss = |r: &Record| r.task_loss.unwrap_or(f64::INFINITY);
-            loss(a).total_cmp(&loss(b)).then_with(|| a.design.cmp(&b.design))
+            let first = match ranking {
+                Ranking::Loss => std::cmp::Ordering::Equal,
+                Ranking::SolvedFirst => b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved)),
+            };
+            first.then(loss(a).total_cmp(&loss(b))).then_with(|| a.design.cmp(&b.design))
         });
+        rows.truncate(top);
         let distribution = distributions.get(*scenario);
-        let solved = rows.iter().filter(|r| r.task_solved).count();
+        let all = records.iter().filter(|r| r.scenario == *scenario);
+        let (count, solved) = all.fold((0, 0), |(n, s), r| (n + 1, s + usize::from(r.task_solved)));
+        let verdicts = rows.iter().any(|r| r.verdict.is_some());
+        let name = width(&mut rows.iter().map(|r| r.design.as_str()));
         let _ = writeln!(
             out,
-            "\ntask {scenario}: {} designs, {solved} solve it; best {} by task loss",
+            "\ntask {scenario}: {count} designs, {solved} solve it; best {} {}",
             rows.len(),
-            top.min(rows.len())
+            ranking.words()
         );
+        let verdict_head = if verdicts { format!(" {:<9}", "verdict") } else { String::new() };
         let _ = writeln!(
             out,
-            "{:>5}  {:<32} {:>6} {:>8} {:>9} {:>9} {:>8} {:>11} {:>7} {:>6}",
+            "{:>5}  {:<name$} {:>6}{verdict_head} {:>8} {:>9} {:>9} {:>8} {:>11} {:>7} {:>6}",
             "rank", "design", "solved", "goals", "pos mm", "ori deg", "cost m", "task loss", "score", "pct"
         );
-        for (rank, r) in rows.iter().take(top).enumerate() {
+        for (rank, r) in rows.iter().enumerate() {
+            let verdict = if verdicts {
+                format!(" {:<9}", r.verdict.as_deref().unwrap_or("-"))
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 out,
-                "{:>5}  {:<32} {:>6} {:>8} {:>9} {:>9} {:>8} {:>11} {:>7} {:>6}",
+                "{:>5}  {:<name$} {:>6}{verdict} {:>8} {:>9} {:>9} {:>8} {:>11} {:>7} {:>6}",
                 rank + 1,
                 r.design,
                 if r.task_solved { "yes" } else { "no" },
@@ -281,21 +338,23 @@ pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, 
             )
             .then_with(|| a.design.cmp(&b.design))
     });
+    rows.truncate(top);
+    let name = width(&mut rows.iter().map(|o| o.design.as_str()));
     let _ = writeln!(
         out,
         "\noverall: {} tasks; best {} by tasks solved, then goals solved, then mean score",
         scenarios.len(),
-        top.min(rows.len())
+        rows.len()
     );
     let _ = writeln!(
         out,
-        "{:>5}  {:<32} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
+        "{:>5}  {:<name$} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
         "rank", "design", "tasks solved", "goals solved", "proven", "undecided", "pos mm", "ori deg", "cost m", "score", "pct"
     );
-    for (rank, o) in rows.iter().take(top).enumerate() {
+    for (rank, o) in rows.iter().enumerate() {
         let _ = writeln!(
             out,
-            "{:>5}  {:<32} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
+            "{:>5}  {:<name$} {:>13} {:>13} {:>8} {:>9} {:>9} {:>9} {:>8} {:>7} {:>6}",
             rank + 1,
             o.design,
             format!("{}/{} {:.0}%", o.tasks_solved, o.tasks, percent(o.tasks_solved, o.tasks)),
@@ -351,5 +410,37 @@ mod tests {
         assert_eq!(d.percentile(Some(1.0)), Some(100.0 * 3.5 / 4.0));
         assert_eq!(d.percentile(Some(3.0)), Some(100.0 * 1.5 / 4.0));
         assert_eq!(d.percentile(None), Some(100.0 * 0.5 / 4.0));
+    }
+
+    #[test]
+    fn solved_first_puts_a_solving_design_above_a_better_loss_and_columns_fit_long_names() {
+        let long = "designs/a-design-whose-file-name-is-far-longer-than-the-column.json";
+        let mut missing = record(long, Some(1.0));
+        (missing.task_solved, missing.goals_solved, missing.verdict) = (false, 7, Some("FAIL".into()));
+        let mut solving = record("b", Some(2.0));
+        solving.verdict = Some("PASS".into());
+        let records = [missing, solving];
+        let distributions = distributions(&records, None);
+        let rank = |ranking| {
+            let table = text(&records, &distributions, "x", 5, ranking);
+            let rows: Vec<String> = table
+                .lines()
+                .filter(|l| l.starts_with("    1 ") || l.starts_with("    2 "))
+                .map(String::from)
+                .collect();
+            (table, rows)
+        };
+        let (table, rows) = rank(Ranking::Loss);
+        assert!(rows[0].contains(long) && rows[1].contains(" b "), "{table}");
+        assert!(table.contains("verdict"), "{table}");
+        assert!(rows[0].contains(" FAIL ") && rows[1].contains(" PASS "), "{table}");
+        // Every row of the per-task table has its columns at the same places.
+        let ends: Vec<usize> = table.lines().skip(3).take(3).map(|l| l.len()).collect();
+        assert!(ends.windows(2).all(|w| w[0] == w[1]), "{table}");
+        let (table, rows) = rank(Ranking::SolvedFirst);
+        assert!(rows[0].contains(" b ") && rows[1].contains(long), "{table}");
+        assert!(table.contains("solving designs first"), "{table}");
+        assert_eq!("solved-first".parse::<Ranking>(), Ok(Ranking::SolvedFirst));
+        assert!("best".parse::<Ranking>().is_err());
     }
 }
