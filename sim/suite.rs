@@ -62,8 +62,14 @@ pub enum Outcome {
     Same,
     /// There was no snapshot (written as `.snap.new`, or `.snap` with accept).
     New,
-    /// The snapshot differs; the unified diff.
-    Changed(String),
+    /// The snapshot differs.
+    Changed {
+        /// The unified diff.
+        diff: String,
+        /// The lines of the report's summary that changed, `key: old -> new` (the verdict first
+        /// when it changed); empty when only the details moved.
+        summary: Vec<String>,
+    },
 }
 
 /// One snapshot of the suite.
@@ -277,6 +283,29 @@ fn body_of(text: &str) -> &str {
         .unwrap_or(text)
 }
 
+/// The `key: value` lines of a snapshot's `summary:` block, quotes removed.
+fn summary_lines(body: &str) -> Vec<(&str, &str)> {
+    body.lines()
+        .skip_while(|line| *line != "summary:")
+        .skip(1)
+        .take_while(|line| line.starts_with("  "))
+        .filter_map(|line| line.trim().split_once(": "))
+        .map(|(key, value)| (key, value.trim_matches('"')))
+        .collect()
+}
+
+/// `key: old -> new` for each summary line that differs between two snapshot bodies.
+fn summary_changes(old: &str, new: &str) -> Vec<String> {
+    let before = summary_lines(old);
+    summary_lines(new)
+        .into_iter()
+        .filter_map(|(key, value)| {
+            let was = before.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
+            (was != Some(value)).then(|| format!("{key}: {} -> {value}", was.unwrap_or("(none)")))
+        })
+        .collect()
+}
+
 /// Compares with the snapshot at `file`; writes `.snap.new` (insta's pending file, for `cargo
 /// insta review`) when it differs, or the `.snap` itself with `accept`.
 fn record(file: &Path, contents: &str, body: &str, accept: bool) -> Result<Outcome, Error> {
@@ -284,13 +313,14 @@ fn record(file: &Path, contents: &str, body: &str, accept: bool) -> Result<Outco
     let write = |path: &Path| pipeline::write_output(path, contents);
     let outcome = match std::fs::read_to_string(file) {
         Ok(old) if body_of(&old) == body => Outcome::Same,
-        Ok(old) => Outcome::Changed(
-            similar::TextDiff::from_lines(body_of(&old), body)
+        Ok(old) => Outcome::Changed {
+            diff: similar::TextDiff::from_lines(body_of(&old), body)
                 .unified_diff()
                 .context_radius(2)
                 .header(&file.display().to_string(), "this run")
                 .to_string(),
-        ),
+            summary: summary_changes(body_of(&old), body),
+        },
         Err(_) => Outcome::New,
     };
     match (&outcome, accept) {
@@ -307,6 +337,20 @@ fn record(file: &Path, contents: &str, body: &str, accept: bool) -> Result<Outco
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_changed_summary_says_old_and_new() {
+        let old = "summary:\n  verdict: \"FAIL: 3 goals unreachable (proven)\"\n  goals: \"8 (reached 5, unreachable 3)\"\n  engines: \"x\"\nreport:\n  a: 1\n";
+        let new = "summary:\n  verdict: \"PASS\"\n  goals: \"8 (reached 8)\"\n  engines: \"x\"\nreport:\n  a: 2\n";
+        assert_eq!(
+            summary_changes(old, new),
+            [
+                "verdict: FAIL: 3 goals unreachable (proven) -> PASS",
+                "goals: 8 (reached 5, unreachable 3) -> 8 (reached 8)"
+            ]
+        );
+        assert!(summary_changes(old, old).is_empty());
+    }
 
     #[test]
     fn body_follows_the_header() {

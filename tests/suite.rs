@@ -76,6 +76,16 @@ fn a_suite_records_compares_and_reports_differences_and_orphans() {
         "{text}"
     );
     assert_eq!(std::fs::read_to_string(golden.join("ur5e__task-00.snap")).expect("read"), recorded);
+    // --summary: the status lines with the verdict old -> new (or unchanged), no diff.
+    let (code, summary) = snapshot(dir.path(), &["--summary"]);
+    assert_eq!(code, Some(1), "{summary}");
+    let changed: Vec<&str> = summary.lines().filter(|l| l.starts_with("CHANGED")).collect();
+    assert!(!changed.is_empty(), "{summary}");
+    assert!(
+        changed.iter().all(|l| l.contains(" -> ") || l.contains("(verdict unchanged)")),
+        "{summary}"
+    );
+    assert!(!summary.contains("seed: 3"), "{summary}");
 
     // A snapshot no run writes is an orphan; --accept removes it.
     write_suite(dir.path(), 0);

@@ -12,9 +12,13 @@ pub(crate) struct SnapshotArgs {
     /// Record this run's snapshots (and delete orphans) instead of failing on a difference.
     #[arg(long)]
     accept: bool,
+    /// Print each snapshot's status and what changed in its summary, without the diffs (for a
+    /// pull-request comment).
+    #[arg(long)]
+    summary: bool,
 }
 
-/// `validate-design snapshot --suite FILE [--accept]`.
+/// `validate-design snapshot --suite FILE [--accept] [--summary]`.
 pub(crate) fn command(args: &SnapshotArgs) -> Result<ExitCode, Failure> {
     use proving_ground::suite::{self, Outcome};
     let result = suite::run(&args.suite, args.accept)?;
@@ -22,13 +26,26 @@ pub(crate) fn command(args: &SnapshotArgs) -> Result<ExitCode, Failure> {
         let status = match (&entry.outcome, result.accepted) {
             (Outcome::Same, _) => "same",
             (Outcome::New, true) => "written",
-            (Outcome::Changed(_), true) => "updated",
+            (Outcome::Changed { .. }, true) => "updated",
             (Outcome::New, false) => "NEW",
-            (Outcome::Changed(_), false) => "CHANGED",
+            (Outcome::Changed { .. }, false) => "CHANGED",
         };
-        println!("{status:<8} {}  {}", entry.name, entry.verdict);
-        if let (Outcome::Changed(diff), false) = (&entry.outcome, result.accepted) {
-            print!("{diff}");
+        match &entry.outcome {
+            Outcome::Changed { diff, summary } => {
+                // The verdict's change on the status line; the other summary lines below it.
+                let (head, rest) = match summary.split_first() {
+                    Some((first, rest)) if first.starts_with("verdict: ") => (first.clone(), rest),
+                    _ => (format!("{} (verdict unchanged)", entry.verdict), &summary[..]),
+                };
+                println!("{status:<8} {}  {head}", entry.name);
+                for line in rest {
+                    println!("{:<8} {line}", "");
+                }
+                if !result.accepted && !args.summary {
+                    print!("{diff}");
+                }
+            }
+            _ => println!("{status:<8} {}  {}", entry.name, entry.verdict),
         }
     }
     for orphan in &result.orphans {
