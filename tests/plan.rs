@@ -413,6 +413,25 @@ fn a_default_home_in_collision_is_replaced_by_the_nearest_free_configuration_but
     assert_eq!(trajectory.reached(), 0);
 }
 
+#[test]
+fn a_default_home_clear_of_contact_but_inside_the_margin_is_called_that_not_in_collision() {
+    let model = wand_with_tip();
+    // The ball's surface 7 cm from the rod's axis at zero: clear, but not by a 10 cm margin.
+    let mut scenario = with_obstacles(vec![ball("block", Vector3::new(0.5, 0.12, 0.0), 0.05)]);
+    scenario.goals = vec![position_goal("left", 0.0, -1.0)];
+    let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
+    let solutions = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
+    let mut opts = TrajectoryOptions::default();
+    opts.certify.threshold_m = 0.1;
+    let trajectory = plan(&model, &scenario, &world, &solutions, &opts).expect("plans");
+    let reason = trajectory.home_replaced.as_deref().expect("replaced");
+    assert!(
+        reason.contains("keeps less than the margin (margin 100.0 mm) (rod and block at +"),
+        "{reason}"
+    );
+    assert!(!reason.contains("in collision ("), "{reason}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Planner: detours, outcomes, determinism
 

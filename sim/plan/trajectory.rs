@@ -407,12 +407,23 @@ pub fn plan_counted(
             .as_ref()
             .is_some_and(|c| c.distance_m <= threshold + super::certify::TOUCH_TOLERANCE_M)
     {
-        let colliding = home_clearance
-            .as_ref()
-            .map(|c| format!("{} and {} at {:.1} mm", c.a, c.b, c.distance_m * 1e3))
-            .unwrap_or_default();
+        // Under a margin a home can be clear of contact yet too close: say which it is.
+        let (state, pair) = home_clearance.as_ref().map_or(("is in collision", String::new()), |c| {
+            let touching = c.distance_m <= super::certify::TOUCH_TOLERANCE_M;
+            let state = if touching {
+                "is in collision"
+            } else {
+                "keeps less than the margin"
+            };
+            (state, format!(" ({} and {} at {:+.1} mm)", c.a, c.b, c.distance_m * 1e3))
+        });
         let earlier = home_replaced.take().map(|reason| format!("{reason}; ")).unwrap_or_default();
-        let default = format!("{earlier}the default home {home:?} is in collision ({colliding})");
+        let margin = if threshold > 0.0 {
+            format!(" (margin {:.1} mm)", threshold * 1e3)
+        } else {
+            String::new()
+        };
+        let default = format!("{earlier}the default home {home:?} {state}{margin}{pair}");
         if let Some((free, clearance)) = nearest_free(&mut checker, model, &home, threshold, opts.ik.seed) {
             home_replaced = Some(format!(
                 "{default}; started from the nearest collision-free of {HOME_SAMPLES} seeded configurations"
