@@ -142,6 +142,21 @@ fn gripper_joints_by_name_by_branching_and_by_mimic() {
     ));
     assert_eq!(load(&third).dof(), 3);
 
+    // A turning wrist whose link is called `gripper` (its joint's own name says nothing) stays
+    // on the arm, and the choice says it was considered.
+    let wrist = arm_with(&format!(
+        r#"<link name="gripper">{inertial}</link>
+  <joint name="wrist_3" type="revolute"><parent link="link2"/><child link="gripper"/><axis xyz="0 1 0"/>{limit}</joint>"#
+    ));
+    let model = load(&wrist);
+    assert_eq!(model.dof(), 3);
+    let (tip, choices) = tip_and_choices(&model.source);
+    assert_eq!(tip, "gripper");
+    assert!(
+        choices.iter().any(|c| c.contains("joint `wrist_3` (line 8) (link `gripper`) is named like a gripper's (`gripper`) but kept as an arm joint")),
+        "{choices:?}"
+    );
+
     // A fixed tool frame below a gripper joint is not the arm's tool frame; a flange fixed
     // below the arm is.
     let flange = arm_with(&format!(

@@ -1,7 +1,9 @@
 //! Which moving parts of a robot tree are the arm, one rule for URDF and MJCF input: the
-//! gripper joints (they end the tree, and a coupling the file declares, a gripper word in a
-//! joint's or its part's name, or a sibling that also ends the tree marks them), and the arm as
-//! the longest chain of the other moving parts. The loaders describe their trees as [`Mover`]s
+//! gripper joints (they end the tree, and a coupling the file declares, a gripper word in the
+//! joint's own name, a sibling that also ends the tree, or a slide whose part is named with a
+//! gripper word marks them), and the arm as the longest chain of the other moving parts. A
+//! part's name alone never takes a turning joint off the arm: a wrist whose link is called
+//! `gripper` stays a wrist ([`named_but_kept`]). The loaders describe their trees as [`Mover`]s
 //! and say the results in their own terms.
 
 use super::names;
@@ -20,6 +22,8 @@ pub(super) struct Mover {
     /// the mover at its other end (`None`: it marks this mover whatever is there) and the
     /// sentence that says it.
     pub(super) couplings: Vec<(Option<usize>, String)>,
+    /// Every joint slides (URDF `prismatic`, MJCF `slide`): a finger's motion.
+    pub(super) slides: bool,
 }
 
 /// Why a mover is a gripper's, first reason that holds in this order.
@@ -27,9 +31,9 @@ pub(super) struct Mover {
 pub(super) enum GripperReason {
     /// Couplings with a mover not below it (or none), their sentences joined.
     Coupled(String),
-    /// A joint's name has this gripper word.
+    /// A joint's own name has this gripper word (`jointGripper`: the joint says what it is).
     JointWord(&'static str),
-    /// Its link or body is named with this gripper word.
+    /// It slides and its link or body is named with this gripper word.
     PartWord(&'static str),
     /// It and `other` hang from the mover `above` and nothing moves below either (two fingers
     /// on a hand); never from the base's body (two arms on one torso are arms).
@@ -100,7 +104,7 @@ pub(super) fn grippers(movers: &[Mover]) -> BTreeMap<usize, GripperReason> {
                 Some(GripperReason::Coupled(coupled.join("; ")))
             } else if let Some(word) = mover.joints.iter().find_map(|j| names::gripper_word(j)) {
                 Some(GripperReason::JointWord(word))
-            } else if let Some(word) = names::gripper_word(&mover.part) {
+            } else if let Some(word) = names::gripper_word(&mover.part).filter(|_| mover.slides) {
                 Some(GripperReason::PartWord(word))
             } else {
                 sibling
@@ -114,6 +118,25 @@ pub(super) fn grippers(movers: &[Mover]) -> BTreeMap<usize, GripperReason> {
         grippers.clear();
     }
     grippers
+}
+
+/// The movers that end the tree and whose part is named with a gripper word, yet are kept on the
+/// arm because nothing else marks them (they turn, their joints' names have no gripper word, no
+/// coupling, no finger beside them), with the word: what a loader says, so that a user whose
+/// gripper joint this really is can end the arm above it.
+pub(super) fn named_but_kept(movers: &[Mover], grippers: &BTreeMap<usize, GripperReason>) -> Vec<(usize, &'static str)> {
+    (0..movers.len())
+        .filter(|m| !grippers.contains_key(m))
+        .filter(|&m| {
+            (0..movers.len())
+                .filter(|&below| movers[below].above == Some(m))
+                .all(|below| grippers.contains_key(&below))
+        })
+        .filter_map(|m| {
+            let mover = &movers[m];
+            names::gripper_word(&mover.part).map(|word| (m, word))
+        })
+        .collect()
 }
 
 /// Why no single arm end was found.
@@ -157,12 +180,14 @@ mod tests {
             joints: vec![joint.into()],
             part: part.into(),
             couplings: vec![],
+            slides: false,
         }
     }
 
     #[test]
     fn fingers_end_the_tree_and_the_arm_is_the_longest_other_chain() {
-        // base - j1 - j2 - j3 - {a, b} (two plain fingers), and j1 - c (a link named `claw`).
+        // base - j1 - j2 - j3 - {a, b} (two plain fingers), and j1 - c (a sliding link named
+        // `claw`).
         let mut movers = vec![
             mover(None, "j1", "l1"),
             mover(Some(0), "j2", "l2"),
@@ -171,6 +196,7 @@ mod tests {
             mover(Some(2), "b", "pb"),
             mover(Some(0), "c", "claw_link"),
         ];
+        movers[5].slides = true;
         let found = grippers(&movers);
         assert_eq!(found.get(&3), Some(&GripperReason::Sibling { other: 4, above: 2 }));
         assert_eq!(found.get(&4), Some(&GripperReason::Sibling { other: 3, above: 2 }));
@@ -199,5 +225,31 @@ mod tests {
         let lone = vec![mover(None, "finger_joint", "finger")];
         assert!(grippers(&lone).is_empty());
         assert_eq!(arm_end(&[], &BTreeMap::new()), Err(NoArmEnd::Nothing));
+    }
+
+    #[test]
+    fn a_turning_wrist_whose_link_is_called_gripper_stays_on_the_arm() {
+        // base - j1 - j2 - wrist (link `gripper`) - {f1, f2} (sliding fingers).
+        let mut movers = vec![
+            mover(None, "j1", "l1"),
+            mover(Some(0), "j2", "l2"),
+            mover(Some(1), "wrist", "gripper"),
+            mover(Some(2), "f1", "left_finger"),
+            mover(Some(2), "f2", "right_finger"),
+        ];
+        movers[3].slides = true;
+        movers[4].slides = true;
+        let found = grippers(&movers);
+        assert_eq!(found.keys().copied().collect::<Vec<_>>(), [3, 4]);
+        assert_eq!(arm_end(&movers, &found), Ok((2, 3)));
+        assert_eq!(named_but_kept(&movers, &found), [(2, "gripper")]);
+        // Without its fingers, the same: a part's name alone does not take a turning joint; the
+        // joint's own name does.
+        movers.truncate(3);
+        let found = grippers(&movers);
+        assert!(found.is_empty(), "{found:?}");
+        assert_eq!(arm_end(&movers, &found), Ok((2, 3)));
+        movers[2].joints = vec!["jointGripper".into()];
+        assert_eq!(grippers(&movers).get(&2), Some(&GripperReason::JointWord("gripper")));
     }
 }

@@ -377,6 +377,13 @@ impl<'a> Builder<'a> {
                 self.element("joint", name)
             ));
         }
+        for (m, word) in arm::named_but_kept(&movers, &by_index) {
+            choices.push(format!(
+                "{} (link `{}`) is named like a gripper's (`{word}`) but kept as an arm joint: it turns, its own name has no gripper word, no joint mimics it and no finger hangs beside it; if it is the gripper's, end the arm above it with --tip",
+                self.element("joint", &joints[m].name),
+                movers[m].part
+            ));
+        }
         let (arm_end, length) = match arm::arm_end(&movers, &by_index) {
             Ok((end, length)) => (movers[end].part.as_str(), length),
             Err(arm::NoArmEnd::Nothing) => {
@@ -485,6 +492,7 @@ impl<'a> Builder<'a> {
                     joints: vec![joint.name.clone()],
                     part: joint.child.link.clone(),
                     couplings,
+                    slides: matches!(joint.joint_type, urdf_rs::JointType::Prismatic),
                 }
             })
             .collect();

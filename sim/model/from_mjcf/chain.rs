@@ -11,7 +11,7 @@
 
 use super::Reader;
 use crate::model::{arm, names, ModelError};
-use mujoco_rs::mujoco_c::mjtEq;
+use mujoco_rs::mujoco_c::{mjtEq, mjtJoint};
 use mujoco_rs::prelude::*;
 use std::collections::BTreeMap;
 
@@ -122,6 +122,13 @@ impl Reader<'_> {
                 "joint `{}` of {} is a gripper joint, not an arm joint: {reason}; it is held at its reference position and its body is rigid geometry of the link it hangs from",
                 self.joint_names(*body).join("`, `"),
                 self.body(*body)
+            ));
+        }
+        for (m, word) in arm::named_but_kept(&movers, &found) {
+            choices.push(format!(
+                "joint `{}` of {} is named like a gripper's (`{word}`) but kept as an arm joint: it turns, its own name has no gripper word, no equality couples it and no finger hangs beside it; if it is the gripper's, end the arm above it with --tip",
+                self.joint_names(all_moving[m]).join("`, `"),
+                self.body(all_moving[m])
             ));
         }
         let arm_end = match arm::arm_end(&movers, &found) {
@@ -268,6 +275,7 @@ impl Reader<'_> {
                     .collect();
                 arm::Mover {
                     above: index.get(&self.moving_parent(body)).copied(),
+                    slides: joints.clone().all(|j| mj.jnt_type()[j] == mjtJoint::mjJNT_SLIDE),
                     joints: joints.map(|j| self.name(MjtObjBase::mjOBJ_JOINT, j)).collect(),
                     part: self.name(MjtObjBase::mjOBJ_BODY, body),
                     couplings,
