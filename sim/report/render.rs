@@ -97,27 +97,29 @@ pub fn render(report: &Report) -> String {
     }
 
     for engine in &report.engines {
+        // An engine whose effort is its control law's estimate (rapier: ten times MuJoCo's on the
+        // same joint) has no number here; the JSON report keeps it, marked as an estimate.
+        let effort = if crate::engine::find(engine.engine).is_some_and(|e| e.effort().estimate) {
+            ", effort not measured (a control-law estimate, in the JSON report only)".to_string()
+        } else {
+            let peaks = engine
+                .peak_effort
+                .iter()
+                .zip(&engine.rated_effort)
+                .map(|(p, r)| r.map_or_else(|| format!("{p:.0}"), |r| format!("{p:.0}/{r:.0}")))
+                .collect::<Vec<_>>()
+                .join(" ");
+            format!(", peak effort {peaks}")
+        };
         let _ = writeln!(
             out,
-            "{}: {} goals held (worst {:.3} mm, {:.3} deg), {} contacts, {} in the kinematic replay, peak effort{} {}",
+            "{}: {} goals held (worst {:.3} mm, {:.3} deg), {} contacts, {} in the kinematic replay{effort}",
             engine.engine,
             engine.goals_held,
             engine.worst_hold_position_m * 1e3,
             engine.worst_hold_orientation_deg,
             engine.contacts.len(),
             engine.replay_contacts.len(),
-            if crate::engine::find(engine.engine).is_some_and(|e| e.effort().estimate) {
-                " (control-law estimate)"
-            } else {
-                ""
-            },
-            engine
-                .peak_effort
-                .iter()
-                .zip(&engine.rated_effort)
-                .map(|(p, r)| r.map_or_else(|| format!("{p:.0}"), |r| format!("{p:.0}/{r:.0}")))
-                .collect::<Vec<_>>()
-                .join(" ")
         );
     }
     if !report.engines.is_empty() {
