@@ -331,6 +331,32 @@ fn rejects_mimic_joint_on_the_chain() {
 }
 
 #[test]
+fn a_robot_file_has_no_paper_model_figures() {
+    // The paper's capsules and hardware cost are defined for designs: for a URDF they would be a
+    // phantom (capsules on joint frames colliding at every goal).
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args([
+            "--reach-only",
+            "--mujoco-checks",
+            "0",
+            "--scenario",
+            "scenarios/cluttered/task-00.json",
+        ])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("paper loss: not for a robot file"), "{stdout}");
+    assert!(!stdout.contains("capsules collide"), "{stdout}");
+    let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with(|c: char| c.is_ascii_digit())).collect();
+    assert!(!rows.is_empty(), "{stdout}");
+    // The capsule column (the fifth number) is `-` on every goal row.
+    for row in rows {
+        assert!(row.split_whitespace().any(|w| w == "-"), "{row}");
+    }
+}
+
+#[test]
 fn reads_a_urdf_saved_as_xml_as_the_urdf_it_is() {
     let dir = tempfile::tempdir().expect("temp dir");
     let copy = dir.path().join("arm.xml");

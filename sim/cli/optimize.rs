@@ -193,13 +193,13 @@ fn side_by_side(before: &Report, after: &Report) -> String {
         ("goals reached", reached(before), reached(after)),
         (
             "paper loss (min over IK)",
-            loss(before.paper_loss.total),
-            loss(after.paper_loss.total),
+            loss(before.paper_loss.as_ref().and_then(|p| p.total)),
+            loss(after.paper_loss.as_ref().and_then(|p| p.total)),
         ),
         (
             "paper loss (chosen)",
-            loss(before.paper_loss.at_chosen),
-            loss(after.paper_loss.at_chosen),
+            loss(before.paper_loss.as_ref().and_then(|p| p.at_chosen)),
+            loss(after.paper_loss.as_ref().and_then(|p| p.at_chosen)),
         ),
         ("hardware cost (m)", cost(before), cost(after)),
         ("verdict", verdict(before), verdict(after)),

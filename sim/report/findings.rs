@@ -228,7 +228,9 @@ fn goal_findings(validation: &Validation, out: &mut Vec<Finding>) {
     for (index, goal) in validation.scenario.goals.iter().enumerate() {
         let solutions = validation.solutions.get(index).map(|g| g.solutions.as_slice()).unwrap_or_default();
         let best = solutions.first();
-        if let Some(best) = best {
+        // The paper's capsules are a model of designs; on a robot file's joint frames they would
+        // be a phantom to compare with.
+        if let Some(best) = best.filter(|_| validation.design.is_some()) {
             if let Some(c) = best.clearance {
                 let margin = 0.0;
                 if c.approximate_m <= margin && c.exact_m > margin {

@@ -47,8 +47,10 @@ pub struct Report {
     pub engines: Vec<EngineReport>,
     /// Gravity torques along the trajectory against the ratings (needs MuJoCo).
     pub static_load: Option<StaticLoad>,
-    /// The paper's objective for this design on this scenario.
-    pub paper_loss: PaperLoss,
+    /// The paper's objective for this design on this scenario; `None` (JSON `null`) for a URDF or
+    /// MJCF robot: the paper's capsule model and hardware cost are defined on design parameters,
+    /// and capsules on a robot file's joint frames would measure a phantom.
+    pub paper_loss: Option<PaperLoss>,
     /// Everything noteworthy, failing or not.
     pub findings: Vec<Finding>,
     /// The verdict and its reasons.
@@ -370,7 +372,7 @@ pub fn build(validation: &Validation) -> Report {
         trajectory,
         engines: engine_reports,
         static_load: validation.static_load.clone(),
-        paper_loss: loss::paper_loss(validation),
+        paper_loss: validation.design.is_some().then(|| loss::paper_loss(validation)),
         findings,
         verdict,
     }
@@ -468,7 +470,9 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                     .cloned()
                     .flatten()
                     .map(|c| format!("{} and {}", c.a, c.b)),
-                approximate_clearance_m: solution.and_then(|s| s.clearance.map(|c| c.approximate_m)),
+                approximate_clearance_m: solution
+                    .filter(|_| validation.design.is_some())
+                    .and_then(|s| s.clearance.map(|c| c.approximate_m)),
                 chosen,
                 on_trajectory,
                 held_by,

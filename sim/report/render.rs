@@ -153,12 +153,21 @@ pub fn render(report: &Report) -> String {
                 .join(" ")
         );
     }
-    if let Some(total) = report.paper_loss.total {
-        let chosen = report
-            .paper_loss
-            .at_chosen
-            .map_or_else(String::new, |c| format!(" ({c:.4} at the chosen configurations)"));
-        let _ = writeln!(out, "paper loss {total:.4}{chosen}");
+    match &report.paper_loss {
+        Some(loss) => {
+            if let Some(total) = loss.total {
+                let chosen = loss
+                    .at_chosen
+                    .map_or_else(String::new, |c| format!(" ({c:.4} at the chosen configurations)"));
+                let _ = writeln!(out, "paper loss {total:.4}{chosen}");
+            }
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "paper loss: not for a robot file (the paper's capsule model and hardware cost are defined for designs)"
+            );
+        }
     }
 
     if !report.findings.is_empty() {

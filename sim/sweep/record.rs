@@ -99,7 +99,7 @@ pub fn evaluate(
         .filter(|&i| !validation.solutions[i].reached() && validation.proof(i).is_some())
         .count();
     // The report's paper loss, each goal at its best IK solution: one home for the sum.
-    let task_loss = report.paper_loss.total;
+    let task_loss = report.paper_loss.as_ref().and_then(|p| p.total);
     let (goals_solved, task_solved, verdict) = match mode {
         SweepMode::ReachOnly { .. } => {
             let solved = validation.solutions.iter().filter(|g| g.reached()).count();
