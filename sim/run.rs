@@ -239,8 +239,10 @@ pub fn validate_loaded(
         written.push((Written::Urdf, path.clone()));
     }
     if let Some(path) = &opts.exports.mjcf {
+        // The scene's home key now; a validated run rewrites it with each goal's configuration.
         let text = if opts.exports.scene {
-            crate::export::scene_mjcf(model, &scenario)?
+            let home = crate::plan::home_for(model, &scenario).0;
+            crate::export::scene_mjcf(model, &scenario, vec![("home".into(), home)])?
         } else {
             mjcf.clone()
         };
@@ -276,7 +278,21 @@ pub fn validate_loaded(
     }
     let mut validation = pipeline::validate_with_progress(loaded, run.scenario.clone(), &validate_options, progress)?;
     validation.kinematics_check = run.kinematics_check.clone();
-    run.report = Some(crate::report::build(&validation));
+    let report = crate::report::build(&validation);
+    if let (Some(path), true) = (&opts.exports.mjcf, opts.exports.scene) {
+        let home = report
+            .trajectory
+            .as_ref()
+            .map_or_else(|| crate::plan::home_for(&run.model, &run.scenario).0, |t| t.home.clone());
+        let goals = report
+            .goals
+            .iter()
+            .enumerate()
+            .filter_map(|(k, g)| Some((format!("goal/{k}"), g.chosen.clone()?)));
+        let keys = std::iter::once(("home".to_string(), home)).chain(goals).collect();
+        pipeline::write_output(path, &crate::export::scene_mjcf(&run.model, &run.scenario, keys)?)?;
+    }
+    run.report = Some(report);
     run.validation = Some(validation);
     Ok(run)
 }

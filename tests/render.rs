@@ -315,3 +315,53 @@ fn scene_mjcf_loads_in_mujoco_with_every_obstacle_the_floor_and_a_site_per_goal(
     let output = validate_design().args(["designs/ur5e.json", "--scene"]).output().expect("runs");
     assert_eq!(output.status.code(), Some(2));
 }
+
+#[test]
+fn a_validated_scene_has_colours_and_a_keyframe_for_home_and_every_goal() {
+    use mujoco_rs::prelude::*;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (scene, json) = (dir.path().join("scene.xml"), dir.path().join("report.json"));
+    let output = validate_design()
+        .args([
+            "designs/ur5e.json",
+            "--scenario",
+            "scenarios/cluttered/task-00.json",
+            "--reach-only",
+        ])
+        .args(["--mujoco-checks", "0", "--quiet", "--scene", "--export-mjcf"])
+        .arg(&scene)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .expect("runs");
+    assert!(
+        matches!(output.status.code(), Some(0 | 1 | 3)),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let xml = std::fs::read_to_string(&scene).expect("scene written");
+    assert!(
+        xml.contains(r#"<default class="obstacle">"#) && xml.contains(r#"class="obstacle""#),
+        "{xml}"
+    );
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("report")).expect("JSON");
+    let goals = report["goals"].as_array().expect("goals");
+    let mj = MjModel::from_xml_string(&xml).expect("MuJoCo loads the scene");
+    let nq = mj.ffi().nq as usize;
+    assert_eq!(mj.ffi().nkey as usize, 1 + goals.len(), "home and one key per goal");
+    // Each goal's key is its chosen configuration (to the digits the file keeps), held by ctrl.
+    for (k, goal) in goals.iter().enumerate() {
+        let chosen: Vec<f64> = goal["chosen"]
+            .as_array()
+            .expect("chosen")
+            .iter()
+            .filter_map(serde_json::Value::as_f64)
+            .collect();
+        let key = &mj.key_qpos()[(k + 1) * nq..(k + 2) * nq];
+        assert!(
+            chosen.iter().zip(key).all(|(a, b)| (a - b).abs() < 1e-9),
+            "goal {k}: {chosen:?} vs {key:?}"
+        );
+        assert_eq!(&mj.key_ctrl()[(k + 1) * nq..(k + 2) * nq], key);
+    }
+}

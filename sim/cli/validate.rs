@@ -38,7 +38,8 @@ pub(crate) struct ValidateArgs {
     #[arg(long, value_name = "FILE")]
     pub(crate) export_mjcf: Option<PathBuf>,
     /// With --export-mjcf: write the scenario too (the robot at its base pose, the obstacles, the
-    /// floor and a site `goal/K` per goal), so MuJoCo's own viewer shows the whole scene.
+    /// floor and a site `goal/K` per goal, in colours, with keyframes for home and each goal's
+    /// chosen configuration), so MuJoCo's own viewer shows the whole scene.
     #[arg(long, requires = "export_mjcf")]
     pub(crate) scene: bool,
     /// Write pictures as SVG into DIR (created if missing; only the files named scene.svg,

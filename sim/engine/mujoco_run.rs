@@ -136,6 +136,7 @@ impl Loaded {
             // The pieces, not the hull MuJoCo would make of a whole mesh: the same shapes rapier
             // collides, and no phantom contact inside a mesh's concavity.
             convex_pieces: true,
+            ..Default::default()
         };
         let xml = to_mjcf(model, &mjcf_options).map_err(|source| EngineError::Export {
             robot: model.name.clone(),

@@ -36,6 +36,13 @@ const DEFAULT_KP: f64 = 100.0;
 const DEFAULT_KV: f64 = 10.0;
 /// Name of the floor plane geom.
 const FLOOR_GEOM: &str = "floor";
+/// The default class of a scene's obstacles.
+const OBSTACLE_CLASS: &str = "obstacle";
+/// Scene colours (`rgba`): a viewer tells robot, obstacles, floor and goal frames apart.
+const ROBOT_RGBA: &str = "0.62 0.64 0.68 1";
+const OBSTACLE_RGBA: &str = "0.85 0.5 0.25 0.6";
+const FLOOR_RGBA: &str = "0.9 0.9 0.88 1";
+const SITE_RGBA: &str = "0.2 0.7 0.3 0.8";
 /// Prefix of the mesh assets of world colliders (`mesh_world_<k>`, `k` the collider's index).
 const WORLD_MESH_PREFIX: &str = "mesh_world_";
 
@@ -77,6 +84,12 @@ pub struct MjcfOptions {
     /// cannot decompose is written whole. Default `false`: the file then describes the model
     /// exactly (read back, it is the same model, meshes and all); the engine runs set it.
     pub convex_pieces: bool,
+    /// Colours for a viewer (`<default>` classes: the robot grey, obstacles orange and
+    /// translucent, the floor light, sites green); default `false` (MuJoCo's own grey).
+    pub colours: bool,
+    /// `<keyframe>` keys, `(name, q)` with `q` in chain order (and the position actuators' `ctrl`
+    /// set to it, so a viewer holds the pose); default none.
+    pub keyframes: Vec<(String, Vec<f64>)>,
 }
 
 impl Default for MjcfOptions {
@@ -94,6 +107,8 @@ impl Default for MjcfOptions {
             gravity_m_s2: 9.81,
             integrator: None,
             convex_pieces: false,
+            colours: false,
+            keyframes: Vec::new(),
         }
     }
 }
@@ -176,6 +191,17 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         option.push(("integrator", name.clone()));
     }
     doc.empty("option", option);
+    if opts.colours {
+        doc.open("default", NO_ATTRIBUTES);
+        doc.empty("geom", [("rgba", ROBOT_RGBA)]);
+        doc.empty("site", [("rgba", SITE_RGBA)]);
+        for (class, rgba) in [(OBSTACLE_CLASS, OBSTACLE_RGBA), (FLOOR_GEOM, FLOOR_RGBA)] {
+            doc.open("default", [("class", class)]);
+            doc.empty("geom", [("rgba", rgba)]);
+            doc.close("default");
+        }
+        doc.close("default");
+    }
     write_assets(&mut doc, model, &opts.world_colliders, &pieces);
     write_bodies(&mut doc, model, base_is_world, opts, &pieces);
     if opts.include_actuators && !model.joints.is_empty() {
@@ -212,6 +238,26 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
             doc.empty("exclude", [("body1", body1), ("body2", body2)]);
         }
         doc.close("contact");
+    }
+    if !opts.keyframes.is_empty() {
+        doc.open("keyframe", NO_ATTRIBUTES);
+        for (name, q) in &opts.keyframes {
+            if q.len() != model.dof() {
+                return Err(ExportError::GainCount {
+                    robot: model.name.clone(),
+                    gain: "keyframe",
+                    given: q.len(),
+                    joints: model.dof(),
+                });
+            }
+            let qpos = numbers(q.iter().copied());
+            let mut key = vec![("name", name.as_str()), ("qpos", qpos.as_str())];
+            if opts.include_actuators {
+                key.push(("ctrl", qpos.as_str()));
+            }
+            doc.empty("key", key);
+        }
+        doc.close("keyframe");
     }
     doc.close("mujoco");
     Ok(doc.finish())
@@ -336,11 +382,16 @@ fn write_bodies(doc: &mut Doc, model: &Model, base_is_world: bool, opts: &MjcfOp
     // The world's own geoms come first, outside any base frame: their poses are world poses.
     if let Some(height) = opts.floor_height {
         let pos = numbers([0.0, 0.0, height]);
-        doc.empty("geom", [("name", FLOOR_GEOM), ("type", "plane"), ("pos", &pos), ("size", "0 0 1")]);
+        let mut floor = vec![("name", FLOOR_GEOM), ("type", "plane"), ("pos", &pos), ("size", "0 0 1")];
+        if opts.colours {
+            floor.push(("class", FLOOR_GEOM));
+        }
+        doc.empty("geom", floor);
     }
+    let class = opts.colours.then_some(OBSTACLE_CLASS);
     for (k, collider) in opts.world_colliders.iter().enumerate() {
         let mesh = format!("{WORLD_MESH_PREFIX}{k}");
-        write_geoms(doc, &collider.label, &mesh, collider, pieces.world(k));
+        write_geoms(doc, &collider.label, &mesh, collider, pieces.world(k), class);
     }
     for (name, world_from_site) in &opts.world_sites {
         let mut site = vec![("name", name.clone())];
@@ -396,7 +447,7 @@ fn write_bodies(doc: &mut Doc, model: &Model, base_is_world: bool, opts: &MjcfOp
         }
         for (k, collider) in link.colliders.iter().enumerate() {
             let (name, mesh) = (format!("{}/{k}", link.name), mesh_name(&link.name, k));
-            write_geoms(doc, &name, &mesh, collider, pieces.link(i, k));
+            write_geoms(doc, &name, &mesh, collider, pieces.link(i, k), None);
         }
         if i == model.links.len() - 1 {
             let mut site = vec![("name", "tool".to_string())];
@@ -412,11 +463,15 @@ fn write_bodies(doc: &mut Doc, model: &Model, base_is_world: bool, opts: &MjcfOp
 
 /// The geoms of one collider: itself, or one per convex piece (each on its own asset, all at
 /// the collider's pose: the pieces are in the mesh's frame).
-fn write_geoms(doc: &mut Doc, name: &str, mesh: &str, collider: &Collider, pieces: Option<&[ConvexPiece]>) {
+fn write_geoms(doc: &mut Doc, name: &str, mesh: &str, collider: &Collider, pieces: Option<&[ConvexPiece]>, class: Option<&str>) {
     let names = piece_names(name, pieces);
     let meshes = piece_names_with(mesh, '_', pieces);
     for (name, mesh) in names.iter().zip(&meshes) {
-        doc.empty("geom", geom_attributes(name, mesh, collider));
+        let mut attributes = geom_attributes(name, mesh, collider);
+        if let Some(class) = class {
+            attributes.push(("class", class.to_string()));
+        }
+        doc.empty("geom", attributes);
     }
 }
 

@@ -63,7 +63,7 @@ pub enum ExportError {
     GainCount {
         /// Robot name.
         robot: String,
-        /// `kp` or `kv`.
+        /// `kp`, `kv` or `keyframe` (a key's configuration).
         gain: &'static str,
         /// Number of values given.
         given: usize,

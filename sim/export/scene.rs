@@ -5,12 +5,13 @@ use crate::model::{Collider, Model};
 use crate::scenario::Scenario;
 
 /// MJCF text of the whole scene: the model at the scenario's base pose, the obstacles as static
-/// geoms named as in the scenario, the floor plane `floor`, and a site `goal/K` at each goal's
-/// frame, so MuJoCo's viewer shows what the run checks.
+/// geoms named as in the scenario, the floor plane `floor`, a site `goal/K` at each goal's frame,
+/// colours that tell them apart, and a keyframe per `(name, q)` of `keys` (the run's home and
+/// each goal's chosen configuration), so MuJoCo's viewer shows what the run checks.
 ///
 /// # Errors
-/// [`ExportError`] (e.g. an obstacle named like a link geom).
-pub fn scene_mjcf(model: &Model, scenario: &Scenario) -> Result<String, ExportError> {
+/// [`ExportError`] (e.g. an obstacle named like a link geom, a key of another length).
+pub fn scene_mjcf(model: &Model, scenario: &Scenario, keys: Vec<(String, Vec<f64>)>) -> Result<String, ExportError> {
     let placed = model.placed(&scenario.world_from_base);
     let world_colliders = scenario
         .obstacles
@@ -34,6 +35,8 @@ pub fn scene_mjcf(model: &Model, scenario: &Scenario) -> Result<String, ExportEr
         world_colliders,
         floor_height: scenario.floor.map(|f| f.height),
         world_sites,
+        colours: true,
+        keyframes: keys,
         ..Default::default()
     };
     to_mjcf(&placed, &opts)
