@@ -340,6 +340,7 @@ fn an_edited_design_or_an_input_folder_is_never_taken_for_finished_work() {
         validate_design()
             .arg("sweep")
             .arg(&design)
+            .arg("designs/ur5e.json")
             .args(["--scenarios", SCENARIOS[0], "--out"])
             .arg(out)
             .args(extra)
@@ -348,12 +349,19 @@ fn an_edited_design_or_an_input_folder_is_never_taken_for_finished_work() {
     };
     let out = dir.path().join("out");
     assert!(run(&out, &[]).status.success());
+    let before = read(&out.join("results.jsonl"));
     let text = read(&design).replace("\"L-long\"", "\"I-long\"");
     std::fs::write(&design, text).expect("edit");
+    // The edited design's pairs are computed again, the other design's kept: the same files as
+    // a fresh sweep of the designs as they are now.
     let output = run(&out, &[]);
-    assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("has changed since"), "{stderr}");
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("2 pairs (1 computed now, 1 resumed)"), "{stderr}");
+    let fresh = dir.path().join("fresh");
+    assert!(run(&fresh, &[]).status.success());
+    assert_same_files(&fresh, &out);
+    assert_ne!(read(&out.join("results.jsonl")), before, "the edit changes the arm's record");
 
     // --force never replaces the reference it scores against.
     let output = run(&out, &["--reference", out.to_str().expect("utf-8 path"), "--force"]);

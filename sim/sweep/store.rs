@@ -149,6 +149,7 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
             }
             Ok(Vec::new())
         }
+        Some(found) if !force && only_designs_differ(&found, manifest) => changed_designs(dir, &found, manifest),
         Some(found) if !force => Err(SweepError::Folder {
             dir: dir.to_path_buf(),
             message: format!(
@@ -203,6 +204,53 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
             Ok(Vec::new())
         }
     }
+}
+
+/// Whether `found` is the same sweep as `wanted` but for designs added, removed or edited (an
+/// unsharded sweep: a shard's pairs would move between shards).
+fn only_designs_differ(found: &Manifest, wanted: &Manifest) -> bool {
+    let rest = |m: &Manifest| Manifest {
+        designs: Vec::new(),
+        ..m.clone()
+    };
+    found.shard.is_none() && wanted.shard.is_none() && rest(found) == rest(wanted)
+}
+
+/// Takes over a folder whose sweep differs from `manifest` only in its designs: the records of
+/// the designs both have unchanged (same id, same file and model hashes) are kept, as the new
+/// sweep's finished pairs, and the rest computed again. The partial log is written before the
+/// old results and manifest go, so an interruption anywhere leaves a folder this reads again.
+fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<Vec<Record>, SweepError> {
+    let unchanged: std::collections::HashSet<&str> = manifest
+        .designs
+        .iter()
+        .filter(|d| found.designs.contains(d))
+        .map(|d| d.id.as_str())
+        .collect();
+    let previous = if dir.join(RESULTS).exists() {
+        read_records(&dir.join(RESULTS))?
+    } else if dir.join(PARTIAL).exists() {
+        read_partial(&dir.join(PARTIAL))?
+    } else {
+        Vec::new()
+    };
+    let kept: Vec<Record> = previous.into_iter().filter(|r| unchanged.contains(r.design.as_str())).collect();
+    let mut text = String::new();
+    for record in &kept {
+        text.push_str(&record_line(record)?);
+    }
+    rewrite_log(&dir.join(PARTIAL), &text)?;
+    for name in [RESULTS, CSV, TABLE] {
+        let path = dir.join(name);
+        if path.exists() {
+            std::fs::remove_file(&path).map_err(|e| SweepError::Write {
+                path: path.clone(),
+                message: e.to_string(),
+            })?;
+        }
+    }
+    write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
+    Ok(kept)
 }
 
 fn manifest_text(manifest: &Manifest) -> Result<String, SweepError> {
