@@ -161,6 +161,17 @@ fn pictures_png_and_html_are_byte_identical_whatever_the_thread_count() {
     }
     let html = |run: &PathBuf| std::fs::read(run.join("report.html")).expect("html written");
     assert!(html(&runs[0]) == html(&runs[1]), "the HTML differs between --threads 1 and 2");
+    // The page has the text report's whole summary and the clearance of each kind per goal.
+    let page = String::from_utf8(html(&runs[0])).expect("UTF-8 page");
+    for part in [
+        "<section id=\"summary\">",
+        "criteria: reached",
+        "trajectory: 36 of 36 goals",
+        "paper loss ",
+        "<th>obstacles</th><th>self</th><th>floor</th>",
+    ] {
+        assert!(page.contains(part), "the page lacks {part}");
+    }
     // A PNG decodes at the SVG's size.
     let bytes = std::fs::read(runs[0].join("png/scene.png")).expect("png");
     let pixmap = resvg::tiny_skia::Pixmap::decode_png(&bytes).expect("a PNG");

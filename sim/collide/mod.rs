@@ -218,6 +218,37 @@ pub struct PairDistance {
     pub enclosed: bool,
 }
 
+/// The smallest signed distance of each kind of checked pair at one configuration (m): the
+/// robot against the obstacles, against itself, against the floor; `None` where the world checks
+/// no pair of that kind (no obstacles, no floor). One number would hide the others: a modular
+/// arm's mount 40 mm above the floor sets most goals' clearance, however close the obstacles are.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct ClearanceByKind {
+    /// Against the scenario's obstacles.
+    pub obstacles_m: Option<f64>,
+    /// Between the robot's own links.
+    pub self_m: Option<f64>,
+    /// Against the floor.
+    pub floor_m: Option<f64>,
+}
+
+impl ClearanceByKind {
+    /// Each kind's smallest distance among `distances.within_margin`: a query with an infinite
+    /// margin measures every checked pair exactly.
+    pub fn of(distances: &Distances) -> Self {
+        let mut out = Self::default();
+        for pair in &distances.within_margin {
+            let slot = match pair.b.body {
+                Body::Obstacle(_) => &mut out.obstacles_m,
+                Body::Link(_) => &mut out.self_m,
+                Body::Floor => &mut out.floor_m,
+            };
+            *slot = Some(slot.map_or(pair.distance, |d: f64| d.min(pair.distance)));
+        }
+        out
+    }
+}
+
 /// What a query knows about one checked pair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PairEstimate {

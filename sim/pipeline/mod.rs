@@ -140,6 +140,7 @@ pub fn validate_with_progress(
         excluded_shapes: world.excluded_shapes().to_vec(),
         structural_allowances: world.structural_allowances().to_vec(),
         goal_clearances: goal_clearances(&model, &world, &solutions, motion.trajectory.as_ref(), opts.certify),
+        goal_clearances_by_kind: goal_clearances_by_kind(&model, &world, &solutions, motion.trajectory.as_ref()),
         input_warnings,
         kinematics_check: None,
         model,
@@ -322,8 +323,49 @@ fn task_loss_terms(
         .collect()
 }
 
-/// Per goal, the exact clearance of its configuration and the pair that sets it: the one the
-/// trajectory reached, else IK's best solution.
+/// Per goal, the configuration the report judges: the one the trajectory reached, else IK's best
+/// solution.
+fn goal_configuration<'a>(
+    index: usize,
+    found: &'a crate::ik::GoalSolutions,
+    trajectory: Option<&'a crate::plan::Trajectory>,
+) -> Option<&'a [f64]> {
+    let reached = trajectory.and_then(|t| match t.steps.get(index) {
+        Some(crate::plan::GoalStep::Reached { q, .. }) => Some(q.as_slice()),
+        _ => None,
+    });
+    reached.or_else(|| found.solutions.first().map(|s| s.q.as_slice()))
+}
+
+/// Per goal, the smallest distance of each kind of pair (obstacles, self, floor) at its
+/// configuration ([`goal_configuration`]), every checked pair measured exactly.
+fn goal_clearances_by_kind(
+    model: &Model,
+    world: &collide::CollisionWorld,
+    solutions: &[crate::ik::GoalSolutions],
+    trajectory: Option<&crate::plan::Trajectory>,
+) -> Vec<Option<collide::ClearanceByKind>> {
+    let mut ws = model.workspace();
+    let mut out = collide::Distances::new();
+    let query = collide::QueryOptions {
+        margin: f64::INFINITY,
+        hulls: false,
+        exact_depth: true,
+    };
+    solutions
+        .iter()
+        .enumerate()
+        .map(|(index, found)| {
+            let q = goal_configuration(index, found, trajectory)?;
+            model.forward(q, &mut ws);
+            collide::distances(world, &ws.link_in_world, &query, &mut out);
+            Some(collide::ClearanceByKind::of(&out))
+        })
+        .collect()
+}
+
+/// Per goal, the exact clearance of its configuration ([`goal_configuration`]) and the pair that
+/// sets it.
 fn goal_clearances(
     model: &Model,
     world: &collide::CollisionWorld,
@@ -335,13 +377,6 @@ fn goal_clearances(
     solutions
         .iter()
         .enumerate()
-        .map(|(index, found)| {
-            let reached = trajectory.and_then(|t| match t.steps.get(index) {
-                Some(crate::plan::GoalStep::Reached { q, .. }) => Some(q.as_slice()),
-                _ => None,
-            });
-            let q = reached.or_else(|| found.solutions.first().map(|s| s.q.as_slice()))?;
-            checker.clearance(q)
-        })
+        .map(|(index, found)| checker.clearance(goal_configuration(index, found, trajectory)?))
         .collect()
 }

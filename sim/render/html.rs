@@ -58,6 +58,10 @@ pub fn page(validation: &Validation, report: &Report) -> String {
     );
     out.push_str(&format!("<section id=\"plot\">{plot}</section>\n"));
     out.push_str(&goal_table(report));
+    out.push_str(&format!(
+        "<section id=\"summary\"><h2>Summary</h2><pre>{}</pre></section>\n",
+        escape(&crate::report::summary(report))
+    ));
     out.push_str(&findings(report));
     out.push_str("<footer>3D view: three.js r187 (MIT licence, vendored). Drag to orbit, scroll to zoom; click a goal row or the plot to go there.</footer>\n");
     out.push_str(&format!("<script id=\"data\" type=\"application/json\">{data}</script>\n"));
@@ -80,14 +84,14 @@ fn reasons(report: &Report) -> String {
 fn goal_table(report: &Report) -> String {
     let mut out = String::from(
         "<section id=\"goals\"><h2>Goals</h2><table><thead><tr><th>#</th><th>goal</th><th>tolerance</th><th>outcome</th>\
-         <th>position error</th><th>orientation error</th><th>clearance</th><th>closest pair</th><th>held by</th></tr></thead><tbody>\n",
+         <th>position error</th><th>orientation error</th><th>obstacles</th><th>self</th><th>floor</th><th>closest pair</th><th>held by</th></tr></thead><tbody>\n",
     );
     for goal in &report.goals {
         let number = |v: Option<f64>, scale: f64, digits: usize, unit: &str| {
             v.map(|v| format!("{:.digits$} {unit}", v * scale)).unwrap_or_else(|| "-".into())
         };
         out.push_str(&format!(
-            "<tr data-goal=\"{}\" class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            "<tr data-goal=\"{}\" class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
             goal.index,
             goal.outcome,
             goal.index,
@@ -96,7 +100,9 @@ fn goal_table(report: &Report) -> String {
             goal.outcome,
             number(goal.position_error_m, 1000.0, 3, "mm"),
             number(goal.orientation_error_deg, 1.0, 3, "deg"),
-            number(goal.exact_clearance_m, 1000.0, 1, "mm"),
+            number(goal.clearance_by_kind.and_then(|c| c.obstacles_m), 1000.0, 1, "mm"),
+            number(goal.clearance_by_kind.and_then(|c| c.self_m), 1000.0, 1, "mm"),
+            number(goal.clearance_by_kind.and_then(|c| c.floor_m), 1000.0, 1, "mm"),
             escape(goal.clearance_pair.as_deref().unwrap_or("-")),
             escape(&goal.held_by.join(", "))
         ));

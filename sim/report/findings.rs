@@ -489,7 +489,11 @@ fn engine_findings(validation: &Validation, name: &'static str, runs: &EngineRun
             &[("position_m", h.position_error_m), ("orientation_rad", h.orientation_error_rad)],
         ));
     }
-    for (joint, (peak, model_joint)) in runs.dynamic.peak_effort.iter().zip(&validation.model.joints).enumerate() {
+    // An engine whose effort is its control law's estimate (rapier: ten times MuJoCo's on the
+    // same joint) says nothing about a rating; its numbers stay in the JSON report, marked.
+    let measured = crate::engine::find(name).is_none_or(|e| !e.effort().estimate);
+    let efforts = runs.dynamic.peak_effort.iter().filter(|_| measured);
+    for (joint, (peak, model_joint)) in efforts.zip(&validation.model.joints).enumerate() {
         if let Some(rated) = model_joint.max_effort {
             if *peak > rated {
                 out.push(finding(

@@ -25,6 +25,9 @@ pub struct Validation {
     /// Per goal, the exact clearance of its configuration (the trajectory's, else IK's best) and
     /// the pair that sets it.
     pub goal_clearances: Vec<Option<crate::plan::SegmentPoint>>,
+    /// Per goal, the smallest distance of each kind of pair (obstacles, self, floor) at the same
+    /// configuration.
+    pub goal_clearances_by_kind: Vec<Option<crate::collide::ClearanceByKind>>,
     /// Warnings about the input files (what was suspicious and what was assumed).
     pub input_warnings: Vec<String>,
     /// Our kinematics against MuJoCo's on the MJCF export, when the caller ran the check.

@@ -13,7 +13,7 @@ pub use describe::{describe, scenario_summary};
 pub use findings::{Finding, FindingKind, Severity};
 pub use inputs::{EngineRuns, Settings, Validation};
 pub use loss::PaperLoss;
-pub use render::{render, verdict_line};
+pub use render::{render, summary, verdict_line};
 
 use crate::collide::ExcludedPair;
 use crate::engine::{ContactInterval, StaticLoad};
@@ -181,6 +181,9 @@ pub struct GoalReport {
     pub exact_clearance_m: Option<f64>,
     /// The pair that sets that clearance (`a and b`).
     pub clearance_pair: Option<String>,
+    /// The smallest distance of each kind of pair at the chosen configuration (m): obstacles,
+    /// self, floor, every pair measured exactly.
+    pub clearance_by_kind: Option<crate::collide::ClearanceByKind>,
     /// The paper's capsule model's clearance of the chosen configuration (m).
     pub approximate_clearance_m: Option<f64>,
     /// The trajectory reaches it by a certified path.
@@ -470,6 +473,7 @@ fn goal_reports(validation: &Validation, engines: &[(&'static str, &EngineRuns)]
                     .cloned()
                     .flatten()
                     .map(|c| format!("{} and {}", c.a, c.b)),
+                clearance_by_kind: validation.goal_clearances_by_kind.get(index).copied().flatten(),
                 approximate_clearance_m: solution
                     .filter(|_| validation.design.is_some())
                     .and_then(|s| s.clearance.map(|c| c.approximate_m)),

@@ -10,9 +10,9 @@ fn mm(value: Option<f64>) -> String {
     value.map_or_else(|| "-".into(), |v| format!("{:.1}", v * 1e3))
 }
 
-/// The report as text: one line per goal, the trajectory, the engines, the static load, the
-/// findings that matter and the verdict line.
-pub fn render(report: &Report) -> String {
+/// The lines above the goal table: the kinematics check, input warnings, the design and the
+/// scenario, the planner, the criteria.
+fn head(report: &Report) -> String {
     let mut out = String::new();
     if let Some(check) = &report.inputs.kinematics_check {
         let _ = writeln!(out, "{}", check.line());
@@ -67,31 +67,13 @@ pub fn render(report: &Report) -> String {
         if c.engines.is_empty() { "none".to_string() } else { c.engines.join(", ") }
     );
 
-    let _ = writeln!(
-        out,
-        "\ngoal                      outcome      pos mm  ori deg  clear mm  capsule mm  held by         closest pair"
-    );
-    for goal in &report.goals {
-        let status = goal.outcome;
-        let _ = writeln!(
-            out,
-            "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>8}  {:>10}  {:<14}  {}",
-            goal.index,
-            truncate(&goal.name, 21),
-            status,
-            goal.position_error_m.map_or_else(|| "-".into(), |v| format!("{:.2}", v * 1e3)),
-            goal.orientation_error_deg.map_or_else(|| "-".into(), |v| format!("{v:.2}")),
-            mm(goal.exact_clearance_m),
-            mm(goal.approximate_clearance_m),
-            if goal.held_by.is_empty() {
-                "-".to_string()
-            } else {
-                goal.held_by.join(", ")
-            },
-            goal.clearance_pair.as_deref().unwrap_or("-")
-        );
-    }
+    out
+}
 
+/// The lines between the goal table and the findings: the trajectory, the engines, the replay's
+/// agreement, the static load and the paper loss.
+fn lower_block(report: &Report) -> String {
+    let mut out = String::new();
     if let Some(t) = &report.trajectory {
         trajectory_lines(&mut out, t);
     }
@@ -170,6 +152,47 @@ pub fn render(report: &Report) -> String {
         }
     }
 
+    out
+}
+
+/// The report's summary as text without the goal table and the findings (the HTML page shows
+/// those as tables of its own): what the text report says above and below the goal table.
+pub fn summary(report: &Report) -> String {
+    format!("{}{}", head(report), lower_block(report))
+}
+
+/// The report as text: one line per goal, the trajectory, the engines, the static load, the
+/// findings that matter and the verdict line.
+pub fn render(report: &Report) -> String {
+    let mut out = head(report);
+    let _ = writeln!(
+        out,
+        "\ngoal                      outcome      pos mm  ori deg  obst mm  self mm  floor mm  capsule mm  held by         closest pair"
+    );
+    for goal in &report.goals {
+        let status = goal.outcome;
+        let _ = writeln!(
+            out,
+            "{:<3} {:<21} {:<11} {:>6}  {:>7}  {:>7}  {:>7}  {:>8}  {:>10}  {:<14}  {}",
+            goal.index,
+            truncate(&goal.name, 21),
+            status,
+            goal.position_error_m.map_or_else(|| "-".into(), |v| format!("{:.2}", v * 1e3)),
+            goal.orientation_error_deg.map_or_else(|| "-".into(), |v| format!("{v:.2}")),
+            mm(goal.clearance_by_kind.and_then(|c| c.obstacles_m)),
+            mm(goal.clearance_by_kind.and_then(|c| c.self_m)),
+            mm(goal.clearance_by_kind.and_then(|c| c.floor_m)),
+            mm(goal.approximate_clearance_m),
+            if goal.held_by.is_empty() {
+                "-".to_string()
+            } else {
+                goal.held_by.join(", ")
+            },
+            goal.clearance_pair.as_deref().unwrap_or("-")
+        );
+    }
+
+    out.push_str(&lower_block(report));
     if !report.findings.is_empty() {
         let _ = writeln!(out, "\nfindings:");
         // Every failure and warning; context (info) up to three of a kind, the rest counted.
