@@ -191,15 +191,7 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>,
                     message: format!("{name} is an input of this run (the reference, or a shard being merged): give another --out"),
                 });
             }
-            for name in ours {
-                let path = dir.join(name);
-                if path.exists() {
-                    std::fs::remove_file(&path).map_err(|e| SweepError::Write {
-                        path: path.clone(),
-                        message: e.to_string(),
-                    })?;
-                }
-            }
+            remove_ours(dir, &ours)?;
             write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
             Ok(Vec::new())
         }
@@ -240,7 +232,14 @@ fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<
         text.push_str(&record_line(record)?);
     }
     rewrite_log(&dir.join(PARTIAL), &text)?;
-    for name in [RESULTS, CSV, TABLE] {
+    remove_ours(dir, &[RESULTS, CSV, TABLE])?;
+    write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
+    Ok(kept)
+}
+
+/// Removes those of this tool's files `names` that are in `dir`.
+fn remove_ours(dir: &Path, names: &[&str]) -> Result<(), SweepError> {
+    for name in names {
         let path = dir.join(name);
         if path.exists() {
             std::fs::remove_file(&path).map_err(|e| SweepError::Write {
@@ -249,8 +248,7 @@ fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<
             })?;
         }
     }
-    write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
-    Ok(kept)
+    Ok(())
 }
 
 fn manifest_text(manifest: &Manifest) -> Result<String, SweepError> {
