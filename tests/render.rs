@@ -357,6 +357,8 @@ fn a_validated_scene_has_colours_and_a_keyframe_for_home_and_every_goal() {
     );
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("report")).expect("JSON");
     let goals = report["goals"].as_array().expect("goals");
+    // Direct mujoco-rs calls need the library loaded first (it is loaded at first use).
+    proving_ground::engine::check_version().expect("MuJoCo is available");
     let mj = MjModel::from_xml_string(&xml).expect("MuJoCo loads the scene");
     let nq = mj.ffi().nq as usize;
     assert_eq!(mj.ffi().nkey as usize, 1 + goals.len(), "home and one key per goal");
