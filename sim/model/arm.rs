@@ -57,6 +57,14 @@ fn is_below(movers: &[Mover], mover: usize, ancestor: usize) -> bool {
     false
 }
 
+/// Whether every mover hanging directly from `mover` is one of `grippers` (nothing else moves
+/// below it).
+fn ends_tree(movers: &[Mover], mover: usize, grippers: &BTreeMap<usize, GripperReason>) -> bool {
+    (0..movers.len())
+        .filter(|&below| movers[below].above == Some(mover))
+        .all(|below| grippers.contains_key(&below))
+}
+
 /// Movers in a chain from the base down to `mover`, itself included.
 fn depth(movers: &[Mover], mover: usize) -> usize {
     1 + std::iter::successors(movers[mover].above, |&m| movers[m].above).count()
@@ -73,15 +81,7 @@ pub(super) fn grippers(movers: &[Mover]) -> BTreeMap<usize, GripperReason> {
     // siblings share a depth.
     for level in (1..=deepest).rev() {
         let at_level: Vec<usize> = (0..movers.len()).filter(|&m| depths[m] == level).collect();
-        let trailing: BTreeMap<usize, bool> = at_level
-            .iter()
-            .map(|&m| {
-                let ends = (0..movers.len())
-                    .filter(|&below| movers[below].above == Some(m))
-                    .all(|below| grippers.contains_key(&below));
-                (m, ends)
-            })
-            .collect();
+        let trailing: BTreeMap<usize, bool> = at_level.iter().map(|&m| (m, ends_tree(movers, m, &grippers))).collect();
         for &m in &at_level {
             if !trailing[&m] {
                 continue;
@@ -127,11 +127,7 @@ pub(super) fn grippers(movers: &[Mover]) -> BTreeMap<usize, GripperReason> {
 pub(super) fn named_but_kept(movers: &[Mover], grippers: &BTreeMap<usize, GripperReason>) -> Vec<(usize, &'static str)> {
     (0..movers.len())
         .filter(|m| !grippers.contains_key(m))
-        .filter(|&m| {
-            (0..movers.len())
-                .filter(|&below| movers[below].above == Some(m))
-                .all(|below| grippers.contains_key(&below))
-        })
+        .filter(|&m| ends_tree(movers, m, grippers))
         .filter_map(|m| {
             let mover = &movers[m];
             names::gripper_word(&mover.part).map(|word| (m, word))
