@@ -17,6 +17,7 @@ mod reach;
 mod refine;
 pub mod search;
 mod selfmotion;
+mod separate;
 pub mod solutions;
 pub mod solvers;
 mod spd6;
