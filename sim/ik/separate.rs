@@ -124,11 +124,10 @@ impl Separator {
     /// Box-constrained least squares `min |E + G d|` over `|d_j| <= h_j` by projected
     /// coordinate descent, into `fit`.
     fn fit_within(&mut self, half: &[f64], rows: usize) {
-        let dof = half.len();
         let mut left = self.residual;
         self.fit.iter_mut().for_each(|d| *d = 0.0);
         for _ in 0..SWEEPS {
-            for j in 0..dof {
+            for (j, &h) in half.iter().enumerate() {
                 let g = &self.columns[j][..rows];
                 let weight: f64 = g.iter().map(|x| x * x).sum();
                 if weight < 1e-24 {
@@ -136,7 +135,7 @@ impl Separator {
                 }
                 let slope: f64 = g.iter().zip(&left[..rows]).map(|(x, y)| x * y).sum();
                 let old = self.fit[j];
-                let new = (old - slope / weight).clamp(-half[j], half[j]);
+                let new = (old - slope / weight).clamp(-h, h);
                 if new != old {
                     for (value, x) in left[..rows].iter_mut().zip(g) {
                         *value += x * (new - old);
