@@ -193,9 +193,9 @@ const POLISH_STEPS: usize = 3;
 /// A closed-form solution whose polished error stays above this (m and rad) is not exact: the
 /// pose sits on a workspace boundary where rounding decides, and the set is not called complete.
 const EXACT: f64 = 1e-9;
-/// Default of [`IkOptions::search_boxes`]: about 0.1 s a goal where the search runs out, and
-/// enough to decide the goals of the shipped 4- and 5-joint designs and 10 of the 24 misses of
-/// the 5-joint real-world robot on the workspace task.
+/// Default of [`IkOptions::search_boxes`]: about 0.3 s a goal where the search runs out, and
+/// enough to decide the goals of the shipped 4- and 5-joint designs on the cluttered tasks and
+/// 86 of the 90 misses of the 5-joint real-world robot on the workspace task.
 pub const SEARCH_BOXES: usize = 200_000;
 /// The search's budget in sweeps: proofs that come cheap (the shipped 4-joint design's goals
 /// take 3 to 123 boxes). The brute force's undecided goals are mostly on arms whose solutions

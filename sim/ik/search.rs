@@ -197,6 +197,9 @@ impl<'a> Judge<'a> {
             moves: &self.moves,
             turns: &self.turns,
         };
+        if linear_rules_out(goal, &self.ws, &bounds) {
+            return Judged::RuledOut;
+        }
         let (position_rest, axis_rest) = remainders(&self.ws, &bounds, 1.0);
         let separating = super::separate::BoxBounds {
             half: &self.half,
@@ -207,15 +210,16 @@ impl<'a> Judge<'a> {
         let Some(split) = self.separator.rules_out(goal, &self.ws, &separating) else {
             return Judged::RuledOut;
         };
-        if linear_rules_out(goal, &self.ws, &bounds) {
-            return Judged::RuledOut;
-        }
         if self.moves[0] <= FIRST_ORDER_M {
             return Judged::Split(split, self.moves[0]);
         }
-        // Large boxes: the first-order model says little, so split the joint that contributes
-        // most to the zeroth-order bound nearer to discarding the box.
-        let by_orientation = goal.tolerance != Tolerance::Position
+        Judged::Split(self.coarse_split(position_gap, orientation_gap), self.moves[0])
+    }
+
+    /// The split of a large box, where the first-order model says little: the joint that
+    /// contributes most to the zeroth-order bound nearer to discarding it.
+    fn coarse_split(&self, position_gap: f64, orientation_gap: f64) -> usize {
+        let by_orientation = self.goal.tolerance != Tolerance::Position
             && orientation_gap > 0.0
             && (position_gap <= 0.0 || self.turns[0] / orientation_gap < self.moves[0] / position_gap);
         let contribution = |j: usize| {
@@ -225,9 +229,7 @@ impl<'a> Judge<'a> {
                 self.moves[j] - self.moves[j + 1]
             }
         };
-        let dof = self.model.dof();
-        let chosen = (0..dof).fold(0, |best, j| if contribution(j) > contribution(best) { j } else { best });
-        Judged::Split(chosen, self.moves[0])
+        (0..self.model.dof()).fold(0, |best, j| if contribution(j) > contribution(best) { j } else { best })
     }
 }
 
