@@ -23,6 +23,9 @@ use nalgebra::{Matrix3, Vector3};
 /// Sweeps of the coordinate descent that fits the box-constrained least squares.
 const SWEEPS: usize = 24;
 
+/// Largest change of a sweep, relative to the box, below which the fit has converged.
+const CONVERGED: f64 = 1e-6;
+
 /// Largest residual: 3 position rows and 9 rotation rows.
 const ROWS: usize = 12;
 
@@ -127,6 +130,7 @@ impl Separator {
         let mut left = self.residual;
         self.fit.iter_mut().for_each(|d| *d = 0.0);
         for _ in 0..SWEEPS {
+            let mut moved = 0.0_f64;
             for (j, &h) in half.iter().enumerate() {
                 let g = &self.columns[j][..rows];
                 let weight: f64 = g.iter().map(|x| x * x).sum();
@@ -141,7 +145,12 @@ impl Separator {
                         *value += x * (new - old);
                     }
                     self.fit[j] = new;
+                    moved = moved.max((new - old).abs() / h);
                 }
+            }
+            // Converged: another sweep would not move the direction the test uses.
+            if moved < CONVERGED {
+                break;
             }
         }
     }
