@@ -41,7 +41,7 @@
   sun.position.set(2, -3, 4);
   scene.add(sun);
 
-  const colours = { link: [0xb8bdc4, 0xee9438], obstacle: 0x5c8fd1, blocked: 0xe01f24, contact: 0xff7f0e, closest: 0xf7cc26 };
+  const colours = { link: [0xb8bdc4, 0x808794], obstacle: 0x5c8fd1, blocked: 0xe01f24, contact: 0x8c564b, closest: 0x1accd9 };
   const bodies = new Map(); // name -> { materials, base }
   function material(name, colour, opacity) {
     const m = new T.MeshLambertMaterial({ color: colour, flatShading: true, side: T.DoubleSide, transparent: opacity < 1, opacity });

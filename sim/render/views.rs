@@ -15,6 +15,10 @@ pub(super) const HEIGHT: u32 = 960;
 const TITLE_H: f64 = 56.0;
 const LEGEND_H: f64 = 28.0;
 const PAD: f64 = 22.0;
+/// Characters of a 13 px caption line that fit the picture's width (about 7 px each).
+const CAPTION_CHARS: usize = 170;
+/// Height of a caption line (px).
+const CAPTION_LINE: f64 = 16.0;
 
 /// An orthographic camera: screen right, screen up, and the viewing direction (into the screen).
 #[derive(Debug, Clone, Copy)]
@@ -134,16 +138,19 @@ pub(super) struct Shot {
     pub(super) goal: Option<usize>,
 }
 
-const LINK_COLOURS: [[f64; 3]; 2] = [[0.72, 0.74, 0.77], [0.93, 0.58, 0.22]];
+// Neighbouring links alternate two greys: any hue would read as a goal's status (an orange link
+// beside the legend's "no path" did).
+const LINK_COLOURS: [[f64; 3]; 2] = [[0.72, 0.74, 0.77], [0.50, 0.53, 0.58]];
 const OBSTACLE_COLOUR: [f64; 3] = [0.36, 0.56, 0.82];
 const BLOCKED_COLOUR: [f64; 3] = [0.88, 0.12, 0.14];
-const CLOSEST_COLOUR: [f64; 3] = [0.97, 0.80, 0.15];
+const CLOSEST_COLOUR: [f64; 3] = [0.10, 0.80, 0.85];
 /// Colour of a goal marker by outcome.
 pub(super) fn outcome_colour(outcome: &str) -> &'static str {
     match outcome {
         "reached" => "#2ca02c",
         "no_path" => "#ff7f0e",
         "unreachable" => "#d62728",
+        "undecided" => "#e377c2",
         _ => "#7f7f7f",
     }
 }
@@ -153,14 +160,19 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
     let mut doc = svg::open(WIDTH, HEIGHT, Vec::new());
     let out = &mut doc;
     svg::text(out, PAD, 24.0, 18, "start", "#000000", &shot.title);
-    svg::text(out, PAD, 46.0, 13, "start", "#333333", &shot.subtitle);
+    // A long caption wraps rather than running off the right edge; the panels give way.
+    let lines = wrap(&shot.subtitle, CAPTION_CHARS);
+    for (k, line) in lines.iter().enumerate() {
+        svg::text(out, PAD, 46.0 + CAPTION_LINE * k as f64, 13, "start", "#333333", line);
+    }
+    let title_h = TITLE_H + CAPTION_LINE * lines.len().saturating_sub(1) as f64;
     let panel_w = f64::from(WIDTH) / 2.0;
-    let panel_h = (f64::from(HEIGHT) - TITLE_H - LEGEND_H) / 2.0;
+    let panel_h = (f64::from(HEIGHT) - title_h - LEGEND_H) / 2.0;
     // One scale for all four views, so lengths compare across them.
     let scale = (panel_w.min(panel_h) - 2.0 * PAD - 16.0) / stage.bounds.size();
     for (k, camera) in cameras().iter().enumerate() {
         let left = panel_w * (k % 2) as f64;
-        let top = TITLE_H + panel_h * (k / 2) as f64;
+        let top = title_h + panel_h * (k / 2) as f64;
         out.open("g", [("class", "view")]);
         let panel = [
             ("x", px(left + 4.0)),
@@ -319,10 +331,11 @@ fn legend(out: &mut Doc, scale: f64) {
         ("#b8bdc4", "robot"),
         ("#5c8fd1", "obstacle"),
         ("#e01f24", "blocking pair"),
-        ("#f7cc26", "closest pair"),
+        ("#1accd9", "closest pair"),
         (outcome_colour("reached"), "goal reached"),
         (outcome_colour("no_path"), "no path"),
         (outcome_colour("unreachable"), "unreachable"),
+        (outcome_colour("undecided"), "undecided"),
     ];
     let mut x = PAD;
     for (colour, label) in items {
@@ -352,6 +365,23 @@ fn legend(out: &mut Doc, scale: f64) {
     svg::text(out, right - bar - 6.0, y, 12, "end", "#333333", "0.1 m");
 }
 
+/// `text` in lines of at most `width` characters, broken at spaces (a longer word stands alone).
+pub(super) fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    lines.push(line);
+    lines
+}
+
 /// `#rrggbb` of `base` (0..1 per channel) times `shade`.
 fn hex(base: [f64; 3], shade: f64) -> String {
     let channel = |c: f64| (c * shade * 255.0).round().clamp(0.0, 255.0) as u8;
@@ -361,6 +391,43 @@ fn hex(base: [f64; 3], shade: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn rgb(hex: &str) -> [f64; 3] {
+        let channel = |k: usize| f64::from(u8::from_str_radix(&hex[1 + 2 * k..3 + 2 * k], 16).expect("hex colour")) / 255.0;
+        [channel(0), channel(1), channel(2)]
+    }
+
+    fn apart(a: [f64; 3], b: [f64; 3]) -> f64 {
+        a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
+    }
+
+    /// Status colours are for status: every goal outcome's colour is far from every other and
+    /// from anything else the scene is drawn in (links at any shade, obstacles, the pairs).
+    #[test]
+    fn status_colours_are_reserved_for_status() {
+        let outcomes = ["reached", "no_path", "unreachable", "undecided"];
+        for (i, a) in outcomes.iter().enumerate() {
+            for b in &outcomes[i + 1..] {
+                assert!(apart(rgb(outcome_colour(a)), rgb(outcome_colour(b))) > 0.3, "{a} and {b}");
+            }
+            for shade in [0.55, 0.8, 1.0] {
+                for base in LINK_COLOURS.iter().chain([&OBSTACLE_COLOUR, &CLOSEST_COLOUR]) {
+                    let drawn = rgb(&hex(*base, shade));
+                    assert!(apart(drawn, rgb(outcome_colour(a))) > 0.3, "{a} against {drawn:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn captions_wrap_at_spaces_and_keep_every_word() {
+        let caption = "goal 3 (ball 1): unreachable: proven: all 8 solutions of the pose collide, throughout the goal's tolerance";
+        let lines = wrap(caption, 40);
+        assert!(lines.len() > 2 && lines.iter().all(|l| l.chars().count() <= 40), "{lines:?}");
+        assert_eq!(lines.join(" "), caption);
+        assert_eq!(wrap("short", 40), vec!["short".to_string()]);
+        assert_eq!(wrap("", 40), vec![String::new()]);
+    }
 
     #[test]
     fn cameras_are_right_handed_orthonormal_frames() {
