@@ -91,6 +91,19 @@ impl Bounds {
     }
 
     /// The largest extent over views and axes (m); 1 when empty.
+    /// The scale (px per m) that fits view `k` into `width` by `height` px.
+    pub(super) fn view_scale(&self, k: usize, width: f64, height: f64) -> f64 {
+        let extent = |axis: usize| {
+            let e = self.max[k][axis] - self.min[k][axis];
+            if e.is_finite() && e > 0.0 {
+                e
+            } else {
+                self.size()
+            }
+        };
+        (width / extent(0)).min(height / extent(1))
+    }
+
     pub(super) fn size(&self) -> f64 {
         let size = (0..4)
             .flat_map(|k| (0..2).map(move |axis| (k, axis)))
@@ -168,9 +181,10 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
     let title_h = TITLE_H + CAPTION_LINE * lines.len().saturating_sub(1) as f64;
     let panel_w = f64::from(WIDTH) / 2.0;
     let panel_h = (f64::from(HEIGHT) - title_h - LEGEND_H) / 2.0;
-    // One scale for all four views, so lengths compare across them.
-    let scale = (panel_w.min(panel_h) - 2.0 * PAD - 16.0) / stage.bounds.size();
     for (k, camera) in cameras().iter().enumerate() {
+        // Each view fills its panel (one scale for all left the scene a third of most panels);
+        // each panel has its own scale bar.
+        let scale = stage.bounds.view_scale(k, panel_w - 2.0 * PAD - 16.0, panel_h - 2.0 * PAD - 36.0);
         let left = panel_w * (k % 2) as f64;
         let top = title_h + panel_h * (k / 2) as f64;
         out.open("g", [("class", "view")]);
@@ -196,9 +210,10 @@ pub(super) fn picture(stage: &Stage, shot: &Shot) -> String {
             )
         };
         view(out, stage, shot, camera, &project);
+        scale_bar(out, left + panel_w - 16.0, top + panel_h - 14.0, scale);
         out.close("g");
     }
-    legend(out, scale);
+    legend(out);
     svg::finish(doc)
 }
 
@@ -325,7 +340,7 @@ fn goal_frames(out: &mut Doc, stage: &Stage, shot: &Shot, project: &dyn Fn(&Poin
     out.close("g");
 }
 
-fn legend(out: &mut Doc, scale: f64) {
+fn legend(out: &mut Doc) {
     let y = f64::from(HEIGHT) - 10.0;
     let items = [
         ("#b8bdc4", "robot"),
@@ -350,9 +365,11 @@ fn legend(out: &mut Doc, scale: f64) {
         svg::text(out, x + 16.0, y, 12, "start", "#333333", label);
         x += 16.0 + 8.0 * label.len() as f64 + 18.0;
     }
-    // A scale bar: 0.1 m at the pictures' scale.
+}
+
+/// A 0.1 m bar at `scale` (px per m) ending at (`right`, `y`).
+fn scale_bar(out: &mut Doc, right: f64, y: f64, scale: f64) {
     let bar = 0.1 * scale;
-    let right = f64::from(WIDTH) - PAD;
     let line = [
         ("x1", px(right - bar)),
         ("y1", px(y - 4.0)),
@@ -417,6 +434,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Each view fills its panel: its extent at its scale touches the panel's width or height
+    /// and fits both; a view with no extent falls back to the scene's size.
+    #[test]
+    fn each_view_is_scaled_to_its_panel() {
+        let mut bounds = Bounds::default();
+        for p in [Point3::new(-0.2, -0.5, 0.0), Point3::new(0.6, 0.3, 1.2)] {
+            bounds.add(&p);
+        }
+        let (width, height) = (600.0, 400.0);
+        for k in 0..4 {
+            let scale = bounds.view_scale(k, width, height);
+            let (w, h) = (bounds.max[k][0] - bounds.min[k][0], bounds.max[k][1] - bounds.min[k][1]);
+            assert!(w * scale <= width + 1e-9 && h * scale <= height + 1e-9, "view {k}");
+            assert!(
+                (w * scale - width).abs() < 1e-9 || (h * scale - height).abs() < 1e-9,
+                "view {k} does not fill"
+            );
+        }
+        let mut point = Bounds::default();
+        point.add(&Point3::new(0.1, 0.2, 0.3));
+        assert_eq!(point.view_scale(0, width, height), height);
     }
 
     #[test]
