@@ -6,7 +6,10 @@
 //! Measured (2026-11-24, 2 idle cores): 38 s wall, 74 s of CPU (4.7 ms per robot); target met.
 //! Measured again (2026-11-27, the same run through `validate-design sweep catalog:modular6`):
 //! 78 s before and 85 s after the issue 28 landing, with identical records: the target is missed
-//! since the undecided-goal proofs of issue 22 (not bisected).
+//! since the undecided-goal proofs of issue 22 (not bisected). Again after the separating test
+//! of the joint-space search (paired `farm-bench` runs, 2 each): 85.2 s against 85.6 s for the
+//! landing before, identical records (the sweeps' 200-box searches skip that test; with it,
+//! 95.2 s against 83.5 s).
 //! It was 98 s before the refinement stopped computing a collision gradient where the task has
 //! no null space (a 6-joint arm on a pose goal), see `ik::refine`.
 #![allow(missing_docs)]
