@@ -462,19 +462,23 @@ mod tests {
         }
     }
 
+    /// Shipped designs of every kind the bounds meet: general, closed-form, spherical wrist,
+    /// redundant, and 5 joints.
+    const DESIGNS: [&str; 5] = [
+        "free-offset-6dof",
+        "economic-elbow",
+        "abb-irb-2600",
+        "free-redundant-7dof",
+        "paper-real-world",
+    ];
+
     /// The bounds themselves against FK at the corners of random boxes (where the remainders
     /// are largest) and inside them: displacement, turn, and both first-order remainders.
     #[test]
     fn the_bounds_hold_at_the_corners_and_inside() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for name in [
-            "free-offset-6dof",
-            "economic-elbow",
-            "abb-irb-2600",
-            "free-redundant-7dof",
-            "paper-real-world",
-        ] {
+        for name in DESIGNS {
             let model = preset(name);
             for tolerance in [Tolerance::Pose, Tolerance::ZSymmetric] {
                 let q0: Vec<f64> = model.random_configuration(&mut rng);
@@ -571,13 +575,7 @@ mod tests {
     fn a_box_holding_a_configuration_within_the_tolerance_is_never_ruled_out() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        for name in [
-            "free-offset-6dof",
-            "economic-elbow",
-            "abb-irb-2600",
-            "free-redundant-7dof",
-            "paper-real-world",
-        ] {
+        for name in DESIGNS {
             let model = preset(name);
             for tolerance in [Tolerance::Pose, Tolerance::ZSymmetric, Tolerance::Position] {
                 for _ in 0..400 {
