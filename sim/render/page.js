@@ -150,7 +150,10 @@
   }
   const camera = new T.PerspectiveCamera(40, 1, size / 100, size * 20);
   camera.up.set(0, 0, 1);
-  camera.position.copy(centre).add(new T.Vector3(1.2, -1.6, 0.9).multiplyScalar(size));
+  // Framed: the sphere around robot, obstacles and goals just fills the 40 degree view (5 % to
+  // spare), rather than starting half again as far out.
+  const distance = (1.05 * size / 2) / Math.sin((20 * Math.PI) / 180);
+  camera.position.copy(centre).add(new T.Vector3(1.2, -1.6, 0.9).normalize().multiplyScalar(distance));
   const controls = new T.OrbitControls(camera, canvas);
   controls.target.copy(centre);
   controls.update();

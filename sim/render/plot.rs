@@ -207,9 +207,8 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             point.b,
             svg::mm(point.distance_m)
         );
-        let anchor = if cx > (left + right) / 2.0 { "end" } else { "start" };
-        let dx = if anchor == "end" { -10.0 } else { 10.0 };
-        svg::text(out, cx + dx, (cy - 10.0).max(top + 12.0), 12, anchor, "#000000", &label);
+        // On the title's line, right-aligned: beside its point the label covered the data.
+        svg::text(out, right, 24.0, 12, "end", "#000000", &format!("circled: {label}"));
     }
     if segments.is_empty() {
         svg::text(
