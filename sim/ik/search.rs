@@ -205,13 +205,13 @@ impl<'a> Judge<'a> {
             moves: &self.moves,
             turns: &self.turns,
         };
-        if linear_rules_out(goal, &self.ws, &bounds) {
+        let (position_rest, axis_rest) = remainders(&self.ws, &bounds);
+        if linear_rules_out(goal, &self.ws, &bounds, &position_rest, &axis_rest) {
             return Judged::RuledOut;
         }
         if !self.separating {
             return Judged::Split(self.coarse_split(position_gap, orientation_gap), self.moves[0]);
         }
-        let (position_rest, axis_rest) = remainders(&self.ws, &bounds, 1.0);
         let separating = super::separate::BoxBounds {
             half: &self.half,
             revolute: &self.revolute,
@@ -321,9 +321,9 @@ const MIXES: [f64; 7] = [1.0, 0.9, 0.7, 0.5, 0.3, 0.1, 0.0];
 /// far the later joints moved it). Orientation is measured by `tr(R_g^T R)` (`pose`, at least
 /// `1 + 2 cos(tol)` within the tolerance) or `z . z_g` (`z_symmetric`), both linear in the
 /// tool's axes. A weighted sum of the two normalised excesses that stays positive over the box
-/// means one of them always does. `ws` holds the Jacobian at the box centre. True when the
-/// box is ruled out.
-fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> bool {
+/// means one of them always does. `ws` holds the Jacobian at the box centre, the rests are
+/// [`remainders`]. True when the box is ruled out.
+fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds, position_rest: &[f64], axis_rest: &[f64]) -> bool {
     let half = bounds.half;
     let tool = &ws.tool_in_world;
     let offset = tool.translation.vector - goal.position;
@@ -333,9 +333,8 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds) -> b
     }
     let along = offset / distance;
     let measure = Orientation::of(goal, &tool.rotation);
-    let (mut position_rest, mut orientation_rest) = remainders(ws, bounds, measure.axes);
-    position_rest.iter_mut().for_each(|r| *r /= REACHED_POSITION_M);
-    orientation_rest.iter_mut().for_each(|r| *r /= measure.scale);
+    let position_rest: Vec<f64> = position_rest.iter().map(|r| r / REACHED_POSITION_M).collect();
+    let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| r * measure.axes / measure.scale).collect();
     // Per joint: the rates at the centre along the error direction and of the orientation
     // measure.
     let dof = half.len();
@@ -417,10 +416,10 @@ impl Orientation {
     }
 }
 
-/// Per joint, the second-order remainders over the box: of the tool position (m) and of the
-/// orientation measure ([`Orientation`]), beyond the centre's rates times the turns.
-/// `axes` is [`Orientation::axes`].
-fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds, axes: f64) -> (Vec<f64>, Vec<f64>) {
+/// Per joint, the second-order remainders over the box, beyond the centre's rates times the
+/// turns: of the tool position (m) and of one tool axis (a unit vector's displacement; the
+/// orientation measure of [`Orientation`] reads [`Orientation::axes`] of them).
+fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f64>, Vec<f64>) {
     let dof = bounds.half.len();
     let (mut position, mut orientation) = (vec![0.0; dof], vec![0.0; dof]);
     for j in (0..dof).filter(|&j| bounds.revolute[j]) {
@@ -430,7 +429,7 @@ fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds, axes: f64) -> (Vec<f64>
         let lever = ws.jacobian.column(j).fixed_rows::<3>(0).norm();
         let (moved, turned) = (bounds.moves[j + 1], bounds.turns[j + 1]);
         position[j] = second * (lever + moved) + h * moved;
-        orientation[j] = axes * (second + h * turned);
+        orientation[j] = second + h * turned;
     }
     (position, orientation)
 }
@@ -498,8 +497,8 @@ mod tests {
                         turns: &judge.turns,
                     };
                     let axes = Orientation::of(&goal, &judge.ws.tool_in_world.rotation).axes;
-                    let (position_rest, orientation_rest) = remainders(&judge.ws, &bounds, axes);
-                    let (_, axis_rest) = remainders(&judge.ws, &bounds, 1.0);
+                    let (position_rest, axis_rest) = remainders(&judge.ws, &bounds);
+                    let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| axes * r).collect();
                     let axis_rest: f64 = axis_rest.iter().sum();
                     let checked_axes: &[usize] = if tolerance == Tolerance::Pose { &[0, 1, 2] } else { &[2] };
                     let at_centre = judge.ws.tool_in_world;

@@ -90,7 +90,6 @@ impl Bounds {
         }
     }
 
-    /// The largest extent over views and axes (m); 1 when empty.
     /// The scale (px per m) that fits view `k` into `width` by `height` px.
     pub(super) fn view_scale(&self, k: usize, width: f64, height: f64) -> f64 {
         let extent = |axis: usize| {
@@ -104,6 +103,7 @@ impl Bounds {
         (width / extent(0)).min(height / extent(1))
     }
 
+    /// The largest extent over views and axes (m); 1 when empty.
     pub(super) fn size(&self) -> f64 {
         let size = (0..4)
             .flat_map(|k| (0..2).map(move |axis| (k, axis)))
@@ -343,14 +343,14 @@ fn goal_frames(out: &mut Doc, stage: &Stage, shot: &Shot, project: &dyn Fn(&Poin
 fn legend(out: &mut Doc) {
     let y = f64::from(HEIGHT) - 10.0;
     let items = [
-        ("#b8bdc4", "robot"),
-        ("#5c8fd1", "obstacle"),
-        ("#e01f24", "blocking pair"),
-        ("#1accd9", "closest pair"),
-        (outcome_colour("reached"), "goal reached"),
-        (outcome_colour("no_path"), "no path"),
-        (outcome_colour("unreachable"), "unreachable"),
-        (outcome_colour("undecided"), "undecided"),
+        (hex(LINK_COLOURS[0], 1.0), "robot"),
+        (hex(OBSTACLE_COLOUR, 1.0), "obstacle"),
+        (hex(BLOCKED_COLOUR, 1.0), "blocking pair"),
+        (hex(CLOSEST_COLOUR, 1.0), "closest pair"),
+        (outcome_colour("reached").to_string(), "goal reached"),
+        (outcome_colour("no_path").to_string(), "no path"),
+        (outcome_colour("unreachable").to_string(), "unreachable"),
+        (outcome_colour("undecided").to_string(), "undecided"),
     ];
     let mut x = PAD;
     for (colour, label) in items {
@@ -359,7 +359,7 @@ fn legend(out: &mut Doc) {
             ("y", px(y - 11.0)),
             ("width", "12".into()),
             ("height", "12".into()),
-            ("fill", colour.into()),
+            ("fill", colour),
         ];
         out.empty("rect", swatch);
         svg::text(out, x + 16.0, y, 12, "start", "#333333", label);
