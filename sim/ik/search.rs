@@ -13,11 +13,11 @@
 //! (the angle of a product is at most the sum of the angles; a direction at angle `s` from an
 //! axis moves by at most `h sin s`).
 //!
-//! A box these bounds keep is tried against first-order ones ([`super::separate`]: the
+//! A box these bounds keep is tried against first-order ones (`ik::separate`: the
 //! residual's linear model over the box, in the direction the model misses the tolerance by
 //! most), and, once small, split at the joint that keeps that test from discarding it:
 //! splitting by the zeroth-order bound alone cut joints that move the tool's position while its
-//! orientation was what could rule the box out (see [`FIRST_ORDER_M`]). A box shrunk to a point
+//! orientation was what could rule the box out (see `FIRST_ORDER_M`). A box shrunk to a point
 //! on the tolerance's edge is left open after one local solve, never split further: splitting
 //! it again only repeated it until the budget ran out.
 
