@@ -33,6 +33,7 @@ fn main() {
         reference: None,
         top: 5,
         ranking: Default::default(),
+        stop: None,
     };
     let start = Instant::now();
     let result = run(&designs, &scenarios, &opts, &Silent).expect("the brute force runs");

@@ -209,7 +209,50 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
         let _ = std::fs::remove_file(&temp);
         return Err(error.into());
     }
+    sync_folder(&dir);
     Ok(())
+}
+
+/// Syncs a folder's entries (a rename or a new name) to disk. Best effort: some file systems
+/// refuse to sync a directory, and the file's own data is already synced.
+pub fn sync_folder(dir: &Path) {
+    if let Ok(folder) = std::fs::File::open(dir) {
+        let _ = folder.sync_all();
+    }
+}
+
+/// Whether `file_name` is a temporary [`write_atomic`] makes for one of `targets`
+/// (`.NAME.PID.N.tmp`): left behind only by a process killed mid-write.
+pub fn is_temporary_of(file_name: &str, targets: &[&str]) -> bool {
+    let Some(rest) = file_name.strip_prefix('.').and_then(|r| r.strip_suffix(".tmp")) else {
+        return false;
+    };
+    targets.iter().any(|target| {
+        rest.strip_prefix(target)
+            .and_then(|r| r.strip_prefix('.'))
+            .and_then(|r| r.split_once('.'))
+            .is_some_and(|(pid, n)| {
+                let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+                digits(pid) && digits(n)
+            })
+    })
+}
+
+/// Removes from `dir` the temporaries of `targets` that killed writers left (see
+/// [`is_temporary_of`]); returns how many. The caller must hold the folder (no live writer).
+///
+/// # Errors
+/// The folder cannot be listed or a temporary cannot be removed.
+pub fn remove_temporaries(dir: &Path, targets: &[&str]) -> std::io::Result<usize> {
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        if entry.file_type()?.is_file() && is_temporary_of(&entry.file_name().to_string_lossy(), targets) {
+            std::fs::remove_file(entry.path())?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
 }
 
 fn create_temp(dir: &Path, name: &str) -> std::io::Result<(PathBuf, std::fs::File)> {
@@ -228,6 +271,24 @@ fn create_temp(dir: &Path, name: &str) -> std::io::Result<(PathBuf, std::fs::Fil
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_our_temporaries_of_the_named_targets_are_temporaries() {
+        let targets = ["sweep.json", "results.jsonl"];
+        assert!(is_temporary_of(".sweep.json.4711.0.tmp", &targets));
+        assert!(is_temporary_of(".results.jsonl.12.345.tmp", &targets));
+        for name in [
+            "sweep.json",
+            ".sweep.json.tmp",
+            ".sweep.json.x.0.tmp",
+            ".sweep.json.1.0.1.tmp",
+            ".notes.txt.1.0.tmp",
+            "sweep.json.1.0.tmp",
+            ".sweep.json.1..tmp",
+        ] {
+            assert!(!is_temporary_of(name, &targets), "{name}");
+        }
+    }
 
     #[test]
     fn reads_are_remembered_and_refused_as_outputs_through_links() {

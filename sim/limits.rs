@@ -33,7 +33,7 @@ pub const MAX_JOINT_LIMIT: f64 = 1000.0;
 
 /// A byte count for messages.
 pub fn bytes(n: u64) -> String {
-    if n >= 1 << 20 && n % (1 << 20) == 0 {
+    if n >= 1 << 20 && n.is_multiple_of(1 << 20) {
         format!("{} MiB", n >> 20)
     } else {
         format!("{n} bytes")

@@ -37,6 +37,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        Err(error @ Failure::Sweep(proving_ground::sweep::SweepError::Interrupted { .. })) => {
+            eprintln!("{error}");
+            cli::interrupted_exit_code()
+        }
         Err(error) => {
             eprintln!("error: {error}");
             ExitCode::from(2)

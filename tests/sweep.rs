@@ -6,6 +6,7 @@ mod common;
 
 use assert_cmd::Command;
 use common::repo;
+use sha2::Digest;
 use std::path::Path;
 
 fn validate_design() -> Command {
@@ -93,13 +94,24 @@ fn an_interrupted_sweep_resumes_without_running_its_finished_pairs() {
     std::fs::create_dir(&resumed).expect("mkdir");
     std::fs::copy(whole.join("sweep.json"), resumed.join("sweep.json")).expect("copy");
     let text = read(&whole.join("results.jsonl"));
-    let lines: Vec<&str> = text.lines().collect();
+    // Each line of the partial log carries its sweep's identity: the start of the manifest's
+    // SHA-256.
+    let manifest = read(&whole.join("sweep.json"));
+    let id: String = sha2::Sha256::digest(manifest.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let stamped = |line: &str| format!("{{\"sweep\":\"{}\",\"record\":{line}}}", &id[..16]);
+    let lines: Vec<String> = text.lines().map(stamped).collect();
     let mut partial: String = lines[..6].iter().rev().map(|l| format!("{l}\n")).collect();
     partial.push_str(&lines[6][..lines[6].len() / 2]);
     std::fs::write(resumed.join("pairs.partial.jsonl"), partial).expect("write");
     let output = sweep(&resumed, &[]);
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("10 pairs (4 computed now, 6 resumed)"), "{stderr}");
+    assert!(
+        stderr.contains("10 pairs (4 computed now, 6 resumed; 1 line cut short or damaged left out)"),
+        "{stderr}"
+    );
     assert_same_files(&whole, &resumed);
     // A finished sweep run again computes nothing.
     let output = sweep(&resumed, &[]);
@@ -143,6 +155,136 @@ fn a_killed_sweep_keeps_every_pair_it_finished() {
         "{stderr}"
     );
     assert_same_files(&whole, &killed);
+}
+
+/// A reach-only sweep of catalog robots that runs for many seconds on one thread: long enough
+/// to be caught running.
+fn long_sweep(out: &Path, extra: &[&str]) -> std::process::Child {
+    std::process::Command::new(assert_cmd::cargo::cargo_bin("validate-design"))
+        .current_dir(repo())
+        .args([
+            "sweep",
+            "catalog:modular6",
+            "--scenarios",
+            SCENARIOS[0],
+            "--shard",
+            "1/25",
+            "--threads",
+            "1",
+            "--quiet",
+        ])
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("starts")
+}
+
+fn lines_logged(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("pairs.partial.jsonl")).map_or(0, |t| t.lines().count())
+}
+
+fn wait_for_lines(dir: &Path, lines: usize) {
+    let start = std::time::Instant::now();
+    while lines_logged(dir) < lines && start.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn sigint_stops_a_sweep_that_keeps_every_pair_it_finished_and_resumes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    let child = long_sweep(&out, &[]);
+    wait_for_lines(&out, 20);
+    let status = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success());
+    let output = child.wait_with_output().expect("reaped");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    let kept = lines_logged(&out);
+    assert!(
+        stderr.contains(&format!("interrupted: {kept} of 625 pairs finished and kept in")),
+        "{kept} lines logged: {stderr}"
+    );
+    assert!(read(&out.join("pairs.partial.jsonl")).ends_with('\n'));
+    // Resumed to the end: the records are the ones a sweep without interruption writes.
+    let resumed = validate_design()
+        .args(["sweep", "catalog:modular6", "--scenarios", SCENARIOS[0], "--shard", "1/25", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("({} computed now, {kept} resumed)", 625 - kept)),
+        "{stderr}"
+    );
+    let whole = dir.path().join("whole");
+    let fresh = validate_design()
+        .args([
+            "sweep",
+            "catalog:modular6",
+            "--scenarios",
+            SCENARIOS[0],
+            "--shard",
+            "1/25",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&whole)
+        .output()
+        .expect("runs");
+    assert!(fresh.status.success());
+    assert_same_files(&whole, &out);
+}
+
+#[test]
+fn one_run_writes_a_folder_at_a_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    let mut first = long_sweep(&out, &[]);
+    wait_for_lines(&out, 1);
+    let holder = format!("in use by another validate-design (pid {})", first.id());
+    let second = validate_design()
+        .args([
+            "sweep",
+            "designs/ur5e.json",
+            "--scenarios",
+            SCENARIOS[0],
+            "--seed",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let merge = validate_design()
+        .args(["merge", "no-such-shard", "--force", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let running = first.try_wait().expect("polled").is_none();
+    first.kill().expect("killed");
+    first.wait().expect("reaped");
+    assert!(running, "the first sweep ended before the others were tried");
+    for output in [second, merge] {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(&holder), "{stderr}");
+    }
+    // Its holder dead, the folder is taken over without any cleanup.
+    let taken = validate_design()
+        .args(["sweep", "designs/ur5e.json", "--scenarios", SCENARIOS[0], "--force", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(taken.status.success(), "{}", String::from_utf8_lossy(&taken.stderr));
 }
 
 #[test]
@@ -284,6 +426,30 @@ fn scores_are_zero_and_one_at_the_reference_worst_and_best_and_a_reference_is_re
         .expect("runs");
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("was run with IK seed 0 and 4 IK starts, this run with 1 and 4"));
+
+    // A reference that lost lines, or all of them, would shift every score: refused.
+    let results = read(&reference.join("results.jsonl"));
+    let designs = results.lines().count();
+    for kept in [designs - 3, 0] {
+        let cut = dir.path().join(format!("cut-{kept}"));
+        std::fs::create_dir(&cut).expect("mkdir");
+        std::fs::copy(reference.join("sweep.json"), cut.join("sweep.json")).expect("copy");
+        let lines: String = results.lines().take(kept).map(|l| format!("{l}\n")).collect();
+        std::fs::write(cut.join("results.jsonl"), lines).expect("write");
+        let output = validate_design()
+            .args(["sweep", "catalog:table1", "--scenarios", SCENARIOS[0], "--reference"])
+            .arg(&cut)
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!(
+                "results.jsonl holds {kept} records where its sweep.json lists {designs} designs x 1 scenarios"
+            )),
+            "{stderr}"
+        );
+    }
 }
 
 #[test]

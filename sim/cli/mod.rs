@@ -179,6 +179,43 @@ pub(crate) fn threads(count: Option<u64>) {
     }
 }
 
+/// Raised by SIGINT or SIGTERM once [`stop_on_signals`] installed its handler.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// The signal that raised [`STOP`] (0 before one came).
+static SIGNAL: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
+extern "C" fn on_stop_signal(signal: libc::c_int) {
+    // Only async-signal-safe work: two atomic stores, and the default action back, so a
+    // second Ctrl-C ends the process at once.
+    SIGNAL.store(signal, std::sync::atomic::Ordering::Relaxed);
+    STOP.store(true, std::sync::atomic::Ordering::Relaxed);
+    // SAFETY: signal(2) is async-signal-safe; SIG_DFL runs no code of ours.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+    }
+}
+
+/// For runs that keep their work as they go (sweeps): SIGINT and SIGTERM raise the returned
+/// flag instead of killing the process, so the run stops taking work, saves what finished and
+/// exits with [`interrupted_exit_code`]; a second signal kills as usual.
+pub(crate) fn stop_on_signals() -> &'static std::sync::atomic::AtomicBool {
+    let handler = on_stop_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+    // SAFETY: the handler only stores to atomics and calls signal(2), all async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, handler);
+        libc::signal(libc::SIGTERM, handler);
+    }
+    &STOP
+}
+
+/// 128 plus the signal's number, as a shell reports a process the signal ended (130 for
+/// SIGINT, 143 for SIGTERM).
+pub(crate) fn interrupted_exit_code() -> std::process::ExitCode {
+    let signal = SIGNAL.load(std::sync::atomic::Ordering::Relaxed);
+    let signal = if signal > 0 { signal } else { libc::SIGINT };
+    std::process::ExitCode::from(u8::try_from(128 + signal).unwrap_or(130))
+}
+
 /// The exit code of an outcome: 0 pass, 1 fail, 3 undecided (2 is a run that could not be made).
 pub(crate) fn exit_code(outcome: proving_ground::run::Outcome) -> std::process::ExitCode {
     match outcome {

@@ -183,6 +183,7 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
         reference: reference(args.reference.as_ref())?,
         top: usize::try_from(args.top).unwrap_or(usize::MAX),
         ranking: args.rank,
+        stop: Some(super::stop_on_signals()),
     };
     let progress = super::Bar::new("pairs", args.quiet, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
@@ -190,8 +191,16 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
     let result = result?;
     if !args.quiet {
         print!("{}", result.table);
+        let lines = |n: usize| if n == 1 { "1 line".to_string() } else { format!("{n} lines") };
+        let mut ignored = String::new();
+        if result.foreign > 0 {
+            ignored += &format!("; {} of another sweep left out", lines(result.foreign));
+        }
+        if result.damaged > 0 {
+            ignored += &format!("; {} cut short or damaged left out", lines(result.damaged));
+        }
         eprintln!(
-            "{} pairs ({} computed now, {} resumed){}",
+            "{} pairs ({} computed now, {} resumed{ignored}){}",
             result.records.len(),
             result.computed,
             result.records.len() - result.computed,
@@ -233,7 +242,10 @@ pub(crate) fn table1_command(args: &Table1Args) -> Result<ExitCode, Failure> {
     };
     let designs = inputs::resolve_designs(&[sweep::paper::TABLE_1_DESIGNS.to_string()], &LoadOptions::default())?;
     let scenarios = inputs::resolve_scenarios(&scenario_args)?;
-    let opts = sweep::paper::table_1_options(args.seed, args.out.clone(), args.force);
+    let opts = SweepOptions {
+        stop: Some(super::stop_on_signals()),
+        ..sweep::paper::table_1_options(args.seed, args.out.clone(), args.force)
+    };
     let progress = super::Bar::new("pairs", false, false);
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
     progress.bar.finish_and_clear();

@@ -369,7 +369,7 @@ fn check_binary_stl(bytes: &[u8]) -> Result<(), String> {
             Err(format!("{} bytes: too short for an STL file", bytes.len()))
         };
     };
-    let consistent = stated == held && (bytes.len() - HEADER) % TRIANGLE == 0;
+    let consistent = stated == held && (bytes.len() - HEADER).is_multiple_of(TRIANGLE);
     // "solid" opens ASCII STL, but some binary exporters write it into the header too.
     if trimmed.starts_with(b"solid") && !consistent {
         return Ok(());

@@ -99,6 +99,23 @@ pub enum SweepError {
         /// Why.
         message: String,
     },
+    /// The stop flag was raised (SIGINT or SIGTERM): the running pairs finished and were kept.
+    #[error("interrupted: {kept} of {total} pairs finished and kept{}", resume_hint(out.as_deref()))]
+    Interrupted {
+        /// Pairs finished (resumed or computed) and saved.
+        kept: usize,
+        /// Pairs of the sweep (or its shard).
+        total: usize,
+        /// The folder they are saved in.
+        out: Option<PathBuf>,
+    },
+}
+
+fn resume_hint(out: Option<&Path>) -> String {
+    out.map_or_else(
+        || " (in memory only: without --out nothing is saved)".into(),
+        |dir| format!(" in {}; run the same command again to resume", dir.display()),
+    )
 }
 
 /// What each pair runs.
@@ -181,6 +198,9 @@ pub struct SweepOptions {
     pub top: usize,
     /// How the per-task tables order designs (the tables only: records are the same).
     pub ranking: table::Ranking,
+    /// Raised to stop early (the CLI's SIGINT and SIGTERM): no pair starts after it, the running
+    /// ones finish and are saved, and the run ends with [`SweepError::Interrupted`].
+    pub stop: Option<&'static std::sync::atomic::AtomicBool>,
 }
 
 /// A finished sweep.
@@ -192,6 +212,11 @@ pub struct SweepResult {
     pub table: String,
     /// Pairs computed by this run (the others were resumed).
     pub computed: usize,
+    /// Lines of the folder's partial log left out as another sweep's; their pairs were computed.
+    pub foreign: usize,
+    /// Lines of the partial log left out as not whole records (cut short by a kill, damaged by
+    /// a crash); their pairs were computed again.
+    pub damaged: usize,
 }
 
 fn manifest(designs: &[DesignEntry], scenarios: &[ScenarioEntry], opts: &SweepOptions) -> store::Manifest {
@@ -242,10 +267,14 @@ pub fn run(
         .as_ref()
         .map(|r| reference_records(r, &opts.mode, scenarios))
         .transpose()?;
-    let mut done = match &opts.out {
+    // Held until the run returns: one writer per folder.
+    let _lock = opts.out.as_deref().map(store::lock).transpose()?;
+    let resumed = match &opts.out {
         Some(dir) => store::open(dir, &manifest, opts.force)?,
-        None => Vec::new(),
+        None => store::Resumed::default(),
     };
+    let (foreign, damaged) = (resumed.foreign, resumed.damaged);
+    let mut done = resumed.records;
     let total = designs.len() * scenarios.len();
     let pairs: Vec<(usize, usize)> = (0..total)
         .filter(|&i| opts.shard.is_none_or(|s| s.holds(i)))
@@ -281,10 +310,19 @@ pub fn run(
     let computed = todo.len();
     // Each record is logged as its pair finishes (no batches: a killed sweep loses only the
     // pairs still running, and no core waits for a batch's slowest pair).
-    let log = opts.out.as_deref().map(store::Log::open).transpose()?.map(std::sync::Mutex::new);
-    let records: Vec<Record> = todo
+    let log = opts
+        .out
+        .as_deref()
+        .map(|dir| store::Log::open(dir, &manifest))
+        .transpose()?
+        .map(std::sync::Mutex::new);
+    let stopped = || opts.stop.is_some_and(|flag| flag.load(std::sync::atomic::Ordering::Relaxed));
+    let records: Vec<Option<Record>> = todo
         .par_iter()
         .map(|&(d, s)| {
+            if stopped() {
+                return Ok(None);
+            }
             let (design, scenario) = (&designs[d], &scenarios[s]);
             let record = record::evaluate(&design.id, &scenario.id, design.load(), scenario.scenario.clone(), &opts.mode).map_err(|e| {
                 SweepError::Pair {
@@ -297,13 +335,21 @@ pub fn run(
                 log.lock().unwrap_or_else(std::sync::PoisonError::into_inner).write(&record)?;
             }
             progress.advance();
-            Ok(record)
+            Ok(Some(record))
         })
         .collect::<Result<_, SweepError>>()?;
     if let Some(log) = log {
         log.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).sync()?;
     }
-    done.extend(records);
+    let finished = records.len() - records.iter().filter(|r| r.is_none()).count();
+    if finished < records.len() {
+        return Err(SweepError::Interrupted {
+            kept: done.len() + finished,
+            total: pairs.len(),
+            out: opts.out.clone(),
+        });
+    }
+    done.extend(records.into_iter().flatten());
     let records = canonical(done, designs, scenarios, &pairs);
     let reference_name = reference_name(opts.reference.as_ref());
     let distributions = table::distributions(&records, reference.as_deref());
@@ -315,6 +361,8 @@ pub fn run(
         records,
         table: text,
         computed,
+        foreign,
+        damaged,
     })
 }
 
@@ -374,6 +422,28 @@ pub fn read_reference(dir: &Path) -> Result<Reference, SweepError> {
         return Err(error("holds no finished sweep (no results.jsonl): run it to the end first".into()));
     }
     let (records, sha256) = store::read_input_records(&results)?;
+    // Scores and percentiles over a cut or edited file shift without a sign: refused instead.
+    let expected = manifest.designs.len() * manifest.scenarios.len();
+    let mut pairs = std::collections::HashSet::with_capacity(records.len());
+    for record in &records {
+        let listed = manifest.designs.iter().any(|d| d.id == record.design) && manifest.scenarios.iter().any(|s| s.id == record.scenario);
+        if !listed || !pairs.insert((record.design.as_str(), record.scenario.as_str())) {
+            return Err(error(format!(
+                "results.jsonl holds design `{}` on `{}` {}: the file was edited; run its sweep again (with --force) to rebuild it",
+                record.design,
+                record.scenario,
+                if listed { "twice" } else { "which its sweep.json does not list" }
+            )));
+        }
+    }
+    if records.len() != expected {
+        return Err(error(format!(
+            "results.jsonl holds {} records where its sweep.json lists {} designs x {} scenarios = {expected} pairs: the file was cut short or edited; run its sweep again to rebuild it",
+            records.len(),
+            manifest.designs.len(),
+            manifest.scenarios.len()
+        )));
+    }
     Ok(Reference {
         dir: dir.to_path_buf(),
         manifest,
@@ -441,6 +511,8 @@ pub fn merge(
     top: usize,
     ranking: table::Ranking,
 ) -> Result<SweepResult, SweepError> {
+    // Taken first: a folder being written by a sweep is not merged into.
+    let _lock = store::lock(out)?;
     let (manifest, records) = store::read_shards(dirs)?;
     let merge_error = |message: String| SweepError::Merge {
         dir: out.to_path_buf(),
@@ -493,5 +565,7 @@ pub fn merge(
         records,
         table: text,
         computed: 0,
+        foreign: 0,
+        damaged: 0,
     })
 }

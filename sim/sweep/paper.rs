@@ -26,6 +26,7 @@ pub fn table_1_options(seed: u64, out: Option<PathBuf>, force: bool) -> SweepOpt
         reference: None,
         top: table::DEFAULT_TOP,
         ranking: table::Ranking::Loss,
+        stop: None,
     }
 }
 

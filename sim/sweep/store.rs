@@ -21,8 +21,12 @@ pub const RESULTS: &str = "results.jsonl";
 pub const CSV: &str = "results.csv";
 /// The ranked tables.
 pub const TABLE: &str = "table.txt";
+/// The lock file: held (`flock`) by the one run that writes the folder, for its whole life.
+pub const LOCK: &str = ".validate-design.lock";
 /// Version of the folder's layout and the record's fields.
 pub const FORMAT: u32 = 1;
+/// This tool's files in a sweep folder (the lock and interrupted writes' temporaries aside).
+const OURS: [&str; 5] = [MANIFEST, PARTIAL, RESULTS, CSV, TABLE];
 
 /// What a sweep was asked to do; two runs with equal manifests compute the same records.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -76,6 +80,93 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// A sweep folder held by this process: no other validate-design writes it until this is
+/// dropped (or the process ends, however it ends: the kernel releases the lock, so a dead
+/// run's folder is taken over without any cleanup).
+#[derive(Debug)]
+pub struct FolderLock {
+    _file: std::fs::File,
+}
+
+/// Takes `dir` (created if missing) for this process's writes.
+///
+/// # Errors
+/// [`SweepError::Folder`] when another process holds it (naming its pid) or the file system
+/// cannot lock; [`SweepError::Write`] when the folder or its lock file cannot be made.
+pub fn lock(dir: &Path) -> Result<FolderLock, SweepError> {
+    let write_error = |path: &Path, e: std::io::Error| SweepError::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let path = dir.join(LOCK);
+    // Not truncated on open: the holder's pid stays readable until the lock is ours.
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(|e| write_error(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            let _ = std::io::Read::read_to_string(&mut file, &mut holder);
+            let holder = holder.trim();
+            let pid = if holder.is_empty() {
+                String::new()
+            } else {
+                format!(" (pid {holder})")
+            };
+            return Err(SweepError::Folder {
+                dir: dir.to_path_buf(),
+                message: format!(
+                    "is in use by another validate-design{pid}: wait for it to finish or stop it; one run writes a folder at a time"
+                ),
+            });
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(SweepError::Folder {
+                dir: dir.to_path_buf(),
+                message: format!("cannot be locked ({e}): the file system must support flock, so that two runs never write one folder"),
+            })
+        }
+    }
+    let stamp = (|| -> std::io::Result<()> {
+        file.set_len(0)?;
+        std::io::Seek::rewind(&mut file)?;
+        writeln!(file, "{}", std::process::id())
+    })();
+    stamp.map_err(|e| write_error(&path, e))?;
+    Ok(FolderLock { _file: file })
+}
+
+/// The manifest's identity, carried by every line of the partial log: the start of the SHA-256
+/// of its text.
+fn identity(manifest: &Manifest) -> Result<String, SweepError> {
+    let hex = sha256_hex(manifest_text(manifest)?.as_bytes());
+    Ok(hex[..16].to_string())
+}
+
+/// One line of the partial log: a record and the sweep it belongs to.
+#[derive(Serialize, Deserialize)]
+struct Line {
+    sweep: String,
+    record: Record,
+}
+
+/// What a folder held for this sweep when it was opened.
+#[derive(Debug, Default)]
+pub struct Resumed {
+    /// Finished pairs of this very sweep.
+    pub records: Vec<Record>,
+    /// Lines of the partial log that another sweep wrote: ignored, their pairs computed.
+    pub foreign: usize,
+    /// Lines that are not records (cut short or damaged by a crash): ignored likewise.
+    pub damaged: usize,
+}
+
 fn write(path: &Path, text: &str) -> Result<(), SweepError> {
     crate::files::write_atomic(path, text.as_bytes(), true).map_err(|e| SweepError::Write {
         path: path.to_path_buf(),
@@ -118,84 +209,123 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>, SweepError> {
     })
 }
 
+/// What a folder's manifest is.
+enum Found {
+    /// No `sweep.json`.
+    Nothing,
+    /// A readable one.
+    Manifest(Manifest),
+    /// One that does not parse (a crash while it was first written, on a file system that does
+    /// not order a rename after the data): why not.
+    Damaged(String),
+}
+
 /// Prepares `dir` for `manifest`: a new or empty folder gets the manifest; a folder holding the
 /// same sweep is resumed (its finished records returned); anything else is refused unless
-/// `force`, which removes this tool's files there (and nothing else) and starts over.
+/// `force`, which removes this tool's files there (and nothing else) and starts over. The caller
+/// holds the folder ([`lock`]): temporaries that killed writes left are removed first, and a
+/// damaged manifest is rewritten when the partial log's lines prove the folder is this sweep's.
 ///
 /// # Errors
 /// [`SweepError::Folder`] naming the first difference, or a file that is not ours.
-pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Vec<Record>, SweepError> {
-    std::fs::create_dir_all(dir).map_err(|e| SweepError::Write {
-        path: dir.to_path_buf(),
+pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Resumed, SweepError> {
+    let folder_error = |message: String| SweepError::Folder {
+        dir: dir.to_path_buf(),
+        message,
+    };
+    let write_error = |path: &Path, e: std::io::Error| SweepError::Write {
+        path: path.to_path_buf(),
         message: e.to_string(),
-    })?;
-    let existing = read_manifest(dir)?;
-    match existing {
-        Some(found) if &found == manifest && !force => {
+    };
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    crate::files::remove_temporaries(dir, &OURS).map_err(|e| write_error(dir, e))?;
+    // The partial log's temporary before it was written through `write_atomic`.
+    remove_ours(dir, &[LEGACY_REWRITE])?;
+    let id = identity(manifest)?;
+    let found = match read_manifest(dir) {
+        Ok(Some(found)) => Found::Manifest(found),
+        Ok(None) => Found::Nothing,
+        Err(e) => Found::Damaged(e.to_string()),
+    };
+    if let Found::Damaged(why) = &found {
+        if !force && !dir.join(RESULTS).exists() && dir.join(PARTIAL).exists() {
+            let partial = read_partial(&dir.join(PARTIAL), &id)?;
+            if !partial.records.is_empty() {
+                // Lines stamped with this manifest's identity: the folder is this sweep's.
+                write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
+                return resume_partial(dir, partial, &id);
+            }
+        }
+        if !force {
+            return Err(folder_error(format!(
+                "{why}; its partial log holds no pair of this sweep: `--force` starts the sweep over in this folder (replacing this tool's files only)"
+            )));
+        }
+    }
+    match found {
+        Found::Manifest(found) if &found == manifest && !force => {
             if dir.join(RESULTS).exists() {
-                return read_records(&dir.join(RESULTS));
+                let records = read_records(&dir.join(RESULTS))
+                    .map_err(|e| folder_error(format!("{e}; `--force` computes the sweep again in this folder")))?;
+                return Ok(Resumed {
+                    records,
+                    ..Resumed::default()
+                });
             }
             let partial = dir.join(PARTIAL);
             if partial.exists() {
-                let records = read_partial(&partial)?;
-                // A line cut short by an interruption is dropped here and in the file, so the
-                // next batch appends after whole lines.
-                let mut text = String::new();
-                for record in &records {
-                    text.push_str(&record_line(record)?);
-                }
-                rewrite_log(&partial, &text)?;
-                return Ok(records);
+                return resume_partial(dir, read_partial(&partial, &id)?, &id);
             }
-            Ok(Vec::new())
+            Ok(Resumed::default())
         }
-        Some(found) if !force && only_designs_differ(&found, manifest) => changed_designs(dir, &found, manifest),
-        Some(found) if !force => Err(SweepError::Folder {
-            dir: dir.to_path_buf(),
-            message: format!(
-                "holds another sweep ({}); pass --force to replace it, or another --out",
-                difference(&found, manifest)
-            ),
-        }),
-        _ => {
-            let ours = [MANIFEST, PARTIAL, RESULTS, CSV, TABLE];
-            let entries = std::fs::read_dir(dir).map_err(|e| SweepError::Write {
-                path: dir.to_path_buf(),
-                message: e.to_string(),
-            })?;
+        Found::Manifest(found) if !force && only_designs_differ(&found, manifest) => changed_designs(dir, &found, manifest),
+        Found::Manifest(found) if !force => Err(folder_error(format!(
+            "holds another sweep ({}); pass --force to replace it, or another --out",
+            difference(&found, manifest)
+        ))),
+        found => {
+            let entries = std::fs::read_dir(dir).map_err(|e| write_error(dir, e))?;
             let foreign: Vec<String> = entries
                 .filter_map(Result::ok)
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|name| !ours.contains(&name.as_str()))
+                .filter(|name| !OURS.contains(&name.as_str()) && name != LOCK)
                 .collect();
-            if existing.is_none() {
-                let mut present: Vec<String> = ours
+            if matches!(found, Found::Nothing) {
+                let mut present: Vec<String> = OURS
                     .iter()
                     .filter(|name| dir.join(name).exists())
                     .map(|name| (*name).to_string())
                     .collect();
                 present.extend(foreign);
                 if !present.is_empty() {
-                    return Err(SweepError::Folder {
-                        dir: dir.to_path_buf(),
-                        message: format!(
-                            "is not empty and holds no sweep ({}): give a new or empty folder",
-                            present.join(", ")
-                        ),
-                    });
+                    return Err(folder_error(format!(
+                        "is not empty and holds no sweep ({}): give a new or empty folder",
+                        present.join(", ")
+                    )));
                 }
             }
-            if let Some(name) = ours.iter().find(|name| crate::files::is_input(&dir.join(name))) {
-                return Err(SweepError::Folder {
-                    dir: dir.to_path_buf(),
-                    message: format!("{name} is an input of this run (the reference, or a shard being merged): give another --out"),
-                });
+            if let Some(name) = OURS.iter().find(|name| crate::files::is_input(&dir.join(name))) {
+                return Err(folder_error(format!(
+                    "{name} is an input of this run (the reference, or a shard being merged): give another --out"
+                )));
             }
-            remove_ours(dir, &ours)?;
+            remove_ours(dir, &OURS)?;
             write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
-            Ok(Vec::new())
+            Ok(Resumed::default())
         }
     }
+}
+
+/// Where an older version rewrote the partial log through (removed when found).
+const LEGACY_REWRITE: &str = "pairs.partial.jsonl.rewrite";
+
+/// Resumes from the partial log as read: when lines were ignored (another sweep's, or cut short
+/// by an interruption) the log is rewritten without them, so the next lines follow whole ones.
+fn resume_partial(dir: &Path, partial: Resumed, id: &str) -> Result<Resumed, SweepError> {
+    if partial.foreign + partial.damaged > 0 {
+        rewrite_log(&dir.join(PARTIAL), &partial.records, id)?;
+    }
+    Ok(partial)
 }
 
 /// Whether `found` is the same sweep as `wanted` but for designs added, removed or edited (an
@@ -212,7 +342,7 @@ fn only_designs_differ(found: &Manifest, wanted: &Manifest) -> bool {
 /// the designs both have unchanged (same id, same file and model hashes) are kept, as the new
 /// sweep's finished pairs, and the rest computed again. The partial log is written before the
 /// old results and manifest go, so an interruption anywhere leaves a folder this reads again.
-fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<Vec<Record>, SweepError> {
+fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<Resumed, SweepError> {
     let unchanged: std::collections::HashSet<&str> = manifest
         .designs
         .iter()
@@ -220,21 +350,24 @@ fn changed_designs(dir: &Path, found: &Manifest, manifest: &Manifest) -> Result<
         .map(|d| d.id.as_str())
         .collect();
     let previous = if dir.join(RESULTS).exists() {
-        read_records(&dir.join(RESULTS))?
+        Resumed {
+            records: read_records(&dir.join(RESULTS))?,
+            ..Resumed::default()
+        }
     } else if dir.join(PARTIAL).exists() {
-        read_partial(&dir.join(PARTIAL))?
+        read_partial(&dir.join(PARTIAL), &identity(found)?)?
     } else {
-        Vec::new()
+        Resumed::default()
     };
-    let kept: Vec<Record> = previous.into_iter().filter(|r| unchanged.contains(r.design.as_str())).collect();
-    let mut text = String::new();
-    for record in &kept {
-        text.push_str(&record_line(record)?);
-    }
-    rewrite_log(&dir.join(PARTIAL), &text)?;
+    let kept: Vec<Record> = previous
+        .records
+        .into_iter()
+        .filter(|r| unchanged.contains(r.design.as_str()))
+        .collect();
+    rewrite_log(&dir.join(PARTIAL), &kept, &identity(manifest)?)?;
     remove_ours(dir, &[RESULTS, CSV, TABLE])?;
     write(&dir.join(MANIFEST), &manifest_text(manifest)?)?;
-    Ok(kept)
+    Ok(Resumed { records: kept, ..previous })
 }
 
 /// Removes those of this tool's files `names` that are in `dir`.
@@ -297,15 +430,13 @@ fn difference(found: &Manifest, wanted: &Manifest) -> String {
 }
 
 /// Replaces the sweep's own partial log (never an input: the folder was checked to be this
-/// sweep's) through a temporary file beside it, so an interruption leaves the old or the new.
-fn rewrite_log(path: &Path, text: &str) -> Result<(), SweepError> {
-    let error = |e: std::io::Error| SweepError::Write {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let temporary = path.with_extension("jsonl.rewrite");
-    std::fs::write(&temporary, text).map_err(error)?;
-    std::fs::rename(&temporary, path).map_err(error)
+/// sweep's) with `records`, atomically and synced, so an interruption leaves the old or the new.
+fn rewrite_log(path: &Path, records: &[Record], id: &str) -> Result<(), SweepError> {
+    let mut text = String::new();
+    for record in records {
+        text.push_str(&line_text(record, id)?);
+    }
+    write(path, &text)
 }
 
 /// How often the partial log is synced to disk while records are written as they finish.
@@ -318,14 +449,17 @@ pub struct Log {
     path: PathBuf,
     file: std::fs::File,
     synced: std::time::Instant,
+    /// The manifest's identity, stamped on every line.
+    id: String,
 }
 
 impl Log {
-    /// Opens `dir`'s partial log for appending.
+    /// Opens `dir`'s partial log for appending the records of `manifest`'s sweep.
     ///
     /// # Errors
     /// [`SweepError::Write`].
-    pub fn open(dir: &Path) -> Result<Self, SweepError> {
+    pub fn open(dir: &Path, manifest: &Manifest) -> Result<Self, SweepError> {
+        let id = identity(manifest)?;
         let path = dir.join(PARTIAL);
         let file = std::fs::OpenOptions::new()
             .create(true)
@@ -339,6 +473,7 @@ impl Log {
             path,
             file,
             synced: std::time::Instant::now(),
+            id,
         })
     }
 
@@ -347,7 +482,9 @@ impl Log {
     /// # Errors
     /// [`SweepError::Write`].
     pub fn write(&mut self, record: &Record) -> Result<(), SweepError> {
-        self.file.write_all(record_line(record)?.as_bytes()).map_err(|e| self.error(&e))?;
+        self.file
+            .write_all(line_text(record, &self.id)?.as_bytes())
+            .map_err(|e| self.error(&e))?;
         if self.synced.elapsed() >= SYNC_EVERY {
             self.sync()?;
         }
@@ -370,6 +507,18 @@ impl Log {
             message: e.to_string(),
         }
     }
+}
+
+/// A partial log's line: `record` stamped with its sweep's identity.
+fn line_text(record: &Record, id: &str) -> Result<String, SweepError> {
+    let line = Line {
+        sweep: id.to_string(),
+        record: record.clone(),
+    };
+    serde_json::to_string(&line).map(|t| t + "\n").map_err(|e| SweepError::Folder {
+        dir: PathBuf::new(),
+        message: e.to_string(),
+    })
 }
 
 fn record_line(record: &Record) -> Result<String, SweepError> {
@@ -415,25 +564,26 @@ fn parse_records(text: &str) -> Result<Vec<Record>, String> {
         .collect()
 }
 
-/// Reads the partial log; a last line cut short by an interruption is dropped (its pair runs
-/// again).
-fn read_partial(path: &Path) -> Result<Vec<Record>, SweepError> {
+/// Reads the partial log: the records stamped with `id`; lines of another sweep (or of a
+/// version that did not stamp them) and lines that are not records (cut short by a kill, or
+/// zero-filled by a power loss) are counted and left out, their pairs run again.
+fn read_partial(path: &Path, id: &str) -> Result<Resumed, SweepError> {
     let text = read_text(path)?;
-    let lines: Vec<&str> = text.split_inclusive('\n').collect();
-    let mut records = Vec::with_capacity(lines.len());
-    for (index, line) in lines.iter().enumerate() {
-        match serde_json::from_str::<Record>(line.trim_end()) {
-            Ok(record) => records.push(record),
-            Err(_) if index + 1 == lines.len() && !line.ends_with('\n') => {}
-            Err(e) => {
-                return Err(SweepError::Folder {
-                    dir: path.to_path_buf(),
-                    message: format!("line {}: not a sweep record: {e}", index + 1),
-                })
-            }
+    let mut resumed = Resumed::default();
+    for line in text.split_inclusive('\n') {
+        if !line.ends_with('\n') {
+            // Cut short, even where what came through parses: the next line would join it.
+            resumed.damaged += 1;
+            continue;
+        }
+        match serde_json::from_str::<Line>(line.trim_end()) {
+            Ok(line) if line.sweep == id => resumed.records.push(line.record),
+            Ok(_) => resumed.foreign += 1,
+            Err(_) if serde_json::from_str::<Record>(line.trim_end()).is_ok() => resumed.foreign += 1,
+            Err(_) => resumed.damaged += 1,
         }
     }
-    Ok(records)
+    Ok(resumed)
 }
 
 /// Writes the finished sweep: records in canonical order, the CSV and the tables; removes the
@@ -449,13 +599,8 @@ pub fn finish(dir: &Path, records: &[Record], csv: &str, table: &str) -> Result<
     write(&dir.join(RESULTS), &text)?;
     write(&dir.join(CSV), csv)?;
     write(&dir.join(TABLE), table)?;
-    let partial = dir.join(PARTIAL);
-    if partial.exists() {
-        std::fs::remove_file(&partial).map_err(|e| SweepError::Write {
-            path: partial,
-            message: e.to_string(),
-        })?;
-    }
+    remove_ours(dir, &[PARTIAL])?;
+    crate::files::sync_folder(dir);
     Ok(())
 }
 
@@ -568,18 +713,98 @@ mod tests {
     #[test]
     fn a_resumed_partial_log_loses_its_cut_line_so_the_next_batch_appends_after_whole_lines() {
         let dir = tempfile::tempdir().expect("temp dir");
-        assert!(open(dir.path(), &manifest(), false).expect("new folder").is_empty());
-        let mut log = Log::open(dir.path()).expect("log");
+        assert!(open(dir.path(), &manifest(), false).expect("new folder").records.is_empty());
+        let mut log = Log::open(dir.path(), &manifest()).expect("log");
         log.write(&record("a")).expect("append");
         log.write(&record("b")).expect("append");
         drop(log);
         let partial = dir.path().join(PARTIAL);
         let mut text = std::fs::read_to_string(&partial).expect("read");
-        text.push_str("{\"design\":\"c\",\"sce");
+        text.push_str("{\"sweep\":\"0123\",\"rec");
         std::fs::write(&partial, &text).expect("write");
-        assert_eq!(open(dir.path(), &manifest(), false).expect("resumed").len(), 2);
-        Log::open(dir.path()).expect("log").write(&record("c")).expect("append");
-        assert_eq!(open(dir.path(), &manifest(), false).expect("resumed again").len(), 3);
+        let resumed = open(dir.path(), &manifest(), false).expect("resumed");
+        assert_eq!((resumed.records.len(), resumed.damaged), (2, 1));
+        Log::open(dir.path(), &manifest())
+            .expect("log")
+            .write(&record("c"))
+            .expect("append");
+        let resumed = open(dir.path(), &manifest(), false).expect("resumed again");
+        assert_eq!((resumed.records.len(), resumed.damaged), (3, 0));
+    }
+
+    #[test]
+    fn lines_of_another_sweep_and_damaged_lines_are_left_out_and_counted() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        open(dir.path(), &manifest(), false).expect("new folder");
+        let other = Manifest { seed: 1, ..manifest() };
+        Log::open(dir.path(), &manifest())
+            .expect("log")
+            .write(&record("a"))
+            .expect("append");
+        Log::open(dir.path(), &other).expect("log").write(&record("b")).expect("append");
+        let partial = dir.path().join(PARTIAL);
+        let mut text = std::fs::read_to_string(&partial).expect("read");
+        // What a power loss leaves: a run of zero bytes where a line was.
+        text.push_str(&"\0".repeat(40));
+        text.push('\n');
+        text.push_str(&record_line(&record("c")).expect("line"));
+        std::fs::write(&partial, &text).expect("write");
+        Log::open(dir.path(), &manifest())
+            .expect("log")
+            .write(&record("c"))
+            .expect("append");
+        let resumed = open(dir.path(), &manifest(), false).expect("resumed");
+        let designs: Vec<&str> = resumed.records.iter().map(|r| r.design.as_str()).collect();
+        assert_eq!(designs, ["a", "c"]);
+        assert_eq!((resumed.foreign, resumed.damaged), (2, 1));
+        let resumed = open(dir.path(), &manifest(), false).expect("resumed again");
+        assert_eq!((resumed.records.len(), resumed.foreign, resumed.damaged), (2, 0, 0));
+    }
+
+    #[test]
+    fn temporaries_of_killed_writes_never_block_a_folder() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        std::fs::write(dir.path().join(".sweep.json.4242.0.tmp"), "{\"form").expect("write");
+        open(dir.path(), &manifest(), false).expect("taken");
+        let names: Vec<String> = std::fs::read_dir(dir.path())
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, [MANIFEST]);
+    }
+
+    #[test]
+    fn a_damaged_manifest_is_repaired_from_its_own_lines_or_replaced_with_force() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        open(dir.path(), &manifest(), false).expect("new folder");
+        Log::open(dir.path(), &manifest())
+            .expect("log")
+            .write(&record("a"))
+            .expect("append");
+        std::fs::write(dir.path().join(MANIFEST), "\0\0\0").expect("damage");
+        let resumed = open(dir.path(), &manifest(), false).expect("repaired");
+        assert_eq!(resumed.records.len(), 1);
+        assert_eq!(read_manifest(dir.path()).expect("readable"), Some(manifest()));
+        // Another sweep's folder with a damaged manifest: refused, then replaced with --force.
+        let other = Manifest { seed: 1, ..manifest() };
+        std::fs::write(dir.path().join(MANIFEST), "{").expect("damage");
+        let error = open(dir.path(), &other, false).expect_err("not provably ours").to_string();
+        assert!(error.contains("`--force` starts the sweep over"), "{error}");
+        assert!(open(dir.path(), &other, true).expect("forced").records.is_empty());
+        assert_eq!(read_manifest(dir.path()).expect("readable"), Some(other));
+    }
+
+    #[test]
+    fn a_second_lock_on_a_folder_is_refused_with_the_holders_pid() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let held = lock(dir.path()).expect("first");
+        let error = lock(dir.path()).expect_err("second").to_string();
+        assert!(
+            error.contains(&format!("in use by another validate-design (pid {})", std::process::id())),
+            "{error}"
+        );
+        drop(held);
+        lock(dir.path()).expect("free again");
     }
 
     #[test]
