@@ -213,6 +213,63 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
     Ok(())
 }
 
+/// The lock file of a folder this tool writes (sweeps, merges, snapshot suites).
+pub const LOCK: &str = ".validate-design.lock";
+
+/// A folder held by this process: no other validate-design writes it until this is dropped, or
+/// the process ends however it ends (the kernel releases the lock, so a dead run's folder is
+/// taken over without any cleanup).
+#[derive(Debug)]
+pub struct FolderLock {
+    _file: std::fs::File,
+}
+
+/// Why a folder could not be taken.
+#[derive(Debug, thiserror::Error)]
+pub enum LockError {
+    /// Another process holds it.
+    #[error("is in use by another validate-design{}: wait for it to finish or stop it; one run writes a folder at a time", holder.as_ref().map_or(String::new(), |pid| format!(" (pid {pid})")))]
+    Held {
+        /// The holder's pid, as it wrote it.
+        holder: Option<String>,
+    },
+    /// The folder or its lock file cannot be made, or the file system cannot lock.
+    #[error("cannot be locked ({0}): the file system must support flock, so that two runs never write one folder")]
+    Io(#[from] std::io::Error),
+}
+
+/// Takes `dir` (created if missing) for this process's writes: an exclusive `flock` on its
+/// [`LOCK`] file, which names the holder's pid.
+///
+/// # Errors
+/// [`LockError`].
+pub fn lock_folder(dir: &Path) -> Result<FolderLock, LockError> {
+    std::fs::create_dir_all(dir)?;
+    // Not truncated on open: the holder's pid stays readable until the lock is ours.
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(dir.join(LOCK))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            let _ = file.read_to_string(&mut holder);
+            let holder = holder.trim();
+            return Err(LockError::Held {
+                holder: (!holder.is_empty()).then(|| holder.to_string()),
+            });
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(e.into()),
+    }
+    file.set_len(0)?;
+    std::io::Seek::rewind(&mut file)?;
+    writeln!(file, "{}", std::process::id())?;
+    Ok(FolderLock { _file: file })
+}
+
 /// Syncs a folder's entries (a rename or a new name) to disk. Best effort: some file systems
 /// refuse to sync a directory, and the file's own data is already synced.
 pub fn sync_folder(dir: &Path) {

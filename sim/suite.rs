@@ -179,8 +179,49 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
         ));
     }
     let opts = options(suite_path, &suite.options)?;
+    // Every snapshot's name before any run: two runs sharing one would leave one file and a
+    // suite that fails forever with nothing to review.
+    let design_names = suite
+        .designs
+        .iter()
+        .enumerate()
+        .map(|(index, design)| {
+            let name = match design {
+                DesignEntry::Path(p) => stem(p),
+                DesignEntry::Full(full) => full.name.clone().unwrap_or_else(|| stem(&full.path)),
+            };
+            if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
+                return Err(invalid(
+                    suite_path,
+                    &format!("designs[{index}].name"),
+                    format!("`{name}`: expected a file-name-safe name (no slashes, not starting with a dot)"),
+                ));
+            }
+            Ok(name)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let scenario_names: Vec<String> = suite.scenarios.iter().map(|p| stem(p)).collect();
+    let mut taken: std::collections::HashMap<String, (usize, usize)> = std::collections::HashMap::new();
+    for (d, design) in design_names.iter().enumerate() {
+        for (s, scenario) in scenario_names.iter().enumerate() {
+            if let Some((d0, s0)) = taken.insert(format!("{design}__{scenario}"), (d, s)) {
+                return Err(invalid(
+                    suite_path,
+                    "designs, scenarios",
+                    format!(
+                        "designs[{d0}] on scenarios[{s0}] and designs[{d}] on scenarios[{s}] would share the snapshot `{design}__{scenario}.snap`: give the designs distinct `name`s, and list each scenario once under distinct file names"
+                    ),
+                ));
+            }
+        }
+    }
     let folder = dir.join(suite.snapshots.clone().unwrap_or_else(|| PathBuf::from("snapshots")));
-    std::fs::create_dir_all(&folder).map_err(|source| Error::Write {
+    // Held for the whole run: one writer per snapshot folder.
+    let _lock = files::lock_folder(&folder).map_err(|e| invalid(suite_path, "snapshots", format!("{}: {e}", folder.display())))?;
+    // Temporaries of writes a kill cut short (the names this suite writes, and nothing else).
+    let targets: Vec<String> = taken.keys().flat_map(|name| [format!("{name}.snap"), format!("{name}.snap.new")]).collect();
+    let targets: Vec<&str> = targets.iter().map(String::as_str).collect();
+    files::remove_temporaries(&folder, &targets).map_err(|source| Error::Write {
         path: folder.clone(),
         source,
     })?;
@@ -200,12 +241,11 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
         })
         .collect::<Result<Vec<_>, Error>>()?;
     let mut entries = Vec::new();
-    for (index, design) in suite.designs.iter().enumerate() {
-        let (path, name, load_opts, srdf) = match design {
-            DesignEntry::Path(p) => (dir.join(p), stem(p), LoadOptions::default(), None),
+    for (design, name) in suite.designs.iter().zip(design_names) {
+        let (path, load_opts, srdf) = match design {
+            DesignEntry::Path(p) => (dir.join(p), LoadOptions::default(), None),
             DesignEntry::Full(full) => (
                 dir.join(&full.path),
-                full.name.clone().unwrap_or_else(|| stem(&full.path)),
                 LoadOptions {
                     base_link: full.base.clone(),
                     tip_link: full.tip.clone(),
@@ -214,13 +254,6 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
                 full.srdf.as_ref().map(|p| dir.join(p)),
             ),
         };
-        if name.is_empty() || name.contains(['/', '\\']) {
-            return Err(invalid(
-                suite_path,
-                &format!("designs[{index}].name"),
-                format!("`{name}`: expected a file-name-safe name"),
-            ));
-        }
         let loaded = pipeline::load(&path, &load_opts)?;
         // The snapshot is the report: no exports, and MuJoCo's kinematics check is the CLI's.
         let run_opts = run::Options {

@@ -127,10 +127,32 @@ fn a_bad_suite_exits_2_naming_the_field() {
             r#"{"designs": ["d.json"], "scenarios": ["s.json"], "options": {"margin": -1}}"#,
             "options.margin",
         ),
+        (
+            r#"{"designs": ["d.json"], "scenarios": ["s.json"], "options": {"reach_only": true, "engines": "mujoco"}}"#,
+            "options.engines",
+        ),
+        // Runs that would share one snapshot, refused before any design is read.
+        (
+            r#"{"designs": ["a/d.json", "b/d.json"], "scenarios": ["s.json"]}"#,
+            "designs[0] on scenarios[0] and designs[1] on scenarios[0] would share the snapshot `d__s.snap`",
+        ),
+        (
+            r#"{"designs": ["d.json"], "scenarios": ["s.json", "other/s.json"]}"#,
+            "designs[0] on scenarios[0] and designs[0] on scenarios[1] would share the snapshot `d__s.snap`",
+        ),
+        (
+            r#"{"designs": ["e.json", {"path": "d.json", "name": "e"}], "scenarios": ["s.json"]}"#,
+            "would share the snapshot `e__s.snap`",
+        ),
+        (
+            r#"{"designs": [{"path": "d.json", "name": "x__y"}, {"path": "d.json", "name": "x"}], "scenarios": ["z.json", "y__z.json"]}"#,
+            "would share the snapshot `x__y__z.snap`",
+        ),
     ] {
         std::fs::write(dir.path().join("suite.json"), suite).expect("write");
         let (code, text) = snapshot(dir.path(), &[]);
         assert_eq!(code, Some(2), "{suite}: {text}");
         assert!(text.contains("suite.json") && text.contains(field), "{suite}: {text}");
     }
+    assert!(!dir.path().join("snapshots").exists(), "refused before anything was written");
 }

@@ -21,8 +21,6 @@ pub const RESULTS: &str = "results.jsonl";
 pub const CSV: &str = "results.csv";
 /// The ranked tables.
 pub const TABLE: &str = "table.txt";
-/// The lock file: held (`flock`) by the one run that writes the folder, for its whole life.
-pub const LOCK: &str = ".validate-design.lock";
 /// Version of the folder's layout and the record's fields.
 pub const FORMAT: u32 = 1;
 /// This tool's files in a sweep folder (the lock and interrupted writes' temporaries aside).
@@ -80,66 +78,17 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// A sweep folder held by this process: no other validate-design writes it until this is
-/// dropped (or the process ends, however it ends: the kernel releases the lock, so a dead
-/// run's folder is taken over without any cleanup).
-#[derive(Debug)]
-pub struct FolderLock {
-    _file: std::fs::File,
-}
-
-/// Takes `dir` (created if missing) for this process's writes.
+/// Takes `dir` (created if missing) for this process's writes: held until the returned lock is
+/// dropped (see [`crate::files::lock_folder`]).
 ///
 /// # Errors
 /// [`SweepError::Folder`] when another process holds it (naming its pid) or the file system
-/// cannot lock; [`SweepError::Write`] when the folder or its lock file cannot be made.
-pub fn lock(dir: &Path) -> Result<FolderLock, SweepError> {
-    let write_error = |path: &Path, e: std::io::Error| SweepError::Write {
-        path: path.to_path_buf(),
+/// cannot lock.
+pub fn lock(dir: &Path) -> Result<crate::files::FolderLock, SweepError> {
+    crate::files::lock_folder(dir).map_err(|e| SweepError::Folder {
+        dir: dir.to_path_buf(),
         message: e.to_string(),
-    };
-    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
-    let path = dir.join(LOCK);
-    // Not truncated on open: the holder's pid stays readable until the lock is ours.
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(&path)
-        .map_err(|e| write_error(&path, e))?;
-    match file.try_lock() {
-        Ok(()) => {}
-        Err(std::fs::TryLockError::WouldBlock) => {
-            let mut holder = String::new();
-            let _ = std::io::Read::read_to_string(&mut file, &mut holder);
-            let holder = holder.trim();
-            let pid = if holder.is_empty() {
-                String::new()
-            } else {
-                format!(" (pid {holder})")
-            };
-            return Err(SweepError::Folder {
-                dir: dir.to_path_buf(),
-                message: format!(
-                    "is in use by another validate-design{pid}: wait for it to finish or stop it; one run writes a folder at a time"
-                ),
-            });
-        }
-        Err(std::fs::TryLockError::Error(e)) => {
-            return Err(SweepError::Folder {
-                dir: dir.to_path_buf(),
-                message: format!("cannot be locked ({e}): the file system must support flock, so that two runs never write one folder"),
-            })
-        }
-    }
-    let stamp = (|| -> std::io::Result<()> {
-        file.set_len(0)?;
-        std::io::Seek::rewind(&mut file)?;
-        writeln!(file, "{}", std::process::id())
-    })();
-    stamp.map_err(|e| write_error(&path, e))?;
-    Ok(FolderLock { _file: file })
+    })
 }
 
 /// The manifest's identity, carried by every line of the partial log: the start of the SHA-256
@@ -288,7 +237,7 @@ pub fn open(dir: &Path, manifest: &Manifest, force: bool) -> Result<Resumed, Swe
             let foreign: Vec<String> = entries
                 .filter_map(Result::ok)
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|name| !OURS.contains(&name.as_str()) && name != LOCK)
+                .filter(|name| !OURS.contains(&name.as_str()) && name != crate::files::LOCK)
                 .collect();
             if matches!(found, Found::Nothing) {
                 let mut present: Vec<String> = OURS
