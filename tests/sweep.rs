@@ -357,6 +357,15 @@ fn the_ga_repeats_itself_for_a_seed_on_any_number_of_threads() {
         read(&out)
     };
     let first = run("1", "3", "a.json");
+    // An existing --out is refused before the GA runs (a whole GA here would outlast the timeout).
+    let output = validate_design()
+        .args(["ga", "--scenario", SCENARIOS[0], "--population", "100000", "--generations", "100000", "--out"])
+        .arg(dir.path().join("a.json"))
+        .timeout(std::time::Duration::from_secs(60))
+        .output()
+        .expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("the file exists; pass --force to replace it"));
     assert_eq!(first, run("2", "3", "b.json"));
     assert_ne!(first, run("2", "4", "c.json"), "another seed searches elsewhere");
     let result: serde_json::Value = serde_json::from_str(&first).expect("json");

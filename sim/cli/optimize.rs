@@ -25,6 +25,10 @@ pub(crate) struct OptimizeArgs {
     /// an input.
     #[arg(long, value_name = "PATH")]
     out: PathBuf,
+    /// Replace tuned-design files already there (without it an existing file is refused before
+    /// any work).
+    #[arg(long)]
+    force: bool,
     /// Adam steps (the paper's 200).
     #[arg(long, value_name = "N", default_value_t = 200, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
     steps: u64,
@@ -177,6 +181,13 @@ fn check_targets(args: &OptimizeArgs, inputs: &[Input]) -> Result<(), Failure> {
         }
         if proving_ground::files::is_input(&input.out) {
             return Err(Error::WouldOverwriteInput { path: input.out.clone() }.into());
+        }
+        if input.out.exists() && !args.force {
+            return Err(OptimizeError::Input(format!(
+                "--out {}: the file exists; pass --force to replace it",
+                input.out.display()
+            ))
+            .into());
         }
     }
     Ok(())

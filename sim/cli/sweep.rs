@@ -272,6 +272,25 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
         .into());
     };
     let reference = reference(args.reference.as_ref())?;
+    if let Some(out) = &args.out {
+        // Refused now what the write after the whole GA would refuse.
+        let refused = if out.is_dir() {
+            Some("a folder is there, expected a file name")
+        } else if proving_ground::files::is_input(out) {
+            Some("it is an input of this run")
+        } else if out.exists() && !args.force {
+            Some("the file exists; pass --force to replace it")
+        } else {
+            None
+        };
+        if let Some(why) = refused {
+            return Err(sweep::SweepError::Write {
+                path: out.clone(),
+                message: why.into(),
+            }
+            .into());
+        }
+    }
     let opts = sweep::ga::GaOptions {
         population: usize::try_from(args.population).unwrap_or(usize::MAX),
         generations: usize::try_from(args.generations).unwrap_or(usize::MAX),
