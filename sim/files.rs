@@ -182,15 +182,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
         Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let name = path.file_name().ok_or_else(|| other("expected a file name".into()))?;
-    let (temp, mut file) = create_temp(&dir, &name.to_string_lossy())?;
+    let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
     let written = (|| -> std::io::Result<()> {
-        file.write_all(bytes)?;
-        if let Some(meta) = &existing {
-            file.set_permissions(meta.permissions())?;
-        }
-        file.sync_all()?;
-        drop(file);
         if replace {
             std::fs::rename(&temp, path)
         } else {
@@ -310,6 +303,97 @@ pub fn remove_temporaries(dir: &Path, targets: &[&str]) -> std::io::Result<usize
         }
     }
     Ok(removed)
+}
+
+/// Writes `bytes` to a new temporary beside `path` in `dir`, with the permissions of the file it
+/// will replace, synced to disk; returns its path (removed again on failure).
+fn write_temporary(path: &Path, dir: &Path, bytes: &[u8], existing: Option<&std::fs::Metadata>) -> std::io::Result<PathBuf> {
+    let name = path.file_name().ok_or_else(|| other("expected a file name".into()))?;
+    let (temp, mut file) = create_temp(dir, &name.to_string_lossy())?;
+    let written = (|| -> std::io::Result<()> {
+        file.write_all(bytes)?;
+        if let Some(meta) = existing {
+            file.set_permissions(meta.permissions())?;
+        }
+        file.sync_all()
+    })();
+    if let Err(error) = written {
+        let _ = std::fs::remove_file(&temp);
+        return Err(error);
+    }
+    Ok(temp)
+}
+
+/// Files written as one set: each is written in full to a temporary beside its target first;
+/// only when all of them are does [`Staged::commit`] rename them over their targets. A failure
+/// before (a full disk, a size limit, a refused target) leaves every old file as it was and no
+/// temporary behind.
+#[derive(Debug, Default)]
+pub struct Staged {
+    /// Target and temporary of each file, in the order added.
+    pending: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Staged {
+    /// Writes `bytes` for `path` to a temporary, with [`write_atomic`]'s checks (never over an
+    /// input, a regular file or a new name only); existing files are replaced at commit.
+    ///
+    /// # Errors
+    /// [`WriteError`]; the set is unchanged.
+    pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+        if is_input(path) {
+            return Err(WriteError::Input);
+        }
+        let existing = std::fs::metadata(path).ok();
+        if let Some(meta) = &existing {
+            if !meta.is_file() {
+                return Err(WriteError::Io(other(format!(
+                    "{}: expected a regular file or a new name",
+                    kind_of(meta)
+                ))));
+            }
+        }
+        let dir = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
+        self.pending.push((path.to_path_buf(), temp));
+        Ok(())
+    }
+
+    /// Renames every file of the set over its target, then syncs their folders.
+    ///
+    /// # Errors
+    /// The target whose rename failed (those before it are replaced, the rest left as they were).
+    pub fn commit(mut self) -> Result<(), (PathBuf, WriteError)> {
+        let pending = std::mem::take(&mut self.pending);
+        let mut folders: Vec<PathBuf> = Vec::new();
+        for (index, (target, temp)) in pending.iter().enumerate() {
+            if let Err(error) = std::fs::rename(temp, target) {
+                for (_, left) in &pending[index..] {
+                    let _ = std::fs::remove_file(left);
+                }
+                return Err((target.clone(), error.into()));
+            }
+            let folder = temp.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+            if !folders.contains(&folder) {
+                folders.push(folder);
+            }
+        }
+        for folder in &folders {
+            sync_folder(folder);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        for (_, temp) in &self.pending {
+            let _ = std::fs::remove_file(temp);
+        }
+    }
 }
 
 fn create_temp(dir: &Path, name: &str) -> std::io::Result<(PathBuf, std::fs::File)> {

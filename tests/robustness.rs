@@ -213,8 +213,13 @@ fn a_mesh_over_the_size_limit_is_refused_before_reading() {
 
 /// Runs `command` under a file-size limit of 1 KiB (`ulimit -f 1`): every write past 1 KiB fails.
 fn under_write_limit(args: &[&str], dir: &Path) -> std::process::Output {
+    under_size_limit(1, args, dir)
+}
+
+/// Runs `command` where no file may grow past `kib` KiB (`ulimit -f`).
+fn under_size_limit(kib: u64, args: &[&str], dir: &Path) -> std::process::Output {
     let binary = assert_cmd::cargo::cargo_bin("validate-design");
-    let mut script = format!("ulimit -f 1; exec '{}'", binary.display());
+    let mut script = format!("ulimit -f {kib}; exec '{}'", binary.display());
     for arg in args {
         script.push_str(&format!(" '{arg}'"));
     }
@@ -247,6 +252,47 @@ fn failed_write_leaves_the_old_report_and_export_intact() {
         .map(|e| e.file_name())
         .collect();
     assert_eq!(left.len(), 2, "temporary files left behind: {left:?}");
+}
+
+#[test]
+fn a_run_writes_its_outputs_as_one_set_or_leaves_the_old_ones() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let design = repo().join("designs/ur5e.json");
+    let scenario = repo().join("scenarios/cluttered/task-00.json");
+    let (design, scenario) = (design.to_string_lossy(), scenario.to_string_lossy());
+    for name in ["r.json", "r.html"] {
+        std::fs::write(dir.path().join(name), "old\n").expect("write");
+    }
+    // The JSON (about 13 KiB) fits under 200 KiB, the page (about 800 KiB) does not: nothing
+    // of this run may replace anything of the last one.
+    let args = [
+        &design as &str,
+        "--scenario",
+        &scenario,
+        "--reach-only",
+        "--mujoco-checks",
+        "0",
+        "--quiet",
+        "--json",
+        "r.json",
+        "--svg",
+        "pictures",
+        "--html",
+        "r.html",
+    ];
+    let output = under_size_limit(200, &args, dir.path());
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    for name in ["r.json", "r.html"] {
+        assert_eq!(std::fs::read_to_string(dir.path().join(name)).expect("read"), "old\n", "{name}");
+    }
+    let pictures: Vec<_> = std::fs::read_dir(dir.path().join("pictures")).expect("list").collect();
+    assert!(pictures.is_empty(), "no picture of a failed set: {pictures:?}");
+    let left = std::fs::read_dir(dir.path()).expect("list").count();
+    assert_eq!(left, 3, "temporaries left behind");
+    // Without the limit all of them are written.
+    let output = under_size_limit(1 << 20, &args, dir.path());
+    assert!(matches!(output.status.code(), Some(1)), "{}", stderr(&output));
+    assert!(std::fs::read_to_string(dir.path().join("r.html")).expect("read").len() > 100_000);
 }
 
 #[test]

@@ -203,15 +203,23 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     Ok(super::exit_code(run.outcome()))
 }
 
-/// The report on stdout, and `--json`, `--svg`, `--png`, `--html`.
+/// The report on stdout, and `--json`, `--svg`, `--png`, `--html`: written as one set, so a
+/// failed write leaves every old file as it was rather than a mix of two runs.
 fn print_report(args: &ValidateArgs, run: &Run) -> Result<(), Error> {
     let (Some(validation), Some(report)) = (&run.validation, &run.report) else {
         return Ok(());
     };
+    let mut set = pipeline::OutputSet::default();
     if let Some(path) = &args.json {
-        pipeline::write_output(path, &run::report_json(report)?)?;
+        set.add(path, run::report_json(report)?.as_bytes())?;
     }
-    write_pictures(args, validation, report)?;
+    let written = stage_pictures(&mut set, args, validation, report)?;
+    set.commit()?;
+    if !args.quiet {
+        for line in written {
+            println!("{line}");
+        }
+    }
     if args.quiet {
         println!("{}", report::verdict_line(&report.verdict));
     } else {
@@ -220,9 +228,15 @@ fn print_report(args: &ValidateArgs, run: &Run) -> Result<(), Error> {
     Ok(())
 }
 
-/// `--svg DIR`, `--png DIR`, `--html FILE`.
-fn write_pictures(args: &ValidateArgs, validation: &pipeline::Validation, report: &report::Report) -> Result<(), Error> {
+/// `--svg DIR`, `--png DIR`, `--html FILE` added to `set`; the lines that say what was written.
+fn stage_pictures(
+    set: &mut pipeline::OutputSet,
+    args: &ValidateArgs,
+    validation: &pipeline::Validation,
+    report: &report::Report,
+) -> Result<Vec<String>, Error> {
     use rayon::prelude::*;
+    let mut lines = Vec::new();
     if args.svg.is_some() || args.png.is_some() {
         let pictures = render::pictures(validation, report);
         if let Some(dir) = &args.svg {
@@ -230,10 +244,8 @@ fn write_pictures(args: &ValidateArgs, validation: &pipeline::Validation, report
                 .iter()
                 .map(|p| (format!("{}.svg", p.name), p.svg.clone().into_bytes()))
                 .collect();
-            pipeline::write_files_into(dir, &files)?;
-            if !args.quiet {
-                println!("wrote {} SVG pictures into {}", files.len(), dir.display());
-            }
+            set.add_into(dir, &files)?;
+            lines.push(format!("wrote {} SVG pictures into {}", files.len(), dir.display()));
         }
         if let Some(dir) = &args.png {
             // Each picture on its own: the order and the bytes do not depend on the threads.
@@ -241,17 +253,13 @@ fn write_pictures(args: &ValidateArgs, validation: &pipeline::Validation, report
                 .par_iter()
                 .map(|p| Ok((format!("{}.png", p.name), render::png::to_png(&p.name, &p.svg)?)))
                 .collect::<Result<Vec<_>, render::RenderError>>()?;
-            pipeline::write_files_into(dir, &files)?;
-            if !args.quiet {
-                println!("wrote {} PNG pictures into {}", files.len(), dir.display());
-            }
+            set.add_into(dir, &files)?;
+            lines.push(format!("wrote {} PNG pictures into {}", files.len(), dir.display()));
         }
     }
     if let Some(path) = &args.html {
-        pipeline::write_output(path, &render::page(validation, report))?;
-        if !args.quiet {
-            println!("wrote HTML report {}", path.display());
-        }
+        set.add(path, render::page(validation, report).as_bytes())?;
+        lines.push(format!("wrote HTML report {}", path.display()));
     }
-    Ok(())
+    Ok(lines)
 }

@@ -8,7 +8,7 @@ mod world;
 
 pub use crate::engine::Engines;
 pub use load::{input_kind, load, load_model, load_scenario, scenario_or_default, InputKind, LoadOptions, Loaded, DEFAULT_SCENARIO};
-pub use output::{write_files_into, write_output, write_output_bytes};
+pub use output::{write_files_into, write_output, write_output_bytes, OutputSet};
 pub use world::collision_world;
 
 use crate::collide;
