@@ -183,6 +183,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
         _ => PathBuf::from("."),
     };
     let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
+    crash_point();
     let written = (|| -> std::io::Result<()> {
         if replace {
             std::fs::rename(&temp, path)
@@ -202,8 +203,32 @@ pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), Writ
         let _ = std::fs::remove_file(&temp);
         return Err(error.into());
     }
+    crash_point();
     sync_folder(&dir);
     Ok(())
+}
+
+/// The exit code of a run the crash-test hook ended (what a shell shows for SIGKILL).
+pub const CRASH_EXIT: i32 = 137;
+
+/// The environment variable of the crash-test hook (see [`crash_point`]).
+pub const CRASH_AT: &str = "VALIDATE_DESIGN_CRASH_AT";
+
+/// A step of a write sequence where a crash leaves the files in a state of their own (a
+/// temporary written, a rename done, a line appended). With [`CRASH_AT`] set to `N` the process
+/// exits with [`CRASH_EXIT`] at the `N`-th such step, as a kill would end it there (no
+/// destructor, no cleanup; the kernel closes the files and releases the folder's lock):
+/// the tests run sweeps, merges and suites with every `N` and check that a rerun repairs the
+/// folder. Unset (what every user has), it only counts.
+pub fn crash_point() {
+    static AT: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
+    static STEPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let at = AT.get_or_init(|| std::env::var(CRASH_AT).ok().and_then(|v| v.trim().parse().ok()));
+    if let Some(at) = at {
+        if STEPS.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1 == *at {
+            std::process::exit(CRASH_EXIT);
+        }
+    }
 }
 
 /// The lock file of a folder this tool writes (sweeps, merges, snapshot suites).
@@ -300,6 +325,7 @@ pub fn remove_temporaries(dir: &Path, targets: &[&str]) -> std::io::Result<usize
         if entry.file_type()?.is_file() && is_temporary_of(&entry.file_name().to_string_lossy(), targets) {
             std::fs::remove_file(entry.path())?;
             removed += 1;
+            crash_point();
         }
     }
     Ok(removed)
@@ -359,6 +385,7 @@ impl Staged {
         };
         let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
         self.pending.push((path.to_path_buf(), temp));
+        crash_point();
         Ok(())
     }
 
@@ -376,6 +403,7 @@ impl Staged {
                 }
                 return Err((target.clone(), error.into()));
             }
+            crash_point();
             let folder = temp.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
             if !folders.contains(&folder) {
                 folders.push(folder);

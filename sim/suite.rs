@@ -219,7 +219,10 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
     // Held for the whole run: one writer per snapshot folder.
     let _lock = files::lock_folder(&folder).map_err(|e| invalid(suite_path, "snapshots", format!("{}: {e}", folder.display())))?;
     // Temporaries of writes a kill cut short (the names this suite writes, and nothing else).
-    let targets: Vec<String> = taken.keys().flat_map(|name| [format!("{name}.snap"), format!("{name}.snap.new")]).collect();
+    let targets: Vec<String> = taken
+        .keys()
+        .flat_map(|name| [format!("{name}.snap"), format!("{name}.snap.new")])
+        .collect();
     let targets: Vec<&str> = targets.iter().map(String::as_str).collect();
     files::remove_temporaries(&folder, &targets).map_err(|source| Error::Write {
         path: folder.clone(),

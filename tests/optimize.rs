@@ -499,7 +499,11 @@ fn optimize_output_paths_are_checked_before_any_work() {
     // Run again: the file from before is replaced only with --force.
     let again = optimize_cli(&[&ur5e], QUICK, &folder);
     assert_eq!(again.status.code(), Some(2));
-    assert!(stderr(&again).contains("the file exists; pass --force to replace it"), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("the file exists; pass --force to replace it"),
+        "{}",
+        stderr(&again)
+    );
     let forced = optimize_cli(&[&ur5e], &[QUICK, &["--force"]].concat(), &folder);
     assert!(matches!(forced.status.code(), Some(0 | 1)), "{}", stderr(&forced));
 

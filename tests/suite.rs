@@ -98,6 +98,60 @@ fn a_suite_records_compares_and_reports_differences_and_orphans() {
     assert!(!golden.join("gone__task-00.snap").exists());
 }
 
+/// The snapshot folder's files, sorted by name, with their bytes.
+fn folder_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| {
+            let entry = e.expect("entry");
+            let bytes = if entry.file_name() == ".validate-design.lock" {
+                Vec::new()
+            } else {
+                std::fs::read(entry.path()).expect("read")
+            };
+            (entry.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn a_crash_at_any_write_step_of_accept_is_repaired_by_accepting_again() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (from, to) in [
+        ("designs/ur5e.json", "ur5e.json"),
+        ("designs/paper-real-world.json", "paper-real-world.json"),
+        ("scenarios/cluttered/task-00.json", "task-00.json"),
+    ] {
+        std::fs::copy(repo().join(from), dir.path().join(to)).expect("copy");
+    }
+    write_suite(dir.path(), 0);
+    let golden = dir.path().join("golden");
+    let (code, text) = snapshot(dir.path(), &["--accept"]);
+    assert_eq!(code, Some(0), "{text}");
+    let accepted = folder_files(&golden);
+    assert_eq!(accepted.len(), 3, "two snapshots and the lock: {accepted:?}");
+    for at in 1.. {
+        assert!(at < 50, "still crashing at step {at}");
+        std::fs::remove_dir_all(&golden).expect("start over");
+        let crashed = Command::cargo_bin("validate-design")
+            .expect("binary built")
+            .current_dir(dir.path())
+            .args(["snapshot", "--suite", "suite.json", "--accept"])
+            .env(proving_ground::files::CRASH_AT, at.to_string())
+            .output()
+            .expect("runs");
+        if crashed.status.code() == Some(0) {
+            break;
+        }
+        assert_eq!(crashed.status.code(), Some(137), "{}", String::from_utf8_lossy(&crashed.stderr));
+        let (code, text) = snapshot(dir.path(), &["--accept"]);
+        assert_eq!(code, Some(0), "after a crash at step {at}: {text}");
+        assert_eq!(folder_files(&golden), accepted, "after a crash at step {at}");
+    }
+}
+
 #[test]
 fn a_bad_suite_exits_2_naming_the_field() {
     let dir = tempfile::tempdir().expect("temp dir");

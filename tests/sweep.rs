@@ -287,6 +287,91 @@ fn one_run_writes_a_folder_at_a_time() {
     assert!(taken.status.success(), "{}", String::from_utf8_lossy(&taken.stderr));
 }
 
+/// The folder holds this tool's files and its lock, nothing else (no temporary, no partial log).
+fn assert_no_litter(dir: &Path) {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [".validate-design.lock", "results.csv", "results.jsonl", "sweep.json", "table.txt"],
+        "{}",
+        dir.display()
+    );
+}
+
+/// Runs `args` with the crash hook at every write step in turn (a fresh `out` each time), then
+/// `again` to finish the work; `check` looks at each finished folder. Ends at the first step
+/// count the run survives.
+fn crash_at_every_step(name: &str, args: &[&str], out: impl Fn(usize) -> std::path::PathBuf, again: &[&str], check: impl Fn(&Path)) {
+    for at in 1.. {
+        assert!(at < 200, "{name}: still crashing at step {at}");
+        let folder = out(at);
+        let crashed = validate_design()
+            .args(args)
+            .arg(&folder)
+            .env(proving_ground::files::CRASH_AT, at.to_string())
+            .output()
+            .expect("runs");
+        match crashed.status.code() {
+            Some(0) => break,
+            Some(137) => {}
+            code => panic!("{name} crashed at step {at}: {code:?} {}", String::from_utf8_lossy(&crashed.stderr)),
+        }
+        let rerun = validate_design().args(args).arg(&folder).args(again).output().expect("runs");
+        assert!(
+            rerun.status.success(),
+            "{name} after a crash at step {at}: {}",
+            String::from_utf8_lossy(&rerun.stderr)
+        );
+        check(&folder);
+    }
+}
+
+#[test]
+fn a_crash_at_any_write_step_of_a_sweep_or_a_merge_is_repaired_by_running_it_again() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let whole = dir.path().join("whole");
+    sweep(&whole, &[]);
+    let mut args = vec!["sweep"];
+    args.extend(DESIGNS);
+    args.push("--scenarios");
+    args.extend(SCENARIOS);
+    args.extend(["--quiet", "--out"]);
+    crash_at_every_step(
+        "sweep",
+        &args,
+        |at| dir.path().join(format!("sweep-{at}")),
+        &[],
+        |folder| {
+            assert_same_files(&whole, folder);
+            assert_no_litter(folder);
+        },
+    );
+    let shards: Vec<String> = (1..=2)
+        .map(|k| {
+            let shard = dir.path().join(format!("shard-{k}"));
+            sweep(&shard, &["--shard", &format!("{k}/2")]);
+            shard.to_string_lossy().into_owned()
+        })
+        .collect();
+    let mut args = vec!["merge", "--quiet"];
+    args.extend(shards.iter().map(String::as_str));
+    args.push("--out");
+    crash_at_every_step(
+        "merge",
+        &args,
+        |at| dir.path().join(format!("merge-{at}")),
+        &[],
+        |folder| {
+            assert_same_files(&whole, folder);
+            assert_no_litter(folder);
+        },
+    );
+}
+
 #[test]
 fn quiet_without_a_folder_is_refused_rather_than_throwing_the_results_away() {
     for command in [
@@ -359,7 +444,16 @@ fn the_ga_repeats_itself_for_a_seed_on_any_number_of_threads() {
     let first = run("1", "3", "a.json");
     // An existing --out is refused before the GA runs (a whole GA here would outlast the timeout).
     let output = validate_design()
-        .args(["ga", "--scenario", SCENARIOS[0], "--population", "100000", "--generations", "100000", "--out"])
+        .args([
+            "ga",
+            "--scenario",
+            SCENARIOS[0],
+            "--population",
+            "100000",
+            "--generations",
+            "100000",
+            "--out",
+        ])
         .arg(dir.path().join("a.json"))
         .timeout(std::time::Duration::from_secs(60))
         .output()

@@ -328,6 +328,7 @@ fn remove_ours(dir: &Path, names: &[&str]) -> Result<(), SweepError> {
                 path: path.clone(),
                 message: e.to_string(),
             })?;
+            crate::files::crash_point();
         }
     }
     Ok(())
@@ -431,9 +432,11 @@ impl Log {
     /// # Errors
     /// [`SweepError::Write`].
     pub fn write(&mut self, record: &Record) -> Result<(), SweepError> {
+        crate::files::crash_point();
         self.file
             .write_all(line_text(record, &self.id)?.as_bytes())
             .map_err(|e| self.error(&e))?;
+        crate::files::crash_point();
         if self.synced.elapsed() >= SYNC_EVERY {
             self.sync()?;
         }
