@@ -173,7 +173,7 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
             identity.extend_from_slice(format!("{:?}", loaded.model).as_bytes());
             push(
                 DesignEntry {
-                    id: path.to_string_lossy().into_owned(),
+                    id: path_id(&path),
                     source: DesignSource::File(Arc::new(loaded)),
                     sha256: Some(super::store::sha256_hex(&identity)),
                 },
@@ -210,7 +210,7 @@ pub fn resolve_scenarios(arguments: &[String]) -> Result<Vec<ScenarioEntry>, Swe
     let mut entries: Vec<ScenarioEntry> = Vec::new();
     for argument in arguments {
         for path in expand(argument, &["json"], "scenario")? {
-            let id = path.to_string_lossy().into_owned();
+            let id = path_id(&path);
             if entries.iter().any(|e| e.id == id) {
                 continue;
             }
@@ -235,6 +235,22 @@ pub fn resolve_scenarios(arguments: &[String]) -> Result<Vec<ScenarioEntry>, Swe
         });
     }
     Ok(entries)
+}
+
+/// A file's id in a sweep: its path as given, spelled one way (no `.` components; a path under
+/// the current folder relative to it), so `./d.json`, `d.json` and `$PWD/d.json` are one design
+/// for resume, merge and the list's duplicates. `..` stays (lexically it may cross a link).
+fn path_id(path: &Path) -> String {
+    let relative = std::env::current_dir()
+        .ok()
+        .and_then(|here| path.strip_prefix(here).ok().map(Path::to_path_buf))
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or_else(|| path.to_path_buf());
+    let id: PathBuf = relative
+        .components()
+        .filter(|c| !matches!(c, std::path::Component::CurDir))
+        .collect();
+    id.to_string_lossy().into_owned()
 }
 
 /// The files an argument names: a folder's files with one of `extensions` (sorted), a glob's
@@ -297,6 +313,17 @@ mod tests {
         ids.sort_unstable();
         ids.dedup();
         assert_eq!(ids.len(), 15_625, "catalog ids are unique");
+    }
+
+    #[test]
+    fn one_file_spelled_three_ways_has_one_id() {
+        let here = std::env::current_dir().expect("current folder");
+        let absolute = here.join("designs").join("ur5e.json");
+        for spelling in [Path::new("designs/ur5e.json"), Path::new("./designs/./ur5e.json"), &absolute] {
+            assert_eq!(path_id(spelling), "designs/ur5e.json", "{}", spelling.display());
+        }
+        assert_eq!(path_id(Path::new("/elsewhere/./d.json")), "/elsewhere/d.json");
+        assert_eq!(path_id(Path::new("../d.json")), "../d.json");
     }
 
     #[test]
