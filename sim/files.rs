@@ -53,8 +53,12 @@ pub fn inputs_read() -> Vec<PathBuf> {
 pub fn is_input(path: &Path) -> bool {
     let Some(target) = identity(path) else { return false };
     let read = READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    read.iter()
-        .any(|id| (id.device, id.inode) == (target.device, target.inode) || id.canonical == target.canonical)
+    read.iter().any(|id| {
+        // An inode only counts while the file read still holds it: once that file is deleted
+        // the number is reused by new files, which were never read.
+        let same_inode = (id.device, id.inode) == (target.device, target.inode) && identity(&id.canonical).as_ref() == Some(id);
+        same_inode || id.canonical == target.canonical
+    })
 }
 
 /// What a path is when it is not a regular file, for messages.

@@ -170,18 +170,38 @@ pub fn validate(input: &Path, opts: &Options, progress: &dyn Progress) -> Result
     validate_loaded(input, loaded, scenario, opts, progress)
 }
 
+/// [`validate`] without writing the exports: the caller writes [`export_files`] (`opts.exports`
+/// is still checked, before any work, not to name a file the run read), for example in one
+/// [`pipeline::OutputSet`] with outputs of its own, as the CLI does with the report's files.
+///
+/// # Errors
+/// As [`validate`], but for the writes.
+pub fn validate_unwritten(input: &Path, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
+    let loaded = pipeline::load(input, &opts.load)?;
+    let scenario = pipeline::scenario_or_default(opts.scenario.as_deref())?;
+    run_stages(input, loaded, scenario, opts, progress)
+}
+
 /// [`validate`] on a robot already read from `input` and a scenario already read
 /// (`opts.load` and `opts.scenario` are not used).
 ///
 /// # Errors
 /// As [`validate`].
-pub fn validate_loaded(
-    input: &Path,
-    loaded: Loaded,
-    mut scenario: Scenario,
-    opts: &Options,
-    progress: &dyn Progress,
-) -> Result<Run, Error> {
+pub fn validate_loaded(input: &Path, loaded: Loaded, scenario: Scenario, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
+    let mut run = run_stages(input, loaded, scenario, opts, progress)?;
+    // The exports as one set, after the run: a failure leaves every old file as it was.
+    let files = export_files(&run, &opts.exports)?;
+    let mut set = pipeline::OutputSet::default();
+    for (_, path, text) in &files {
+        set.add(path, text.as_bytes())?;
+    }
+    set.commit()?;
+    run.written = files.into_iter().map(|(what, path, _)| (what, path)).collect();
+    Ok(run)
+}
+
+/// [`validate_loaded`] without the exports' writes.
+fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
     let model = &loaded.model;
     for diagnostic in &model.diagnostics {
         progress.warning(&diagnostic.to_string());
@@ -227,27 +247,11 @@ pub fn validate_loaded(
     } else {
         String::new()
     };
-    let mut written = Vec::new();
-    if let Some(path) = &opts.exports.urdf {
-        // Meshes named relative to the file: it loads from any folder, and moves with them.
-        let folder = std::path::absolute(path).ok().and_then(|p| p.parent().map(Path::to_path_buf));
-        let urdf = UrdfExportOptions {
-            mesh_base: folder,
-            ..Default::default()
-        };
-        pipeline::write_output(path, &to_urdf(model, &urdf)?)?;
-        written.push((Written::Urdf, path.clone()));
-    }
-    if let Some(path) = &opts.exports.mjcf {
-        // The scene's home key now; a validated run rewrites it with each goal's configuration.
-        let text = if opts.exports.scene {
-            let home = crate::plan::home_for(model, &scenario).0;
-            crate::export::scene_mjcf(model, &scenario, vec![("home".into(), home)])?
-        } else {
-            mjcf.clone()
-        };
-        pipeline::write_output(path, &text)?;
-        written.push((Written::Mjcf, path.clone()));
+    // Refused now what the writes at the end would refuse, before any work.
+    for path in [&opts.exports.urdf, &opts.exports.mjcf].into_iter().flatten() {
+        if crate::files::is_input(path) {
+            return Err(Error::WouldOverwriteInput { path: path.clone() });
+        }
     }
     let mut run = Run {
         input: input.to_path_buf(),
@@ -255,7 +259,7 @@ pub fn validate_loaded(
         hardware_cost_m: loaded.design.as_ref().map(crate::design::Design::hardware_cost),
         srdf,
         scenario,
-        written,
+        written: Vec::new(),
         kinematics_check: None,
         validation: None,
         report: None,
@@ -278,23 +282,47 @@ pub fn validate_loaded(
     }
     let mut validation = pipeline::validate_with_progress(loaded, run.scenario.clone(), &validate_options, progress)?;
     validation.kinematics_check = run.kinematics_check.clone();
-    let report = crate::report::build(&validation);
-    if let (Some(path), true) = (&opts.exports.mjcf, opts.exports.scene) {
-        let home = report
-            .trajectory
-            .as_ref()
-            .map_or_else(|| crate::plan::home_for(&run.model, &run.scenario).0, |t| t.home.clone());
-        let goals = report
-            .goals
-            .iter()
-            .enumerate()
-            .filter_map(|(k, g)| Some((format!("goal/{k}"), g.chosen.clone()?)));
-        let keys = std::iter::once(("home".to_string(), home)).chain(goals).collect();
-        pipeline::write_output(path, &crate::export::scene_mjcf(&run.model, &run.scenario, keys)?)?;
-    }
-    run.report = Some(report);
+    run.report = Some(crate::report::build(&validation));
     run.validation = Some(validation);
     Ok(run)
+}
+
+/// The export files `exports` asks of `run`: what each is, where it goes, its text. The scene
+/// MJCF's keyframes are the home and, once validated, each goal's chosen configuration.
+///
+/// # Errors
+/// A failed export ([`Error`] of the exporter).
+pub fn export_files(run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBuf, String)>, Error> {
+    let mut files = Vec::new();
+    if let Some(path) = &exports.urdf {
+        // Meshes named relative to the file: it loads from any folder, and moves with them.
+        let folder = std::path::absolute(path).ok().and_then(|p| p.parent().map(Path::to_path_buf));
+        let urdf = UrdfExportOptions {
+            mesh_base: folder,
+            ..Default::default()
+        };
+        files.push((Written::Urdf, path.clone(), to_urdf(&run.model, &urdf)?));
+    }
+    if let Some(path) = &exports.mjcf {
+        let text = if exports.scene {
+            let home = run
+                .report
+                .as_ref()
+                .and_then(|r| r.trajectory.as_ref())
+                .map_or_else(|| crate::plan::home_for(&run.model, &run.scenario).0, |t| t.home.clone());
+            let goals = run
+                .report
+                .iter()
+                .flat_map(|r| r.goals.iter().enumerate())
+                .filter_map(|(k, g)| Some((format!("goal/{k}"), g.chosen.clone()?)));
+            let keys = std::iter::once(("home".to_string(), home)).chain(goals).collect();
+            crate::export::scene_mjcf(&run.model, &run.scenario, keys)?
+        } else {
+            to_mjcf(&run.model, &MjcfOptions::default())?
+        };
+        files.push((Written::Mjcf, path.clone(), text));
+    }
+    Ok(files)
 }
 
 /// [`validate_loaded`] to the end (`opts.stop` is not used): the validation and its report, as

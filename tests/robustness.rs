@@ -260,7 +260,7 @@ fn a_run_writes_its_outputs_as_one_set_or_leaves_the_old_ones() {
     let design = repo().join("designs/ur5e.json");
     let scenario = repo().join("scenarios/cluttered/task-00.json");
     let (design, scenario) = (design.to_string_lossy(), scenario.to_string_lossy());
-    for name in ["r.json", "r.html"] {
+    for name in ["r.json", "r.html", "r.urdf"] {
         std::fs::write(dir.path().join(name), "old\n").expect("write");
     }
     // The JSON (about 13 KiB) fits under 200 KiB, the page (about 800 KiB) does not: nothing
@@ -279,20 +279,23 @@ fn a_run_writes_its_outputs_as_one_set_or_leaves_the_old_ones() {
         "pictures",
         "--html",
         "r.html",
+        "--export-urdf",
+        "r.urdf",
     ];
     let output = under_size_limit(200, &args, dir.path());
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    for name in ["r.json", "r.html"] {
+    for name in ["r.json", "r.html", "r.urdf"] {
         assert_eq!(std::fs::read_to_string(dir.path().join(name)).expect("read"), "old\n", "{name}");
     }
     let pictures: Vec<_> = std::fs::read_dir(dir.path().join("pictures")).expect("list").collect();
     assert!(pictures.is_empty(), "no picture of a failed set: {pictures:?}");
     let left = std::fs::read_dir(dir.path()).expect("list").count();
-    assert_eq!(left, 3, "temporaries left behind");
+    assert_eq!(left, 4, "temporaries left behind");
     // Without the limit all of them are written.
     let output = under_size_limit(1 << 20, &args, dir.path());
     assert!(matches!(output.status.code(), Some(1)), "{}", stderr(&output));
     assert!(std::fs::read_to_string(dir.path().join("r.html")).expect("read").len() > 100_000);
+    assert!(std::fs::read_to_string(dir.path().join("r.urdf")).expect("read").contains("<robot"));
 }
 
 #[test]

@@ -1,5 +1,7 @@
 //! `validate-design ROBOT`: the arguments become [`proving_ground::Options`], the library's
-//! [`proving_ground::validate`] runs, and what it returns is printed and written.
+//! run ([`proving_ground::run::validate_unwritten`], [`proving_ground::validate`] but for the
+//! writes) runs, and what it returns is printed and written: the exports and the report's files
+//! as one set.
 
 use super::ToleranceArg;
 use proving_ground::error::Error;
@@ -165,9 +167,18 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     let describing = args.describe || args.kinematics_only;
     // --describe prints the choices and the SRDF's pairs with the model.
     let bar = super::Bar::new("goals", args.quiet, !describing);
-    let run = proving_ground::validate(input, &args.options()?, &bar);
+    // The exports are written here, with the report's files, as one set.
+    let options = args.options()?;
+    let run = run::validate_unwritten(input, &options, &bar);
     bar.bar.finish_and_clear();
     let run = run?;
+    let mut set = pipeline::OutputSet::default();
+    let exported = run::export_files(&run, &options.exports)?;
+    for (_, path, text) in &exported {
+        set.add(path, text.as_bytes())?;
+    }
+    let pictures = stage_report(&mut set, args, &run)?;
+    set.commit()?;
     if !args.quiet && describing {
         print!("{}", report::describe(&run.model, run.hardware_cost_m));
         if let Some(srdf) = &run.srdf {
@@ -176,7 +187,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
         println!("{}", report::scenario_summary(&run.scenario));
     }
     if !args.quiet {
-        for (what, path) in &run.written {
+        for (what, path, _) in &exported {
             let what = match what {
                 Written::Urdf => "URDF",
                 Written::Mjcf => "MJCF",
@@ -199,24 +210,28 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     if args.describe && args.quiet {
         println!("{}: {} joints, model built", run.model.name, run.model.dof());
     }
-    print_report(args, &run)?;
+    print_report(args, &run, &pictures);
     Ok(super::exit_code(run.outcome()))
 }
 
-/// The report on stdout, and `--json`, `--svg`, `--png`, `--html`: written as one set, so a
-/// failed write leaves every old file as it was rather than a mix of two runs.
-fn print_report(args: &ValidateArgs, run: &Run) -> Result<(), Error> {
+/// `--json`, `--svg`, `--png` and `--html` added to `set` (one set with the exports, so a failed
+/// write leaves every old file as it was rather than a mix of two runs); the lines that say what
+/// was written.
+fn stage_report(set: &mut pipeline::OutputSet, args: &ValidateArgs, run: &Run) -> Result<Vec<String>, Error> {
     let (Some(validation), Some(report)) = (&run.validation, &run.report) else {
-        return Ok(());
+        return Ok(Vec::new());
     };
-    let mut set = pipeline::OutputSet::default();
     if let Some(path) = &args.json {
         set.add(path, run::report_json(report)?.as_bytes())?;
     }
-    let written = stage_pictures(&mut set, args, validation, report)?;
-    set.commit()?;
+    stage_pictures(set, args, validation, report)
+}
+
+/// The report on stdout, after the lines saying which pictures were written.
+fn print_report(args: &ValidateArgs, run: &Run, pictures: &[String]) {
+    let Some(report) = &run.report else { return };
     if !args.quiet {
-        for line in written {
+        for line in pictures {
             println!("{line}");
         }
     }
@@ -225,7 +240,6 @@ fn print_report(args: &ValidateArgs, run: &Run) -> Result<(), Error> {
     } else {
         print!("{}", report::render(report));
     }
-    Ok(())
 }
 
 /// `--svg DIR`, `--png DIR`, `--html FILE` added to `set`; the lines that say what was written.
