@@ -425,10 +425,21 @@ fn designs_tuned_in_one_batch_end_as_each_alone() {
 fn several_designs_are_tuned_in_batches_into_one_folder() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("tuned");
-    let designs = ["economic-elbow.json", "ur5e.json", "free-4dof-mounted.json"];
-    let run = |inputs: &[&str]| {
-        let paths: Vec<_> = inputs.iter().map(|name| common::repo().join("designs").join(name)).collect();
-        let paths: Vec<&std::path::Path> = paths.iter().map(|p| p.as_path()).collect();
+    // A second economic design of the elbow's capsule structure (its lengths changed).
+    let text = std::fs::read_to_string(common::repo().join("designs/economic-elbow.json")).expect("read");
+    let second = dir.path().join("second-elbow.json");
+    std::fs::write(
+        &second,
+        text.replace("\"economic-elbow\"", "\"second-elbow\"").replace("-0.35", "-0.3"),
+    )
+    .expect("write");
+    let designs = [
+        common::repo().join("designs/economic-elbow.json"),
+        second,
+        common::repo().join("designs/free-4dof-mounted.json"),
+    ];
+    let run = |inputs: &[std::path::PathBuf]| {
+        let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
         optimize_cli(&paths, &["--steps", "5", "--engines", "none"], &out)
     };
     let output = run(&designs);
@@ -438,13 +449,16 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
         "{stdout}{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    for name in designs {
-        let stem = name.trim_end_matches(".json");
-        let tuned = design::load(&out.join(format!("{stem}-tuned.json"))).expect("a tuned design per input");
-        assert_eq!(tuned.name, format!("{}-tuned", design(name).name));
+    for path in &designs {
+        let stem = path.file_stem().expect("stem").to_string_lossy();
+        let written = design::load(&out.join(format!("{stem}-tuned.json"))).expect("a design per input");
+        let name = design::load(path).expect("loads").name;
+        // The tuned design, or the original where tuning lost ground (and the output says so).
+        let kept = stdout.contains(&format!("{stem}-tuned.json: the original design, kept"));
+        assert_eq!(written.name, if kept { name } else { format!("{name}-tuned") }, "{stdout}");
     }
-    // The two 6-dof designs (one economic, one preset) have one capsule structure and share a
-    // batch; the 4-dof design has its own.
+    // The two economic 6-dof designs have one capsule structure and share a batch; the 4-dof
+    // design has its own.
     assert_eq!(stdout.matches("(one batch of 2 designs)").count(), 2, "{stdout}");
     assert_eq!(stdout.matches("goals reached").count(), 3, "{stdout}");
 
@@ -460,7 +474,8 @@ fn several_designs_are_tuned_in_batches_into_one_folder() {
         assert!(!dir.path().join("gpu.json").exists());
     }
 
-    let twice = run(&["free-offset-6dof.json", "free-offset-6dof.json"]);
+    let free = common::repo().join("designs/free-offset-6dof.json");
+    let twice = run(&[free.clone(), free]);
     assert_eq!(twice.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&twice.stderr).contains("another input is also called"));
 }
@@ -534,6 +549,136 @@ fn optimize_output_paths_are_checked_before_any_work() {
     let cased = optimize_cli(&[&ur5e, &upper], QUICK, &dir.path().join("cased"));
     assert_eq!(cased.status.code(), Some(2));
     assert!(stderr(&cased).contains("another input is also called"), "{}", stderr(&cased));
+}
+
+/// Eight designs as a generator would send them: four free ones (the free 6-dof design's
+/// lengths scaled by 0.6 to 1.4) and four economic ones (the economic elbow's nonzero lengths
+/// drawn from [0.1, 0.4] m, `a` keeping its sign), written into `dir`.
+fn generated_designs(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(25);
+    let mut paths = Vec::new();
+    for (base, economic) in [("free-offset-6dof.json", false), ("economic-elbow.json", true)] {
+        let text = std::fs::read_to_string(common::repo().join("designs").join(base)).expect("shipped design");
+        for k in 0..4 {
+            let mut json: serde_json::Value = serde_json::from_str(&text).expect("json");
+            let name = format!("generated-{}-{k}", if economic { "economic" } else { "free" });
+            json["name"] = name.clone().into();
+            for joint in json["joints"].as_array_mut().expect("joints") {
+                for key in ["d", "a"] {
+                    let value = joint[key].as_f64().expect("a number");
+                    if value == 0.0 {
+                        continue;
+                    }
+                    let new = if economic {
+                        value.signum() * rng.random_range(0.1..=0.4)
+                    } else {
+                        value * rng.random_range(0.6..1.4)
+                    };
+                    joint[key] = new.into();
+                }
+            }
+            let path = dir.join(format!("{name}.json"));
+            std::fs::write(&path, serde_json::to_string_pretty(&json).expect("text")).expect("write");
+            paths.push(path);
+        }
+    }
+    paths
+}
+
+#[test]
+fn no_design_optimize_writes_reaches_fewer_goals_than_its_original() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let inputs = generated_designs(dir.path());
+    let out = dir.path().join("tuned");
+    let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let output = optimize_cli(&paths, &["--steps", "60", "--engines", "none"], &out);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        matches!(output.status.code(), Some(0 | 1 | 3)),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    println!("{stdout}");
+    // The objective and the validated loss side by side, for every tuned design.
+    assert_eq!(
+        stdout.matches("at the optimizer's own configurations; paper loss").count(),
+        8,
+        "{stdout}"
+    );
+    assert_eq!(stdout.matches("wrote ").count(), 8, "{stdout}");
+    // Validated again here, independently of what the command decided.
+    let scenario = scenario("scenarios/cluttered/task-03.json");
+    let options = pipeline::ValidateOptions {
+        engines: pipeline::Engines::none(),
+        ..pipeline::ValidateOptions::seeded(0)
+    };
+    let reached = |path: &std::path::Path| -> Vec<usize> {
+        let loaded = pipeline::load(path, &pipeline::LoadOptions::default()).expect("loads");
+        let report = optimize::validation(path, loaded, &scenario, &options).expect("validates");
+        report.goals.iter().filter(|g| g.outcome == "reached").map(|g| g.index).collect()
+    };
+    for input in &inputs {
+        let stem = input.file_stem().expect("stem").to_string_lossy();
+        let before = reached(input);
+        let after = reached(&out.join(format!("{stem}-tuned.json")));
+        assert!(
+            before.iter().all(|g| after.contains(g)),
+            "{stem}: goals {before:?} before, {after:?} after\n{stdout}"
+        );
+    }
+}
+
+#[test]
+fn a_tuned_design_that_loses_a_goal_is_not_returned() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let input = common::repo().join("tests/fixtures/optimize/loses-a-goal.json");
+    let out = dir.path().join("tuned.json");
+    let output = assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary")
+        .arg("optimize")
+        .arg(&input)
+        .arg("--scenario")
+        .arg(common::repo().join("scenarios/cluttered/task-00.json"))
+        .args(["--engines", "none", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    // Tuning reaches more goals (3 -> 7) but not goal 6, which the original reaches.
+    assert!(
+        stdout.contains("the original design, kept: goal 6 (goal 6) is reached by the original"),
+        "{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(
+        design::load(&out).expect("loads").joints,
+        design::load(&input).expect("loads").joints
+    );
+}
+
+#[test]
+fn a_modular_design_gets_its_best_module_swap_or_stays_as_it_is() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("swapped.json");
+    let input = common::repo().join("designs/modular-elbow.json");
+    let output = optimize_cli(&[&input], &["--engines", "none"], &out);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("nothing continuous to tune"), "{stdout}");
+    assert!(stdout.contains("its 24 module swaps by the reach-only metric"), "{stdout}");
+    let swapped = design::load(&out).expect("loads");
+    let original = design("modular-elbow.json");
+    let (ours, theirs) = (swapped.modules.expect("modules"), original.modules.expect("modules"));
+    let changed = ours.iter().zip(&theirs).filter(|(a, b)| a != b).count();
+    assert!(changed <= 1, "one slot swapped at most: {ours:?} from {theirs:?}");
+    // A preset has neither lengths nor modules: written unchanged.
+    let preset_out = dir.path().join("preset.json");
+    let output = optimize_cli(&[&common::repo().join("designs/ur5e.json")], &["--engines", "none"], &preset_out);
+    assert!(
+        String::from_utf8_lossy(&output.stdout).contains("wrote"),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(design::load(&preset_out).expect("loads").joints, design("ur5e.json").joints);
 }
 
 #[test]

@@ -12,9 +12,10 @@ use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct OptimizeArgs {
-    /// The design JSONs to fine-tune (free and economic: d, a and the joints; modular and
-    /// preset: the joints only). Designs of one dof count and capsule structure are tuned in one
-    /// batch, as the paper tunes its generated robots; each ends as it would alone.
+    /// The design JSONs to fine-tune (free and economic: d, a and the joints; modular: the best
+    /// single-module swap instead; preset: nothing to tune). Designs of one dof count and capsule
+    /// structure are tuned in one batch, as the paper tunes its generated robots; each ends as it
+    /// would alone. A tuned design is written only if it keeps every goal of the original.
     #[arg(value_name = "DESIGN", required = true, num_args = 1..)]
     designs: Vec<PathBuf>,
     /// The scenario whose goals and obstacles the objective uses.
@@ -99,37 +100,97 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
         "cuda" => Tensors::cuda(0)?,
         _ => Tensors::default(),
     };
-    let designs: Vec<Design> = inputs.iter().map(|i| i.design.clone()).collect();
-    let tuned = optimize::tune(&designs, &scenario, &opts, &mut objective)?;
-    if into_folder(args) {
-        let files: Vec<(String, Vec<u8>)> = inputs
-            .iter()
-            .zip(&tuned)
-            .map(|(input, t)| {
-                let name = input.out.file_name().unwrap_or_default().to_string_lossy().into_owned();
-                (name, t.text.clone().into_bytes())
-            })
-            .collect();
-        pipeline::write_files_into(&args.out, &files)?;
-    } else {
-        for (input, t) in inputs.iter().zip(&tuned) {
-            pipeline::write_output(&input.out, &t.text)?;
-        }
+    // Only free and economic designs have lengths to tune; the others are validated as they are.
+    let tunable: Vec<usize> = (0..inputs.len())
+        .filter(|&i| optimize::nothing_to_tune(&inputs[i].design).is_none())
+        .collect();
+    let designs: Vec<Design> = tunable.iter().map(|&i| inputs[i].design.clone()).collect();
+    let mut tuned: Vec<Option<optimize::Tuned>> = vec![None; inputs.len()];
+    for (&i, t) in tunable.iter().zip(optimize::tune(&designs, &scenario, &opts, &mut objective)?) {
+        tuned[i] = Some(t);
     }
 
     let validate_options = ValidateOptions {
         engines: args.engines,
         ..ValidateOptions::seeded(args.seed)
     };
+    // Everything is validated before anything is written: what is written is what passed the
+    // comparison, and the files are one set.
     let mut worst = Outcome::Pass;
-    for (input, t) in inputs.into_iter().zip(&tuned) {
+    let mut files: Vec<(PathBuf, String)> = Vec::with_capacity(inputs.len());
+    let mut lines: Vec<String> = Vec::new();
+    for (input, tuned) in inputs.into_iter().zip(tuned) {
+        let Some(t) = tuned else {
+            let why = optimize::nothing_to_tune(&input.design).unwrap_or_default();
+            let swaps = optimize::module_swaps(&input.design).len();
+            let best = if swaps > 0 {
+                optimize::best_module_swap(&input.design, &scenario, &validate_options.ik)?
+            } else {
+                None
+            };
+            let Some((what, neighbour, theirs, own)) = best else {
+                let report = optimize::validation(&input.path, input.loaded, &scenario, &validate_options)?;
+                let swapped = if swaps > 0 {
+                    format!("; none of its {swaps} module swaps beats it by the reach-only metric")
+                } else {
+                    String::new()
+                };
+                println!("optimize {}: {why}{swapped}; verdict {}", input.path.display(), report.verdict.word);
+                let description = format!(
+                    "{} as it was: validate-design optimize found nothing to tune in it",
+                    input.design.name
+                );
+                files.push((input.out.clone(), proving_ground::design::to_json(&input.design, &description)));
+                lines.push(format!("wrote {}: the design unchanged", input.out.display()));
+                worst = worst.max(Outcome::of(&report));
+                continue;
+            };
+            let loss = |v: Option<f64>| v.map_or_else(|| "none".into(), |v| format!("{v:.4}"));
+            println!(
+                "optimize {}: {why}; the discrete analogue, its {swaps} module swaps by the reach-only metric: best {what} ({}/{} goals solved, task loss {}; the design itself {}/{}, {})",
+                input.path.display(),
+                theirs.goals_solved,
+                theirs.goals,
+                loss(theirs.task_loss),
+                own.goals_solved,
+                own.goals,
+                loss(own.task_loss)
+            );
+            let original = input.design.clone();
+            let (before, after) =
+                optimize::before_and_after(&input.path, input.loaded, &input.out, &neighbour, &scenario, &validate_options)?;
+            print!("{}", side_by_side(&before, &after));
+            let lost = optimize::lost_ground(&before, &after);
+            if lost.is_empty() {
+                let description = format!(
+                    "{} with {what}: the best module swap found by validate-design optimize",
+                    original.name
+                );
+                files.push((input.out.clone(), proving_ground::design::to_json(&neighbour, &description)));
+                lines.push(format!(
+                    "wrote {}: the design with {what} (it reaches every goal the original reaches, with no worse verdict or loss)",
+                    input.out.display()
+                ));
+                worst = worst.max(Outcome::of(&after));
+            } else {
+                let why = lost.join("; ");
+                let description = format!(
+                    "{} as it was: validate-design optimize kept it because its best module swap lost ground ({why})",
+                    original.name
+                );
+                files.push((input.out.clone(), proving_ground::design::to_json(&original, &description)));
+                lines.push(format!("wrote {}: the original design, kept: {why}", input.out.display()));
+                worst = worst.max(Outcome::of(&before));
+            }
+            continue;
+        };
         let together = if t.batch_size > 1 {
             format!(" (one batch of {} designs)", t.batch_size)
         } else {
             String::new()
         };
         println!(
-            "optimize {}: {} starts x {} goals, {} steps in {:.2} s{together}; objective {:.4} -> {:.4} (best at step {}); wrote {}",
+            "optimize {}: {} starts x {} goals, {} steps in {:.2} s{together}; objective {:.4} -> {:.4} (best at step {})",
             input.path.display(),
             opts.seeds,
             scenario.goals.len(),
@@ -138,13 +199,57 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
             t.objective.0,
             t.objective.1,
             t.best_step,
-            input.out.display()
         );
+        let original = input.design.clone();
         let (before, after) = optimize::before_and_after(&input.path, input.loaded, &input.out, &t.design, &scenario, &validate_options)?;
         print!("{}", side_by_side(&before, &after));
-        worst = worst.max(Outcome::of(&after));
+        if let Some(validated) = after.paper_loss.as_ref().and_then(|p| p.total) {
+            println!(
+                "objective {:.4} at the optimizer's own configurations; paper loss {validated:.4} at the IK solutions the validation found for the tuned design (IK solves each goal again: a goal it reaches costs no distance, a missed one its closest attempt)",
+                t.objective.1
+            );
+        }
+        let lost = optimize::lost_ground(&before, &after);
+        if lost.is_empty() {
+            files.push((input.out.clone(), t.text.clone()));
+            lines.push(format!(
+                "wrote {}: the tuned design (it reaches every goal the original reaches, with no worse verdict or loss)",
+                input.out.display()
+            ));
+            worst = worst.max(Outcome::of(&after));
+        } else {
+            let why = lost.join("; ");
+            let description = format!(
+                "{} as it was: validate-design optimize kept it because tuning lost ground ({why})",
+                original.name
+            );
+            files.push((input.out.clone(), proving_ground::design::to_json(&original, &description)));
+            lines.push(format!("wrote {}: the original design, kept: {why}", input.out.display()));
+            worst = worst.max(Outcome::of(&before));
+        }
     }
-    // As a single validation: 1 when a tuned design fails, else 3 when one is undecided.
+    if into_folder(args) {
+        let named: Vec<(String, Vec<u8>)> = files
+            .into_iter()
+            .map(|(path, text)| {
+                (
+                    path.file_name().unwrap_or_default().to_string_lossy().into_owned(),
+                    text.into_bytes(),
+                )
+            })
+            .collect();
+        pipeline::write_files_into(&args.out, &named)?;
+    } else {
+        let mut set = pipeline::OutputSet::default();
+        for (path, text) in &files {
+            set.add(path, text.as_bytes())?;
+        }
+        set.commit()?;
+    }
+    for line in lines {
+        println!("{line}");
+    }
+    // As a single validation of what was written: 1 when one fails, else 3 when one is undecided.
     Ok(super::exit_code(worst))
 }
 

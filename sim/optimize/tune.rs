@@ -1,6 +1,7 @@
 //! Fine-tuning a set of designs on one scenario as `validate-design optimize` does it: designs
 //! that can share a batch are tuned together, each tuned design is named and described, checked
-//! to read back to itself, and validated before and after under the same seeded options.
+//! to read back to itself, and validated before and after under the same seeded options; a
+//! tuned design that loses ground on its original is not returned ([`lost_ground`]).
 
 use super::{optimize, starts_of, tuned_design, Batch, Objective, OptimizeError, OptimizeOptions};
 use crate::design::Design;
@@ -104,17 +105,134 @@ pub fn before_and_after(
     scenario: &Scenario,
     opts: &ValidateOptions,
 ) -> Result<(Report, Report), crate::error::Error> {
+    let before = validation(path, loaded, scenario, opts)?;
+    let after_loaded = Loaded {
+        model: crate::model::from_design(tuned),
+        design: Some(tuned.clone()),
+    };
+    let after = validation(tuned_path, after_loaded, scenario, opts)?;
+    Ok((before, after))
+}
+
+/// The report of the run `validate-design` makes of `loaded` (read from `path`) on `scenario`,
+/// without MuJoCo's kinematics check.
+///
+/// # Errors
+/// As [`crate::run::validated`].
+pub fn validation(path: &Path, loaded: Loaded, scenario: &Scenario, opts: &ValidateOptions) -> Result<Report, crate::error::Error> {
     let run_opts = crate::run::Options {
         kinematics_checks: 0,
         validate: opts.clone(),
         ..Default::default()
     };
-    let silent = &crate::progress::Silent;
-    let (_, before) = crate::run::validated(path, loaded, scenario.clone(), &run_opts, silent)?;
-    let after_loaded = Loaded {
-        model: crate::model::from_design(tuned),
-        design: Some(tuned.clone()),
+    let (_, report) = crate::run::validated(path, loaded, scenario.clone(), &run_opts, &crate::progress::Silent)?;
+    Ok(report)
+}
+
+/// Why `design` has nothing continuous to tune (modular and preset designs: their lengths are
+/// their modules' or the robot's; only the joints would move), or `None` for free and economic
+/// designs.
+pub fn nothing_to_tune(design: &Design) -> Option<&'static str> {
+    match design.mode {
+        crate::design::DesignMode::Free | crate::design::DesignMode::Economic => None,
+        crate::design::DesignMode::Modular => {
+            Some("a modular design's lengths are its modules': nothing continuous to tune (only the joints would move)")
+        }
+        crate::design::DesignMode::Preset => Some("a preset is a published robot: nothing continuous to tune (only the joints would move)"),
+    }
+}
+
+/// Where the full validation of a tuned design (`after`) falls behind its original's
+/// (`before`), one reason per loss: a goal the original reaches that the tuned design does not,
+/// a worse outcome (PASS, UNDECIDED, FAIL), a higher paper loss (the least over the goals' IK
+/// solutions) without a goal gained for it. Empty when the tuned design keeps all the ground the
+/// original holds: only then is it returned.
+pub fn lost_ground(before: &Report, after: &Report) -> Vec<String> {
+    let reached = |r: &Report| r.goals.iter().filter(|g| g.outcome == "reached").count();
+    let mut reasons = Vec::new();
+    for (old, new) in before.goals.iter().zip(&after.goals) {
+        if old.outcome == "reached" && new.outcome != "reached" {
+            reasons.push(format!(
+                "goal {} ({}) is reached by the original, {} after tuning",
+                old.index, old.name, new.outcome
+            ));
+        }
+    }
+    let outcome = |r: &Report| crate::run::Outcome::of(r);
+    if outcome(after) > outcome(before) {
+        reasons.push(format!("the verdict falls from {} to {}", before.verdict.word, after.verdict.word));
+    }
+    let loss = |r: &Report| r.paper_loss.as_ref().and_then(|p| p.total);
+    match (loss(before), loss(after)) {
+        (Some(old), Some(new)) if new > old && reasons.is_empty() && reached(after) <= reached(before) => {
+            reasons.push(format!("the paper loss (min over IK) rises from {old:.4} to {new:.4}"))
+        }
+        (Some(_), None) => reasons.push("a goal of the tuned design has no configuration at all (no paper loss)".into()),
+        _ => {}
+    }
+    reasons
+}
+
+/// A modular design's neighbours: the designs with one slot's module swapped for another
+/// catalog module (base and tool kept), in slot order then catalog order; none for other
+/// designs.
+pub fn module_swaps(design: &Design) -> Vec<(String, Design)> {
+    use crate::design::catalog::SlotOption;
+    let Some(slots) = &design.modules else { return Vec::new() };
+    let mut swaps = Vec::new();
+    for (k, &current) in slots.iter().enumerate() {
+        for option in SlotOption::ALL.into_iter().filter(|&o| o != current) {
+            let mut changed = slots.clone();
+            changed[k] = option;
+            let what = format!("slot {} {} -> {}", k + 1, current.name(), option.name());
+            let neighbour = Design {
+                base: design.base,
+                tool: design.tool,
+                ..Design::modular(&format!("{}-tuned", design.name), &changed)
+            };
+            swaps.push((what, neighbour));
+        }
+    }
+    swaps
+}
+
+/// The discrete analogue of fine-tuning for a modular design: its module swaps
+/// ([`module_swaps`]) and itself scored by the paper's reach-only metric on `scenario` (goals
+/// solved, then the task loss), in parallel; the best swap when it beats the design by that
+/// metric (what it changes, the design, its record and the design's own), else `None`.
+///
+/// # Errors
+/// A design the pipeline cannot build or evaluate.
+pub fn best_module_swap(
+    design: &Design,
+    scenario: &Scenario,
+    ik: &crate::ik::IkOptions,
+) -> Result<Option<(String, Design, crate::sweep::record::Record, crate::sweep::record::Record)>, crate::error::Error> {
+    use rayon::prelude::*;
+    let mode = crate::sweep::SweepMode::ReachOnly { ik: ik.clone() };
+    let record = |name: &str, d: &Design| {
+        let loaded = Loaded {
+            model: crate::model::from_design(d),
+            design: Some(d.clone()),
+        };
+        crate::sweep::record::evaluate(name, &scenario.name, loaded, scenario.clone(), &mode)
     };
-    let (_, after) = crate::run::validated(tuned_path, after_loaded, scenario.clone(), &run_opts, silent)?;
-    Ok((before, after))
+    let own = record(&design.name, design)?;
+    let swaps = module_swaps(design);
+    let records = swaps.par_iter().map(|(what, d)| record(what, d)).collect::<Result<Vec<_>, _>>()?;
+    // Goals solved first, then the loss (none last); the first of equals, for determinism.
+    let better = |a: &crate::sweep::record::Record, b: &crate::sweep::record::Record| {
+        let loss = |r: &crate::sweep::record::Record| r.task_loss.unwrap_or(f64::INFINITY);
+        a.goals_solved > b.goals_solved || (a.goals_solved == b.goals_solved && loss(a) < loss(b))
+    };
+    let mut best: Option<usize> = None;
+    for (i, r) in records.iter().enumerate() {
+        if best.is_none_or(|b| better(r, &records[b])) {
+            best = Some(i);
+        }
+    }
+    Ok(best.filter(|&b| better(&records[b], &own)).map(|b| {
+        let (what, d) = swaps[b].clone();
+        (what, d, records[b].clone(), own)
+    }))
 }
