@@ -373,6 +373,47 @@ fn a_crash_at_any_write_step_of_a_sweep_or_a_merge_is_repaired_by_running_it_aga
 }
 
 #[test]
+fn a_catalog_id_is_a_design_wherever_a_design_is() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // The id a sweep prints is a design for a single run.
+    let output = validate_design()
+        .args(["modular6/Ll-Is-Ll-Il-D-Ls", "--scenario", SCENARIOS[0], "--reach-only", "--mujoco-checks", "0"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(matches!(output.status.code(), Some(0 | 1 | 3)), "{stdout}");
+    assert!(stdout.contains("design modular6/Ll-Is-Ll-Il-D-Ls (modular, 6 joints"), "{stdout}");
+    // In a sweep, its record is the catalog's own.
+    let single = dir.path().join("single");
+    sweep_of(&["preset/UR20"], &single);
+    let table1 = dir.path().join("table1");
+    sweep_of(&["catalog:table1"], &table1);
+    let line = read(&single.join("results.jsonl"));
+    assert!(read(&table1.join("results.jsonl")).contains(line.trim()), "{line}");
+    // What is not an id says what an id is.
+    for (id, message) in [
+        ("modular6/Ll-Is-Ll-Il-D-Lx", "unknown slot code `Lx`"),
+        ("modular5/Ll-Is-Ll-Il-D-Ls", "says 5 slots and lists 6"),
+        ("preset/UR3", "no such preset; expected one of preset/UR5e"),
+    ] {
+        let output = validate_design().args([id, "--reach-only"]).output().expect("runs");
+        assert_eq!(output.status.code(), Some(2), "{id}");
+        assert!(String::from_utf8_lossy(&output.stderr).contains(message), "{id}");
+    }
+}
+
+fn sweep_of(designs: &[&str], out: &Path) {
+    let output = validate_design()
+        .arg("sweep")
+        .args(designs)
+        .args(["--scenarios", SCENARIOS[0], "--quiet", "--out"])
+        .arg(out)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
 fn quiet_without_a_folder_is_refused_rather_than_throwing_the_results_away() {
     for command in [
         &["sweep", "designs/ur5e.json", "--scenarios", SCENARIOS[0], "--quiet"][..],

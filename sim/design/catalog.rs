@@ -62,6 +62,17 @@ impl SlotOption {
         }
     }
 
+    /// The short code of catalog ids (`modular6/D-Ls-Il-D-Is-Ll`).
+    pub fn code(self) -> &'static str {
+        match self {
+            Self::Direct => "D",
+            Self::IShort => "Is",
+            Self::ILong => "Il",
+            Self::LShort => "Ls",
+            Self::LLong => "Ll",
+        }
+    }
+
     /// The name used in design files.
     pub fn name(self) -> &'static str {
         match self {
@@ -72,6 +83,62 @@ impl SlotOption {
             Self::LLong => "L-long",
         }
     }
+}
+
+/// A robot named by its catalog id, as `sweep` and `ga` print them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CatalogId {
+    /// `modularN/C1-...-CN`: N slots of the module catalog, by [`SlotOption::code`].
+    Modular(Vec<SlotOption>),
+    /// `preset/NAME`: an industrial preset by [`Preset::name`].
+    Preset(Preset),
+}
+
+/// The id of the modular robot of `slots`.
+pub fn modular_id(slots: &[SlotOption]) -> String {
+    let codes: Vec<&str> = slots.iter().map(|s| s.code()).collect();
+    format!("modular{}/{}", slots.len(), codes.join("-"))
+}
+
+/// The id of a preset.
+pub fn preset_id(preset: Preset) -> String {
+    format!("preset/{}", preset.name())
+}
+
+/// Reads a catalog id: `Ok(None)` for text that does not look like one (`modularN/...`,
+/// `preset/...`), the message for one that looks like it but names no robot.
+///
+/// # Errors
+/// What is wrong and what was expected.
+pub fn parse_id(text: &str) -> Result<Option<CatalogId>, String> {
+    if let Some(name) = text.strip_prefix("preset/") {
+        return match Preset::ALL.into_iter().find(|p| p.name() == name) {
+            Some(preset) => Ok(Some(CatalogId::Preset(preset))),
+            None => {
+                let names: Vec<String> = Preset::ALL.into_iter().map(preset_id).collect();
+                Err(format!("no such preset; expected one of {}", names.join(", ")))
+            }
+        };
+    }
+    let Some((count, codes)) = text.strip_prefix("modular").and_then(|rest| rest.split_once('/')) else {
+        return Ok(None);
+    };
+    if count.is_empty() || !count.bytes().all(|b| b.is_ascii_digit()) {
+        return Ok(None);
+    }
+    let expected = || {
+        let all: Vec<&str> = SlotOption::ALL.iter().map(|s| s.code()).collect();
+        format!("expected modularN/ and N slot codes joined by `-`, each one of {}", all.join(", "))
+    };
+    let slots = codes
+        .split('-')
+        .map(|code| SlotOption::ALL.into_iter().find(|s| s.code() == code).ok_or(code))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|code| format!("unknown slot code `{code}`; {}", expected()))?;
+    if count.parse::<usize>().ok() != Some(slots.len()) {
+        return Err(format!("says {count} slots and lists {}; {}", slots.len(), expected()));
+    }
+    Ok(Some(CatalogId::Modular(slots)))
 }
 
 /// Industrial robots whose published DH tables the paper used as baselines.

@@ -122,6 +122,18 @@ impl Design {
         }
     }
 
+    /// The robot a catalog id names (`modular6/D-Ls-Il-D-Is-Ll`, `preset/UR20`), named by the
+    /// id; `Ok(None)` for text that is not a catalog id.
+    ///
+    /// # Errors
+    /// The message for text that looks like an id and names no robot.
+    pub fn from_catalog_id(text: &str) -> Result<Option<Design>, String> {
+        Ok(catalog::parse_id(text)?.map(|id| match id {
+            catalog::CatalogId::Modular(slots) => Design::modular(text, &slots),
+            catalog::CatalogId::Preset(preset) => Design::preset(text, preset),
+        }))
+    }
+
     /// An industrial preset, named `name`, at the origin without a tool offset.
     pub fn preset(name: &str, preset: Preset) -> Design {
         // The paper ignores preset joint limits and publishes no ratings in its tables.

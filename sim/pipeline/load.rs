@@ -29,7 +29,20 @@ pub enum InputKind {
 }
 
 /// The robot files read, for messages.
-const ROBOT_FILES: &str = "expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file";
+const ROBOT_FILES: &str =
+    "expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file, or a catalog id (modular6/D-Ls-Il-D-Is-Ll, preset/UR5e)";
+
+/// The design a catalog id names, when `path` is no file and its text is one.
+fn catalog_design(path: &Path) -> Result<Option<design::Design>, Error> {
+    if path.exists() {
+        return Ok(None);
+    }
+    let Some(text) = path.to_str() else { return Ok(None) };
+    design::Design::from_catalog_id(text).map_err(|reason| Error::UnknownInput {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
 
 /// The kind of a robot description file: from its extension, and for `.xml` and `.mjcf` from
 /// its root element (a URDF saved as `.xml` is read as the URDF it is).
@@ -51,6 +64,9 @@ pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
         return unknown(format!(
             "is a directory; {ROBOT_FILES} (for many designs: validate-design sweep DIR/*.json)"
         ));
+    }
+    if catalog_design(path)?.is_some() {
+        return Ok(InputKind::Design);
     }
     let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match extension.as_deref() {
@@ -107,7 +123,10 @@ pub struct Loaded {
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
     match input_kind(path)? {
         InputKind::Design => {
-            let design = design::load(path)?;
+            let design = match catalog_design(path)? {
+                Some(design) => design,
+                None => design::load(path)?,
+            };
             Ok(Loaded {
                 model: model::from_design(&design),
                 design: Some(design),

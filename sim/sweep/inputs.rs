@@ -48,17 +48,6 @@ impl Catalog {
     }
 }
 
-/// Short slot names for catalog design ids.
-fn slot_code(option: SlotOption) -> &'static str {
-    match option {
-        SlotOption::Direct => "D",
-        SlotOption::IShort => "Is",
-        SlotOption::ILong => "Il",
-        SlotOption::LShort => "Ls",
-        SlotOption::LLong => "Ll",
-    }
-}
-
 /// The `index`-th 6-slot robot, slot 1 the most significant digit in base 5 (catalog order).
 pub fn modular6_slots(index: usize) -> [SlotOption; CATALOG_SLOTS] {
     let base = SlotOption::ALL.len();
@@ -77,9 +66,8 @@ fn modular6(index: usize) -> DesignEntry {
 
 /// The catalog robot of `slots`, with its id (`modular6/D-Ls-...` for six slots).
 pub fn catalog_entry(slots: &[SlotOption]) -> DesignEntry {
-    let code: Vec<&str> = slots.iter().map(|s| slot_code(*s)).collect();
     DesignEntry {
-        id: format!("modular{}/{}", slots.len(), code.join("-")),
+        id: crate::design::catalog::modular_id(slots),
         source: DesignSource::Modular(slots.to_vec()),
         sha256: None,
     }
@@ -87,7 +75,7 @@ pub fn catalog_entry(slots: &[SlotOption]) -> DesignEntry {
 
 fn preset(preset: Preset) -> DesignEntry {
     DesignEntry {
-        id: format!("preset/{}", preset.name()),
+        id: crate::design::catalog::preset_id(preset),
         source: DesignSource::Preset(preset),
         sha256: None,
     }
@@ -161,6 +149,24 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
                 push(entry, &mut entries);
             }
             continue;
+        }
+        // One catalog robot by its id, as sweeps and the GA print them (a file of that name wins).
+        if !Path::new(argument).exists() {
+            let id = crate::design::catalog::parse_id(argument).map_err(|message| SweepError::Designs {
+                argument: argument.clone(),
+                message,
+            })?;
+            match id {
+                Some(crate::design::catalog::CatalogId::Modular(slots)) => {
+                    push(catalog_entry(&slots), &mut entries);
+                    continue;
+                }
+                Some(crate::design::catalog::CatalogId::Preset(p)) => {
+                    push(preset(p), &mut entries);
+                    continue;
+                }
+                None => {}
+            }
         }
         for path in expand(argument, &DESIGN_EXTENSIONS, "design")? {
             let loaded = pipeline::load(&path, load).map_err(|e| SweepError::Load(Box::new(e)))?;
