@@ -63,6 +63,8 @@ pub struct Options {
     pub scenario: Option<PathBuf>,
     /// Judge every goal by this tolerance instead of the scenario's.
     pub tolerance: Option<Tolerance>,
+    /// The home configuration (rad or m per joint) instead of the scenario's.
+    pub home: Option<Vec<f64>>,
     /// Random configurations at which MuJoCo's kinematics are compared with ours (0 skips the
     /// check); seeded with the IK seed.
     pub kinematics_checks: usize,
@@ -82,6 +84,7 @@ impl Default for Options {
             strict: false,
             scenario: None,
             tolerance: None,
+            home: None,
             kinematics_checks: DEFAULT_KINEMATICS_CHECKS,
             stop: Stop::default(),
             exports: Exports::default(),
@@ -240,6 +243,9 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
             goal.tolerance = tolerance;
         }
     }
+    if let Some(home) = &opts.home {
+        scenario.home = Some(checked_home(model, home)?);
+    }
     // Built only when written or checked: a sweep validates thousands of designs.
     let wants_mjcf = (opts.exports.mjcf.is_some() && !opts.exports.scene) || kinematics_checked(opts);
     let mjcf = if wants_mjcf {
@@ -285,6 +291,33 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
     run.report = Some(crate::report::build(&validation));
     run.validation = Some(validation);
     Ok(run)
+}
+
+/// A home given for `model` (`--home`): one value per joint, each within its joint's limits.
+///
+/// # Errors
+/// [`Error::Option`] naming `home` and what does not fit.
+fn checked_home(model: &crate::model::Model, home: &[f64]) -> Result<Vec<f64>, Error> {
+    let invalid = |message: String| Error::Option { name: "home", message };
+    if home.len() != model.dof() {
+        return Err(invalid(format!(
+            "{} values for a robot of {} joints ({}); expected one per joint",
+            home.len(),
+            model.dof(),
+            model.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ")
+        )));
+    }
+    for (joint, &value) in model.joints.iter().zip(home) {
+        if let Some([low, high]) = joint.limits {
+            if !(low..=high).contains(&value) {
+                return Err(invalid(format!(
+                    "{value} for joint `{}` is outside its limits [{low}, {high}]",
+                    joint.name
+                )));
+            }
+        }
+    }
+    Ok(home.to_vec())
 }
 
 /// The export files `exports` asks of `run`: what each is, where it goes, its text. The scene
@@ -386,6 +419,8 @@ pub struct Named {
     pub strict: bool,
     /// Judge every goal by this tolerance mode instead of the scenario's.
     pub tolerance: Option<Tolerance>,
+    /// The home configuration, one value per joint (rad or m), instead of the scenario's.
+    pub home: Option<Vec<f64>>,
     /// Random configurations of MuJoCo's kinematics check (0 skips it).
     pub mujoco_checks: Option<u64>,
     /// Seed of IK, of the planner and of the kinematics check.
@@ -467,8 +502,15 @@ impl Named {
             srdf: self.srdf.clone(),
             strict: self.strict,
             tolerance: self.tolerance,
+            home: self.home.clone(),
             ..Options::default()
         };
+        if let Some(value) = self.home.iter().flatten().find(|v| !v.is_finite()) {
+            return Err(invalid(
+                "home",
+                format!("{value} is not a joint value; expected finite numbers (rad or m)"),
+            ));
+        }
         if let Some(n) = self.mujoco_checks {
             opts.kinematics_checks = within("mujoco_checks", n, 0, 100_000)?;
         }

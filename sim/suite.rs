@@ -247,7 +247,9 @@ pub fn run(suite_path: &Path, accept: bool) -> Result<SuiteResult, SuiteError> {
     for (design, name) in suite.designs.iter().zip(design_names) {
         let (path, load_opts, srdf) = match design {
             // A catalog id names no file: it is not relative to the suite.
-            DesignEntry::Path(p) if !dir.join(p).exists() && crate::design::Design::from_catalog_id(&p.to_string_lossy()).is_ok_and(|d| d.is_some()) => {
+            DesignEntry::Path(p)
+                if !dir.join(p).exists() && crate::design::Design::from_catalog_id(&p.to_string_lossy()).is_ok_and(|d| d.is_some()) =>
+            {
                 (p.clone(), LoadOptions::default(), None)
             }
             DesignEntry::Path(p) => (dir.join(p), LoadOptions::default(), None),

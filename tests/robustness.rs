@@ -299,6 +299,42 @@ fn a_run_writes_its_outputs_as_one_set_or_leaves_the_old_ones() {
 }
 
 #[test]
+fn a_home_from_the_command_line_is_where_the_trajectory_starts() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let design = repo().join("designs/ur5e.json");
+    let json = dir.path().join("r.json");
+    let home = "0.1,-1.2,1.1,-1.4,-1.5,0.2";
+    let output = Command::cargo_bin("validate-design")
+        .expect("binary")
+        .arg(&design)
+        .args(["--engines", "none", "--mujoco-checks", "0", "--quiet", "--home", home, "--json"])
+        .arg(&json)
+        .output()
+        .expect("runs");
+    assert!(matches!(output.status.code(), Some(0 | 1 | 3)), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("read")).expect("json");
+    let started: Vec<f64> = report["trajectory"]["home"]
+        .as_array()
+        .expect("a home")
+        .iter()
+        .filter_map(serde_json::Value::as_f64)
+        .collect();
+    let given: Vec<f64> = home.split(',').map(|v| v.parse().expect("number")).collect();
+    assert_eq!(started, given);
+    assert!(report["trajectory"]["home_replaced"].is_null(), "{}", report["trajectory"]);
+    for (bad, message) in [("0,1", "2 values for a robot of 6 joints"), ("-9,0,0,0,0,0", "outside its limits")] {
+        let output = Command::cargo_bin("validate-design")
+            .expect("binary")
+            .arg(&design)
+            .arg(format!("--home={bad}"))
+            .output()
+            .expect("runs");
+        assert_eq!(output.status.code(), Some(2), "{bad}");
+        assert!(stderr(&output).contains(message), "{bad}: {}", stderr(&output));
+    }
+}
+
+#[test]
 fn failed_generate_force_leaves_the_old_scenario_intact() {
     let dir = tempfile::tempdir().expect("temp dir");
     let old = dir.path().join("w.json");

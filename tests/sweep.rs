@@ -377,7 +377,14 @@ fn a_catalog_id_is_a_design_wherever_a_design_is() {
     let dir = tempfile::tempdir().expect("temp dir");
     // The id a sweep prints is a design for a single run.
     let output = validate_design()
-        .args(["modular6/Ll-Is-Ll-Il-D-Ls", "--scenario", SCENARIOS[0], "--reach-only", "--mujoco-checks", "0"])
+        .args([
+            "modular6/Ll-Is-Ll-Il-D-Ls",
+            "--scenario",
+            SCENARIOS[0],
+            "--reach-only",
+            "--mujoco-checks",
+            "0",
+        ])
         .output()
         .expect("runs");
     let stdout = String::from_utf8_lossy(&output.stdout);

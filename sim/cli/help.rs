@@ -10,6 +10,7 @@ Examples:
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-00.json --planner straight
   validate-design designs/ur20.json --scenario scenarios/cluttered/task-12.json --plan-budget 50000
   validate-design designs/ur5e.json --scenario scenarios/cluttered/task-03.json --reach-only
+  validate-design modular6/Ll-Is-Ll-Il-D-Ls --scenario scenarios/cluttered/task-00.json --home 0,-1.2,1.1,-1.4,-1.5,0.2
   validate-design designs/economic-scara.json --scenario scenarios/cluttered/task-24.json --reach-only --search-boxes 1000000
   validate-design designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf --srdf designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf
   validate-design robot.urdf --base base_link --tip tool0 --package-path ~/ws/src --strict --kinematics-only
@@ -40,12 +41,14 @@ Exit codes:
   3  undecided: nothing failed, but the harness's limits left something open; the verdict
      line (UNDECIDED) names it: a goal neither reached nor proven unreachable (IK starts), a
      path not found within the planner's budget
-  optimize: as validation, of the tuned designs: 1 when one fails, else 3 when one is
-     undecided, else 0; 2 bad input
+  optimize: as validation, of the designs written (tuned, or kept where tuning lost ground): 1
+     when one fails, else 3 when one is undecided, else 0; 2 bad input
   snapshot: 0 every snapshot matches (or was accepted), 1 a difference, new snapshot or
      orphan, 2 bad input
   sweep, merge, table1, ga: 0 the runs finished (whatever the designs' verdicts: they are in the
-     results), 2 bad input, a folder that holds something else, or a pair that could not run
+     results), 2 bad input, a folder that holds something else or is in use by another run, or
+     a pair that could not run; 130 / 143 a sweep stopped by SIGINT / SIGTERM (every finished
+     pair kept: run it again to resume)
 
 Environment:
   ROS_PACKAGE_PATH  extra ':'-separated roots for package:// mesh URIs

@@ -94,6 +94,10 @@ pub(crate) struct ValidateArgs {
     /// Judge every goal by this tolerance mode instead of the scenario's.
     #[arg(long, value_name = "MODE")]
     pub(crate) tolerance: Option<ToleranceArg>,
+    /// The home configuration instead of the scenario's: one value per joint (rad or m),
+    /// comma-separated, within the joint limits.
+    #[arg(long, value_name = "Q,...", value_delimiter = ',', num_args = 1..)]
+    pub(crate) home: Option<Vec<f64>>,
     /// Clearance (m) every configuration and trajectory segment must keep.
     #[arg(long, value_name = "M", default_value_t = 0.0, value_parser = super::non_negative)]
     pub(crate) margin: f64,
@@ -136,6 +140,7 @@ impl ValidateArgs {
             srdf: self.srdf.clone(),
             strict: self.strict,
             tolerance: self.tolerance.map(Into::into),
+            home: self.home.clone(),
             mujoco_checks: Some(self.mujoco_checks),
             seed: Some(self.seed),
             ik_seeds: Some(self.ik_seeds),
