@@ -397,6 +397,76 @@ fn a_catalog_id_is_a_design_wherever_a_design_is() {
     sweep_of(&["catalog:table1"], &table1);
     let line = read(&single.join("results.jsonl"));
     assert!(read(&table1.join("results.jsonl")).contains(line.trim()), "{line}");
+    // The best designs as files any command takes: the sweep's overall ranking, the GA's best.
+    let best = dir.path().join("best");
+    let output = validate_design()
+        .args([
+            "sweep",
+            "preset/UR20",
+            "modular6/Ll-Is-Ll-Il-D-Ls",
+            "designs/ur5e.json",
+            "--scenarios",
+            SCENARIOS[0],
+        ])
+        .args(["--top", "2", "--best-designs"])
+        .arg(&best)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let ranking: Vec<String> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .skip_while(|l| !l.starts_with("overall:"))
+        .skip(2)
+        .filter_map(|l| l.split_whitespace().nth(1).map(str::to_string))
+        .collect();
+    let mut written: Vec<String> = std::fs::read_dir(&best)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    let expected: Vec<String> = ranking
+        .iter()
+        .enumerate()
+        .map(|(k, id)| format!("{:02}-{}.json", k + 1, id.replace('/', "_")))
+        .collect();
+    assert_eq!(written, expected, "{ranking:?}");
+    for name in &written {
+        let run = validate_design()
+            .arg(best.join(name))
+            .args(["--scenario", SCENARIOS[0], "--reach-only", "--mujoco-checks", "0", "--quiet"])
+            .output()
+            .expect("runs");
+        assert!(
+            matches!(run.status.code(), Some(0 | 1 | 3)),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let ga_best = dir.path().join("ga-best.json");
+    let output = validate_design()
+        .args([
+            "ga",
+            "--scenario",
+            SCENARIOS[0],
+            "--population",
+            "8",
+            "--generations",
+            "2",
+            "--best-design",
+        ])
+        .arg(&ga_best)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let id = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("best "))
+        .and_then(|l| l.split(':').next())
+        .expect("the best id");
+    let design: serde_json::Value = serde_json::from_str(&read(&ga_best)).expect("json");
+    assert_eq!(design["name"], id, "{stdout}");
+
     // What is not an id says what an id is.
     for (id, message) in [
         ("modular6/Ll-Is-Ll-Il-D-Lx", "unknown slot code `Lx`"),

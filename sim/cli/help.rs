@@ -23,11 +23,13 @@ Examples:
   validate-design snapshot --suite proving-ground.json             # your own golden suite
   validate-design snapshot --suite proving-ground.json --accept    # record its new snapshots
   validate-design sweep catalog:modular6 --scenarios scenarios/cluttered/task-00.json --out bf-00   # brute force
+  validate-design sweep catalog:modular6 --scenarios scenarios/cluttered/task-00.json --top 5 --best-designs best-00
   validate-design sweep 'designs/*.json' --scenarios scenarios/cluttered --full --engines none --out runs-1 --shard 1/2
   validate-design merge runs-1 runs-2 --out runs      # the shards joined: what the unsharded sweep writes
   validate-design sweep designs/ur5e.json --scenarios scenarios/cluttered/task-00.json --reference bf-00
   validate-design table1                              # the paper's Table 1 beside ours
   validate-design ga --scenario scenarios/cluttered/task-00.json --seed 1 --reference bf-00 --out ga-00.json
+  validate-design ga --scenario scenarios/cluttered/task-00.json --best-design best-ga-00.json --force
 
 Exit codes:
   0  the design passes the scenario (every goal reached by a certified collision-free path,

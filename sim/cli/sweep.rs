@@ -63,6 +63,10 @@ pub(crate) struct SweepArgs {
     /// Print nothing but errors (with --out: the results go nowhere else).
     #[arg(long, requires = "out")]
     quiet: bool,
+    /// Write the `--top` best designs of the overall ranking into DIR as design files
+    /// (`01-modular6_Ll-Is-Ll-Il-D-Ls.json`, ...), ready for validate-design and optimize.
+    #[arg(long, value_name = "DIR")]
+    best_designs: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -135,7 +139,11 @@ pub(crate) struct GaArgs {
     /// (never over an existing file unless --force).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// Replace --out if it exists.
+    /// Write the best design as a design file to FILE (never over an existing file unless
+    /// --force), ready for validate-design and optimize.
+    #[arg(long, value_name = "FILE")]
+    best_design: Option<PathBuf>,
+    /// Replace --out and --best-design if they exist.
     #[arg(long)]
     force: bool,
     /// Worker threads [default: the number of cores]; the run is the same for any number.
@@ -189,6 +197,21 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
     let result = sweep::run(&designs, &scenarios, &opts, &progress);
     progress.bar.finish_and_clear();
     let result = result?;
+    let mut best = String::new();
+    if let Some(dir) = &args.best_designs {
+        let (files, skipped) = sweep::best_designs(&designs, &result.ranking, opts.top);
+        proving_ground::pipeline::write_files_into(dir, &files)?;
+        let skipped = if skipped.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({} of the best are robots without a design file: {})",
+                skipped.len(),
+                skipped.join(", ")
+            )
+        };
+        best = format!("wrote the {} best designs into {}{skipped}", files.len(), dir.display());
+    }
     if !args.quiet {
         print!("{}", result.table);
         let lines = |n: usize| if n == 1 { "1 line".to_string() } else { format!("{n} lines") };
@@ -206,6 +229,9 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
             result.records.len() - result.computed,
             args.out.as_ref().map_or(String::new(), |d| format!("; results in {}", d.display()))
         );
+        if !best.is_empty() {
+            eprintln!("{best}");
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -272,7 +298,7 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
         .into());
     };
     let reference = reference(args.reference.as_ref())?;
-    if let Some(out) = &args.out {
+    for out in [&args.out, &args.best_design].into_iter().flatten() {
         // Refused now what the write after the whole GA would refuse.
         let refused = if out.is_dir() {
             Some("a folder is there, expected a file name")
@@ -308,6 +334,9 @@ pub(crate) fn ga_command(args: &GaArgs) -> Result<ExitCode, Failure> {
     let result = result?;
     if let Some(path) = &args.out {
         result.save(path, args.force)?;
+    }
+    if let Some(path) = &args.best_design {
+        result.save_best_design(path, args.force)?;
     }
     if !args.quiet {
         let best = &result.best;

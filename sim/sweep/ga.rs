@@ -130,18 +130,42 @@ impl GaResult {
     /// # Errors
     /// [`SweepError::Write`] naming the file.
     pub fn save(&self, path: &std::path::Path, force: bool) -> Result<(), SweepError> {
+        let text = serde_json::to_string_pretty(self).map_err(|e| SweepError::Write {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })? + "\n";
+        write_new(path, &text, force)
+    }
+
+    /// Writes the best design as a design file to `path` (an existing file only with `force`).
+    ///
+    /// # Errors
+    /// [`SweepError::Write`].
+    pub fn save_best_design(&self, path: &std::path::Path, force: bool) -> Result<(), SweepError> {
         let error = |message: String| SweepError::Write {
             path: path.to_path_buf(),
             message,
         };
-        let text = serde_json::to_string_pretty(self).map_err(|e| error(e.to_string()))? + "\n";
-        crate::files::write_atomic(path, text.as_bytes(), force).map_err(|e| {
-            error(match e {
-                crate::files::WriteError::Exists => "the file exists; pass --force to replace it".into(),
-                other => other.to_string(),
-            })
-        })
+        let design = crate::design::Design::from_catalog_id(&self.best.design)
+            .map_err(error)?
+            .ok_or_else(|| error(format!("`{}` is not a catalog id (a bug)", self.best.design)))?;
+        let description = format!(
+            "the best design of validate-design ga on {} (seed {})",
+            self.scenario, self.options.seed
+        );
+        write_new(path, &crate::design::to_json(&design, &description), force)
     }
+}
+
+/// Writes `text` to `path`, replacing an existing file only with `force`.
+fn write_new(path: &std::path::Path, text: &str, force: bool) -> Result<(), SweepError> {
+    crate::files::write_atomic(path, text.as_bytes(), force).map_err(|e| SweepError::Write {
+        path: path.to_path_buf(),
+        message: match e {
+            crate::files::WriteError::Exists => "the file exists; pass --force to replace it".into(),
+            other => other.to_string(),
+        },
+    })
 }
 
 /// Runs the GA on `scenario` with reach-only validations of `ik` settings.

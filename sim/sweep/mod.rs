@@ -217,6 +217,34 @@ pub struct SweepResult {
     /// Lines of the partial log left out as not whole records (cut short by a kill, damaged by
     /// a crash); their pairs were computed again.
     pub damaged: usize,
+    /// Every design's id in the overall table's order (tasks solved, goals solved, mean score).
+    pub ranking: Vec<String>,
+}
+
+/// The design files of the first `top` designs of `ranking` that are designs (a URDF or MJCF
+/// robot has no design file: its id is in the second list), named `RANK-NAME.json` (a catalog
+/// id with `/` as `_`, a file's stem: `01-modular6_Ll-Is-Ll-Il-D-Ls.json`, `02-ur5e.json`),
+/// each a design JSON any command takes.
+pub fn best_designs(designs: &[DesignEntry], ranking: &[String], top: usize) -> (Vec<(String, Vec<u8>)>, Vec<String>) {
+    let mut files = Vec::new();
+    let mut skipped = Vec::new();
+    let digits = top.min(ranking.len()).max(1).to_string().len().max(2);
+    for (rank, id) in ranking.iter().take(top).enumerate() {
+        let Some(design) = designs.iter().find(|d| &d.id == id).and_then(|d| d.load().design) else {
+            skipped.push(id.clone());
+            continue;
+        };
+        let description = format!("rank {} of a validate-design sweep: {id}", rank + 1);
+        // A file's stem (the rank keeps equal stems apart), a catalog id with `_` for `/`.
+        let path = Path::new(id);
+        let base = match (path.extension(), path.file_stem()) {
+            (Some(_), Some(stem)) => stem.to_string_lossy().into_owned(),
+            _ => id.replace(['/', '\\'], "_"),
+        };
+        let name = format!("{:0digits$}-{base}.json", rank + 1);
+        files.push((name, crate::design::to_json(&design, &description).into_bytes()));
+    }
+    (files, skipped)
 }
 
 fn manifest(designs: &[DesignEntry], scenarios: &[ScenarioEntry], opts: &SweepOptions) -> store::Manifest {
@@ -357,12 +385,14 @@ pub fn run(
     if let Some(dir) = &opts.out {
         store::finish(dir, &records, &table::csv(&records, &distributions), &text)?;
     }
+    let ranking = table::ranked(&records, &distributions).into_iter().map(|o| o.design).collect();
     Ok(SweepResult {
         records,
         table: text,
         computed,
         foreign,
         damaged,
+        ranking,
     })
 }
 
@@ -561,11 +591,13 @@ pub fn merge(
     let distributions = table::distributions(&records, reference_records.as_deref());
     let text = table::text(&records, &distributions, &reference_name(reference.as_ref()), top, ranking);
     store::finish(out, &records, &table::csv(&records, &distributions), &text)?;
+    let ranking = table::ranked(&records, &distributions).into_iter().map(|o| o.design).collect();
     Ok(SweepResult {
         records,
         table: text,
         computed: 0,
         foreign: 0,
         damaged: 0,
+        ranking,
     })
 }

@@ -204,6 +204,24 @@ pub fn overall(records: &[Record], distributions: &BTreeMap<String, Distribution
         .collect()
 }
 
+/// [`overall`] in the overall table's order: tasks solved, then goals solved, then mean score
+/// (then the id, for determinism).
+pub fn ranked(records: &[Record], distributions: &BTreeMap<String, Distribution>) -> Vec<Overall> {
+    let mut rows = overall(records, distributions);
+    rows.sort_by(|a, b| {
+        b.tasks_solved
+            .cmp(&a.tasks_solved)
+            .then(b.goals_solved.cmp(&a.goals_solved))
+            .then(
+                b.score
+                    .unwrap_or(f64::NEG_INFINITY)
+                    .total_cmp(&a.score.unwrap_or(f64::NEG_INFINITY)),
+            )
+            .then_with(|| a.design.cmp(&b.design))
+    });
+    rows
+}
+
 /// `part` of `whole` in percent (0 for nothing of nothing).
 pub(super) fn percent(part: usize, whole: usize) -> f64 {
     if whole == 0 {
@@ -326,18 +344,7 @@ pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, 
             );
         }
     }
-    let mut rows = overall(records, distributions);
-    rows.sort_by(|a, b| {
-        b.tasks_solved
-            .cmp(&a.tasks_solved)
-            .then(b.goals_solved.cmp(&a.goals_solved))
-            .then(
-                b.score
-                    .unwrap_or(f64::NEG_INFINITY)
-                    .total_cmp(&a.score.unwrap_or(f64::NEG_INFINITY)),
-            )
-            .then_with(|| a.design.cmp(&b.design))
-    });
+    let mut rows = ranked(records, distributions);
     rows.truncate(top);
     let name = width(&mut rows.iter().map(|o| o.design.as_str()));
     let _ = writeln!(
