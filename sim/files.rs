@@ -167,25 +167,10 @@ pub enum WriteError {
 /// # Errors
 /// [`WriteError`].
 pub fn write_atomic(path: &Path, bytes: &[u8], replace: bool) -> Result<(), WriteError> {
-    if is_input(path) {
-        return Err(WriteError::Input);
-    }
-    let existing = std::fs::metadata(path).ok();
+    let (existing, dir) = target(path)?;
     if existing.is_some() && !replace {
         return Err(WriteError::Exists);
     }
-    if let Some(meta) = &existing {
-        if !meta.is_file() {
-            return Err(WriteError::Io(other(format!(
-                "{}: expected a regular file or a new name",
-                kind_of(meta)
-            ))));
-        }
-    }
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
     let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
     crash_point();
     let written = (|| -> std::io::Result<()> {
@@ -335,6 +320,28 @@ pub fn remove_temporaries(dir: &Path, targets: &[&str]) -> std::io::Result<usize
     Ok(removed)
 }
 
+/// A write target checked: never an input of this run, a regular file or a new name; its
+/// metadata when it exists, and its folder.
+fn target(path: &Path) -> Result<(Option<std::fs::Metadata>, PathBuf), WriteError> {
+    if is_input(path) {
+        return Err(WriteError::Input);
+    }
+    let existing = std::fs::metadata(path).ok();
+    if let Some(meta) = &existing {
+        if !meta.is_file() {
+            return Err(WriteError::Io(other(format!(
+                "{}: expected a regular file or a new name",
+                kind_of(meta)
+            ))));
+        }
+    }
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    Ok((existing, dir))
+}
+
 /// Writes `bytes` to a new temporary beside `path` in `dir`, with the permissions of the file it
 /// will replace, synced to disk; returns its path (removed again on failure).
 fn write_temporary(path: &Path, dir: &Path, bytes: &[u8], existing: Option<&std::fs::Metadata>) -> std::io::Result<PathBuf> {
@@ -371,22 +378,7 @@ impl Staged {
     /// # Errors
     /// [`WriteError`]; the set is unchanged.
     pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-        if is_input(path) {
-            return Err(WriteError::Input);
-        }
-        let existing = std::fs::metadata(path).ok();
-        if let Some(meta) = &existing {
-            if !meta.is_file() {
-                return Err(WriteError::Io(other(format!(
-                    "{}: expected a regular file or a new name",
-                    kind_of(meta)
-                ))));
-            }
-        }
-        let dir = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
+        let (existing, dir) = target(path)?;
         let temp = write_temporary(path, &dir, bytes, existing.as_ref())?;
         self.pending.push((path.to_path_buf(), temp));
         crash_point();

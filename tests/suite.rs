@@ -30,8 +30,8 @@ fn write_suite(dir: &Path, seed: u64) {
     std::fs::write(dir.join("suite.json"), suite).expect("write suite");
 }
 
-#[test]
-fn a_suite_records_compares_and_reports_differences_and_orphans() {
+/// A folder with the suite of [`write_suite`] (seed 0) and the files it names.
+fn suite_folder() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
     for (from, to) in [
         ("designs/ur5e.json", "ur5e.json"),
@@ -41,6 +41,12 @@ fn a_suite_records_compares_and_reports_differences_and_orphans() {
         std::fs::copy(repo().join(from), dir.path().join(to)).expect("copy");
     }
     write_suite(dir.path(), 0);
+    dir
+}
+
+#[test]
+fn a_suite_records_compares_and_reports_differences_and_orphans() {
+    let dir = suite_folder();
     let golden = dir.path().join("golden");
 
     // No snapshots yet: both new, written as insta's pending files, exit 1.
@@ -118,15 +124,7 @@ fn folder_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 
 #[test]
 fn a_crash_at_any_write_step_of_accept_is_repaired_by_accepting_again() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    for (from, to) in [
-        ("designs/ur5e.json", "ur5e.json"),
-        ("designs/paper-real-world.json", "paper-real-world.json"),
-        ("scenarios/cluttered/task-00.json", "task-00.json"),
-    ] {
-        std::fs::copy(repo().join(from), dir.path().join(to)).expect("copy");
-    }
-    write_suite(dir.path(), 0);
+    let dir = suite_folder();
     let golden = dir.path().join("golden");
     let (code, text) = snapshot(dir.path(), &["--accept"]);
     assert_eq!(code, Some(0), "{text}");

@@ -157,22 +157,16 @@ fn a_killed_sweep_keeps_every_pair_it_finished() {
     assert_same_files(&whole, &killed);
 }
 
+/// 625 catalog robots on one task: a sweep long enough to be caught running.
+const SHARD_SWEEP: [&str; 6] = ["sweep", "catalog:modular6", "--scenarios", SCENARIOS[0], "--shard", "1/25"];
+
 /// A reach-only sweep of catalog robots that runs for many seconds on one thread: long enough
 /// to be caught running.
 fn long_sweep(out: &Path, extra: &[&str]) -> std::process::Child {
     std::process::Command::new(assert_cmd::cargo::cargo_bin("validate-design"))
         .current_dir(repo())
-        .args([
-            "sweep",
-            "catalog:modular6",
-            "--scenarios",
-            SCENARIOS[0],
-            "--shard",
-            "1/25",
-            "--threads",
-            "1",
-            "--quiet",
-        ])
+        .args(SHARD_SWEEP)
+        .args(["--threads", "1", "--quiet"])
         .arg("--out")
         .arg(out)
         .args(extra)
@@ -213,11 +207,7 @@ fn sigint_stops_a_sweep_that_keeps_every_pair_it_finished_and_resumes() {
     );
     assert!(read(&out.join("pairs.partial.jsonl")).ends_with('\n'));
     // Resumed to the end: the records are the ones a sweep without interruption writes.
-    let resumed = validate_design()
-        .args(["sweep", "catalog:modular6", "--scenarios", SCENARIOS[0], "--shard", "1/25", "--out"])
-        .arg(&out)
-        .output()
-        .expect("runs");
+    let resumed = validate_design().args(SHARD_SWEEP).arg("--out").arg(&out).output().expect("runs");
     let stderr = String::from_utf8_lossy(&resumed.stderr);
     assert!(resumed.status.success(), "{stderr}");
     assert!(
@@ -226,16 +216,8 @@ fn sigint_stops_a_sweep_that_keeps_every_pair_it_finished_and_resumes() {
     );
     let whole = dir.path().join("whole");
     let fresh = validate_design()
-        .args([
-            "sweep",
-            "catalog:modular6",
-            "--scenarios",
-            SCENARIOS[0],
-            "--shard",
-            "1/25",
-            "--quiet",
-            "--out",
-        ])
+        .args(SHARD_SWEEP)
+        .args(["--quiet", "--out"])
         .arg(&whole)
         .output()
         .expect("runs");

@@ -160,28 +160,22 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
             let (before, after) =
                 optimize::before_and_after(&input.path, input.loaded, &input.out, &neighbour, &scenario, &validate_options)?;
             print!("{}", side_by_side(&before, &after));
-            let lost = optimize::lost_ground(&before, &after);
-            if lost.is_empty() {
-                let description = format!(
-                    "{} with {what}: the best module swap found by validate-design optimize",
-                    original.name
-                );
-                files.push((input.out.clone(), proving_ground::design::to_json(&neighbour, &description)));
-                lines.push(format!(
-                    "wrote {}: the design with {what} (it reaches every goal the original reaches, with no worse verdict or loss)",
-                    input.out.display()
-                ));
-                worst = worst.max(Outcome::of(&after));
-            } else {
-                let why = lost.join("; ");
-                let description = format!(
-                    "{} as it was: validate-design optimize kept it because its best module swap lost ground ({why})",
-                    original.name
-                );
-                files.push((input.out.clone(), proving_ground::design::to_json(&original, &description)));
-                lines.push(format!("wrote {}: the original design, kept: {why}", input.out.display()));
-                worst = worst.max(Outcome::of(&before));
-            }
+            let description = format!(
+                "{} with {what}: the best module swap found by validate-design optimize",
+                original.name
+            );
+            let candidate = proving_ground::design::to_json(&neighbour, &description);
+            let choice = optimize::choose(
+                &original,
+                candidate,
+                &format!("the design with {what}"),
+                "its best module swap",
+                &before,
+                &after,
+            );
+            lines.push(format!("wrote {}: {}", input.out.display(), choice.said));
+            files.push((input.out.clone(), choice.text));
+            worst = worst.max(choice.outcome);
             continue;
         };
         let together = if t.batch_size > 1 {
@@ -209,24 +203,10 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
                 t.objective.1
             );
         }
-        let lost = optimize::lost_ground(&before, &after);
-        if lost.is_empty() {
-            files.push((input.out.clone(), t.text.clone()));
-            lines.push(format!(
-                "wrote {}: the tuned design (it reaches every goal the original reaches, with no worse verdict or loss)",
-                input.out.display()
-            ));
-            worst = worst.max(Outcome::of(&after));
-        } else {
-            let why = lost.join("; ");
-            let description = format!(
-                "{} as it was: validate-design optimize kept it because tuning lost ground ({why})",
-                original.name
-            );
-            files.push((input.out.clone(), proving_ground::design::to_json(&original, &description)));
-            lines.push(format!("wrote {}: the original design, kept: {why}", input.out.display()));
-            worst = worst.max(Outcome::of(&before));
-        }
+        let choice = optimize::choose(&original, t.text.clone(), "the tuned design", "tuning", &before, &after);
+        lines.push(format!("wrote {}: {}", input.out.display(), choice.said));
+        files.push((input.out.clone(), choice.text));
+        worst = worst.max(choice.outcome);
     }
     if into_folder(args) {
         let named: Vec<(String, Vec<u8>)> = files

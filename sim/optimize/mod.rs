@@ -21,7 +21,9 @@ mod tune;
 pub use analytic::Analytic;
 pub use problem::{Batch, Evaluation, Params, Sample};
 pub use tensor::Tensors;
-pub use tune::{batches, before_and_after, best_module_swap, lost_ground, module_swaps, nothing_to_tune, tune, validation, Tuned};
+pub use tune::{
+    batches, before_and_after, best_module_swap, choose, lost_ground, module_swaps, nothing_to_tune, tune, validation, Choice, Tuned,
+};
 
 use crate::design::{Design, DesignMode};
 use crate::ik::HARDWARE_WEIGHT;

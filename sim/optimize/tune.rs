@@ -173,6 +173,41 @@ pub fn lost_ground(before: &Report, after: &Report) -> Vec<String> {
     reasons
 }
 
+/// What `optimize` writes for one design and what it says of it.
+#[derive(Debug, Clone)]
+pub struct Choice {
+    /// The design file written.
+    pub text: String,
+    /// Which design it is and why (`the tuned design (...)`, `the original design, kept: ...`).
+    pub said: String,
+    /// The outcome of the written design's validation.
+    pub outcome: crate::run::Outcome,
+}
+
+/// The candidate (`candidate_text`, called `what`) when [`lost_ground`] finds nothing between
+/// the original's report (`before`) and the candidate's (`after`); else the original design,
+/// its file saying why (`how` names what made the candidate: `tuning`, `its best module swap`).
+pub fn choose(original: &Design, candidate_text: String, what: &str, how: &str, before: &Report, after: &Report) -> Choice {
+    let lost = lost_ground(before, after);
+    if lost.is_empty() {
+        return Choice {
+            text: candidate_text,
+            said: format!("{what} (it reaches every goal the original reaches, with no worse verdict or loss)"),
+            outcome: crate::run::Outcome::of(after),
+        };
+    }
+    let why = lost.join("; ");
+    let description = format!(
+        "{} as it was: validate-design optimize kept it because {how} lost ground ({why})",
+        original.name
+    );
+    Choice {
+        text: crate::design::to_json(original, &description),
+        said: format!("the original design, kept: {why}"),
+        outcome: crate::run::Outcome::of(before),
+    }
+}
+
 /// A modular design's neighbours: the designs with one slot's module swapped for another
 /// catalog module (base and tool kept), in slot order then catalog order; none for other
 /// designs.
