@@ -225,10 +225,21 @@ pub const LOCK: &str = ".validate-design.lock";
 
 /// A folder held by this process: no other validate-design writes it until this is dropped, or
 /// the process ends however it ends (the kernel releases the lock, so a dead run's folder is
-/// taken over without any cleanup).
+/// taken over without any cleanup). Dropped, it removes its lock file (a snapshot folder in a
+/// user's repository keeps no stray file); a killed run's file stays until the next run.
 #[derive(Debug)]
 pub struct FolderLock {
-    _file: std::fs::File,
+    file: std::fs::File,
+    path: PathBuf,
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        // Removed while still locked: a run that opened the file meanwhile finds, once it holds
+        // the lock, that the name no longer leads to its file, and starts over.
+        let _ = std::fs::remove_file(&self.path);
+        let _ = self.file.unlock();
+    }
 }
 
 /// Why a folder could not be taken.
@@ -251,30 +262,41 @@ pub enum LockError {
 /// # Errors
 /// [`LockError`].
 pub fn lock_folder(dir: &Path) -> Result<FolderLock, LockError> {
+    use std::os::unix::fs::MetadataExt;
     std::fs::create_dir_all(dir)?;
-    // Not truncated on open: the holder's pid stays readable until the lock is ours.
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(dir.join(LOCK))?;
-    match file.try_lock() {
-        Ok(()) => {}
-        Err(std::fs::TryLockError::WouldBlock) => {
-            let mut holder = String::new();
-            let _ = file.read_to_string(&mut holder);
-            let holder = holder.trim();
-            return Err(LockError::Held {
-                holder: (!holder.is_empty()).then(|| holder.to_string()),
-            });
+    let path = dir.join(LOCK);
+    loop {
+        // Not truncated on open: the holder's pid stays readable until the lock is ours.
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut holder = String::new();
+                let _ = file.read_to_string(&mut holder);
+                let holder = holder.trim();
+                return Err(LockError::Held {
+                    holder: (!holder.is_empty()).then(|| holder.to_string()),
+                });
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(e.into()),
         }
-        Err(std::fs::TryLockError::Error(e)) => return Err(e.into()),
+        // The holder before may have removed the file between our open and our lock: then the
+        // lock is on a file nobody else can find, and the name must be opened again.
+        let held = file.metadata()?;
+        let named = std::fs::metadata(&path).ok();
+        if named.is_none_or(|m| (m.dev(), m.ino()) != (held.dev(), held.ino())) {
+            continue;
+        }
+        file.set_len(0)?;
+        std::io::Seek::rewind(&mut file)?;
+        writeln!(file, "{}", std::process::id())?;
+        return Ok(FolderLock { file, path });
     }
-    file.set_len(0)?;
-    std::io::Seek::rewind(&mut file)?;
-    writeln!(file, "{}", std::process::id())?;
-    Ok(FolderLock { _file: file })
 }
 
 /// Syncs a folder's entries (a rename or a new name) to disk. Best effort: some file systems
