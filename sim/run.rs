@@ -193,13 +193,10 @@ pub fn validate_unwritten(input: &Path, opts: &Options, progress: &dyn Progress)
 pub fn validate_loaded(input: &Path, loaded: Loaded, scenario: Scenario, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
     let mut run = run_stages(input, loaded, scenario, opts, progress)?;
     // The exports as one set, after the run: a failure leaves every old file as it was.
-    let files = export_files(&run, &opts.exports)?;
     let mut set = pipeline::OutputSet::default();
-    for (_, path, text) in &files {
-        set.add(path, text.as_bytes())?;
-    }
+    let written = stage_exports(&mut set, &run, &opts.exports)?;
     set.commit()?;
-    run.written = files.into_iter().map(|(what, path, _)| (what, path)).collect();
+    run.written = written;
     Ok(run)
 }
 
@@ -246,9 +243,9 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
     if let Some(home) = &opts.home {
         scenario.home = Some(checked_home(model, home)?);
     }
-    // Built only when written or checked: a sweep validates thousands of designs.
-    let wants_mjcf = (opts.exports.mjcf.is_some() && !opts.exports.scene) || kinematics_checked(opts);
-    let mjcf = if wants_mjcf {
+    // Built only when checked (the export is rendered at the end): a sweep validates thousands
+    // of designs.
+    let mjcf = if kinematics_checked(opts) {
         to_mjcf(model, &MjcfOptions::default())?
     } else {
         String::new()
@@ -318,6 +315,20 @@ fn checked_home(model: &crate::model::Model, home: &[f64]) -> Result<Vec<f64>, E
         }
     }
     Ok(home.to_vec())
+}
+
+/// Adds the export files `exports` asks of `run` ([`export_files`]) to `set`; what each is and
+/// where it goes.
+///
+/// # Errors
+/// A failed export, or a target [`pipeline::OutputSet::add`] refuses.
+pub fn stage_exports(set: &mut pipeline::OutputSet, run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBuf)>, Error> {
+    let mut written = Vec::new();
+    for (what, path, text) in export_files(run, exports)? {
+        set.add(&path, text.as_bytes())?;
+        written.push((what, path));
+    }
+    Ok(written)
 }
 
 /// The export files `exports` asks of `run`: what each is, where it goes, its text. The scene

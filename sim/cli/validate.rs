@@ -178,10 +178,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
     bar.bar.finish_and_clear();
     let run = run?;
     let mut set = pipeline::OutputSet::default();
-    let exported = run::export_files(&run, &options.exports)?;
-    for (_, path, text) in &exported {
-        set.add(path, text.as_bytes())?;
-    }
+    let exported = run::stage_exports(&mut set, &run, &options.exports)?;
     let pictures = stage_report(&mut set, args, &run)?;
     set.commit()?;
     if !args.quiet && describing {
@@ -192,7 +189,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
         println!("{}", report::scenario_summary(&run.scenario));
     }
     if !args.quiet {
-        for (what, path, _) in &exported {
+        for (what, path) in &exported {
             let what = match what {
                 Written::Urdf => "URDF",
                 Written::Mjcf => "MJCF",

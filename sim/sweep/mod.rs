@@ -369,10 +369,10 @@ pub fn run(
     if let Some(log) = log {
         log.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).sync()?;
     }
-    let finished = records.len() - records.iter().filter(|r| r.is_none()).count();
-    if finished < records.len() {
+    let skipped = records.iter().filter(|r| r.is_none()).count();
+    if skipped > 0 {
         return Err(SweepError::Interrupted {
-            kept: done.len() + finished,
+            kept: done.len() + records.len() - skipped,
             total: pairs.len(),
             out: opts.out.clone(),
         });
@@ -381,11 +381,12 @@ pub fn run(
     let records = canonical(done, designs, scenarios, &pairs);
     let reference_name = reference_name(opts.reference.as_ref());
     let distributions = table::distributions(&records, reference.as_deref());
-    let text = table::text(&records, &distributions, &reference_name, opts.top, opts.ranking);
+    let overall = table::ranked(&records, &distributions);
+    let text = table::text(&records, &distributions, &overall, &reference_name, opts.top, opts.ranking);
     if let Some(dir) = &opts.out {
         store::finish(dir, &records, &table::csv(&records, &distributions), &text)?;
     }
-    let ranking = table::ranked(&records, &distributions).into_iter().map(|o| o.design).collect();
+    let ranking = overall.into_iter().map(|o| o.design).collect();
     Ok(SweepResult {
         records,
         table: text,
@@ -589,9 +590,17 @@ pub fn merge(
     });
     store::open(out, &manifest, force)?;
     let distributions = table::distributions(&records, reference_records.as_deref());
-    let text = table::text(&records, &distributions, &reference_name(reference.as_ref()), top, ranking);
+    let overall = table::ranked(&records, &distributions);
+    let text = table::text(
+        &records,
+        &distributions,
+        &overall,
+        &reference_name(reference.as_ref()),
+        top,
+        ranking,
+    );
     store::finish(out, &records, &table::csv(&records, &distributions), &text)?;
-    let ranking = table::ranked(&records, &distributions).into_iter().map(|o| o.design).collect();
+    let ranking = overall.into_iter().map(|o| o.design).collect();
     Ok(SweepResult {
         records,
         table: text,

@@ -99,10 +99,17 @@ fn identity(manifest: &Manifest) -> Result<String, SweepError> {
 }
 
 /// One line of the partial log: a record and the sweep it belongs to.
-#[derive(Serialize, Deserialize)]
+#[derive(Deserialize)]
 struct Line {
     sweep: String,
     record: Record,
+}
+
+/// [`Line`] as written, borrowing what it holds.
+#[derive(Serialize)]
+struct LineRef<'a> {
+    sweep: &'a str,
+    record: &'a Record,
 }
 
 /// What a folder held for this sweep when it was opened.
@@ -463,10 +470,7 @@ impl Log {
 
 /// A partial log's line: `record` stamped with its sweep's identity.
 fn line_text(record: &Record, id: &str) -> Result<String, SweepError> {
-    let line = Line {
-        sweep: id.to_string(),
-        record: record.clone(),
-    };
+    let line = LineRef { sweep: id, record };
     serde_json::to_string(&line).map(|t| t + "\n").map_err(|e| SweepError::Folder {
         dir: PathBuf::new(),
         message: e.to_string(),

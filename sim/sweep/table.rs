@@ -273,9 +273,16 @@ impl std::str::FromStr for Ranking {
 /// Width of the design column: the longest name shown, at least [`NAME_WIDTH`].
 const NAME_WIDTH: usize = 32;
 
-/// The ranked tables: per scenario (by `ranking`) and over all scenarios (tasks solved, then
-/// goals solved, then mean score), `top` rows each. Full sweeps show each pair's verdict.
-pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, reference: &str, top: usize, ranking: Ranking) -> String {
+/// The ranked tables: per scenario (by `ranking`) and over all scenarios (`overall`, as
+/// [`ranked`] orders it), `top` rows each. Full sweeps show each pair's verdict.
+pub fn text(
+    records: &[Record],
+    distributions: &BTreeMap<String, Distribution>,
+    overall: &[Overall],
+    reference: &str,
+    top: usize,
+    ranking: Ranking,
+) -> String {
     let mut out = String::new();
     let designs = records
         .iter()
@@ -344,8 +351,7 @@ pub fn text(records: &[Record], distributions: &BTreeMap<String, Distribution>, 
             );
         }
     }
-    let mut rows = ranked(records, distributions);
-    rows.truncate(top);
+    let rows = &overall[..top.min(overall.len())];
     let name = width(&mut rows.iter().map(|o| o.design.as_str()));
     let _ = writeln!(
         out,
@@ -429,7 +435,7 @@ mod tests {
         let records = [missing, solving];
         let distributions = distributions(&records, None);
         let rank = |ranking| {
-            let table = text(&records, &distributions, "x", 5, ranking);
+            let table = text(&records, &distributions, &ranked(&records, &distributions), "x", 5, ranking);
             let rows: Vec<String> = table
                 .lines()
                 .filter(|l| l.starts_with("    1 ") || l.starts_with("    2 "))
