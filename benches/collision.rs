@@ -145,6 +145,7 @@ fn mesh_collision(c: &mut Criterion) {
         margin: 0.0,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     let mut out = Distances::new();
     for (label, robot, tip, scenario) in [

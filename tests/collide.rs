@@ -499,6 +499,7 @@ fn approximate_distances_equal_parry_capsules() {
             margin: 100.0,
             hulls: true,
             exact_depth: true,
+            mesh_hulls: false,
         };
         for sample in 0..100 {
             let q = model.random_configuration(&mut rng);
@@ -593,6 +594,7 @@ fn capsule_against_a_box_is_measured_by_parry_and_against_the_floor_in_closed_fo
             margin: 10.0,
             hulls: true,
             exact_depth: true,
+            mesh_hulls: false,
         },
         &mut out,
     );
@@ -740,6 +742,7 @@ fn clear_agrees_with_the_closest_pair_against_the_margin() {
                     margin,
                     hulls: false,
                     exact_depth: false,
+                    mesh_hulls: false,
                 };
                 distances(&world, &ws.link_in_world, &query, &mut out);
                 let expected = out.closest.is_none_or(|c| c.distance > margin);
@@ -788,6 +791,7 @@ fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
         margin: near_margin,
         hulls: true,
         exact_depth: true,
+        mesh_hulls: false,
     };
     let (mut contacts, mut near) = (Distances::new(), Distances::new());
     let mut ws = model.workspace();
@@ -1179,6 +1183,7 @@ fn sphere_in_the_opening_of_a_u_is_free_but_its_hull_collides() {
             margin: 0.0,
             hulls: false,
             exact_depth: true,
+            mesh_hulls: false,
         };
         distances(&world, &[Isometry3::identity()], &quiet, &mut out);
         assert!(out.findings.is_empty() && out.hull_calls == 0);
@@ -1271,6 +1276,7 @@ fn panda_meshes_build_and_branch_and_bound_matches_an_exhaustive_margin() {
         margin: 100.0,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     for sample in 0..20 {
         let q = model.random_configuration(&mut rng);
@@ -1444,6 +1450,7 @@ fn estimated_depths_keep_every_verdict_and_are_never_shallower() {
                 margin: 100.0,
                 hulls: false,
                 exact_depth,
+                mesh_hulls: false,
             };
             distances(&world, &ws.link_in_world, &all(true), &mut exact);
             distances(&world, &ws.link_in_world, &all(false), &mut estimated);
@@ -1490,11 +1497,13 @@ fn mesh_robots_find_the_same_closest_pair_and_contacts_with_the_hull_bounds_as_w
         margin: 1e3,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     let near = QueryOptions {
         margin: 0.02,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     let mut ws = model.workspace();
     let mut hull_bounded = 0;
@@ -1525,4 +1534,40 @@ fn mesh_robots_find_the_same_closest_pair_and_contacts_with_the_hull_bounds_as_w
         }
     }
     assert!(hull_bounded > 50, "{hull_bounded}");
+}
+
+/// `mesh_hulls` measures mesh links by their convex hulls: every pair it reports is at most as far
+/// apart as the exact geometry says (a hull holds its mesh; an overlap's capsule estimate is at
+/// least as deep), within GJK's early stop on curved obstacles; and it does report pairs the
+/// exact query finds apart where only the hulls meet.
+#[test]
+fn mesh_hulls_never_measure_farther_than_the_meshes() {
+    let urdf = repo().join("tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf");
+    let model = load_model(&urdf, &LoadOptions::default()).expect("fixture loads");
+    let scenario = proving_ground::scenario::load(&repo().join("scenarios/cluttered/task-00.json")).expect("loads");
+    let placed = model.placed(&scenario.world_from_base);
+    let world = proving_ground::pipeline::collision_world(&placed, &scenario, &[]).expect("builds");
+    let everything = |mesh_hulls: bool| QueryOptions {
+        margin: 10.0,
+        hulls: false,
+        exact_depth: !mesh_hulls,
+        mesh_hulls,
+    };
+    let (mut exact, mut hulls) = (Distances::new(), Distances::new());
+    let mut ws = placed.workspace();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let (mut compared, mut closer) = (0, 0);
+    for _ in 0..40 {
+        placed.forward(&placed.random_configuration(&mut rng), &mut ws);
+        collide::distances(&world, &ws.link_in_world, &everything(false), &mut exact);
+        collide::distances(&world, &ws.link_in_world, &everything(true), &mut hulls);
+        assert_eq!(exact.within_margin.len(), hulls.within_margin.len());
+        for (e, h) in exact.within_margin.iter().zip(&hulls.within_margin) {
+            assert_eq!(e.pair, h.pair);
+            assert!(h.distance <= e.distance + 2e-5, "pair {}: hulls {} m, exact {} m", e.pair, h.distance, e.distance);
+            compared += 1;
+            closer += usize::from(h.distance < e.distance - 1e-3);
+        }
+    }
+    assert!(compared > 1000 && closer > 100, "{closer} of {compared} pairs closer by their hulls");
 }

@@ -378,6 +378,7 @@ fn a_link_mesh_in_contact_is_named_after_its_link_in_both_engines() {
         margin: 1.0,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     let first_touch = samples
         .iter()

@@ -242,6 +242,36 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
     assert!(queries < 5000, "{queries} queries for the tour");
 }
 
+/// `keeps_room` stops early but answers as `roomy_free` does, on short random segments of a mesh
+/// robot among obstacles (free with room, free but grazing, and colliding ones) and of a design.
+#[test]
+fn keeps_room_answers_as_roomy_free() {
+    let fixtures = repo().join("tests/fixtures/urdf");
+    let robots = [
+        (fixtures.join("example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf"), "scenarios/cluttered/task-00.json"),
+        (repo().join("designs/modular-elbow.json"), "scenarios/cluttered/task-06.json"),
+    ];
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for (robot, scenario) in robots {
+        let model = load_model(&robot, &LoadOptions::default()).expect("loads");
+        let scenario = proving_ground::scenario::load(&repo().join(scenario)).expect("loads");
+        let placed = model.placed(&scenario.world_from_base);
+        let world = collision_world(&placed, &scenario, &[]).expect("builds");
+        let mut checker = SegmentChecker::new(&placed, &world, CertifyOptions::default());
+        let (mut kept, mut refused) = (0, 0);
+        for segment in 0..60 {
+            let from = placed.random_configuration(&mut rng);
+            let to: Vec<f64> = from.iter().map(|x| x + rng.random_range(-0.4..0.4)).collect();
+            let room = [0.002, 0.02, 0.05][segment % 3];
+            let (expected, _) = checker.roomy_free(&from, &to, room);
+            assert_eq!(checker.keeps_room(&from, &to, room), expected, "{}: segment {segment}", robot.display());
+            kept += usize::from(expected);
+            refused += usize::from(!expected);
+        }
+        assert!(kept >= 5 && refused >= 5, "{}: {kept} kept, {refused} refused", robot.display());
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Trajectory
 

@@ -2,7 +2,7 @@
 //! collider pair within the margin, then branch and bound for the closest pair; mesh hulls beside
 //! the meshes.
 
-use super::narrow::{measure_convex, measure_floor, measure_shapes};
+use super::narrow::{measure_convex, measure_floor, measure_shapes_hinted, within};
 use super::primitives::{order_key, Measured, BOUND_ROUNDING_M};
 
 /// Below the hulls' unpolished GJK gap that is still a lower bound of the meshes' gap (m): GJK on
@@ -43,6 +43,8 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
     } = out;
 
     place(world, link_in_world, scratch);
+    // Hints of another world's meshes are only wasted: every index is checked before use.
+    scratch.hints.resize(world.candidates.len(), None);
     scratch.bounds.clear();
     scratch.stages.clear();
     for index in 0..world.candidates.len() {
@@ -70,7 +72,8 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
         }
         let candidate = &world.candidates[index];
         let pair_best = scratch.best[candidate.pair].map_or(f64::INFINITY, |best| best.distance);
-        let hulls = query.hulls && bound <= margin && world.has_mesh(candidate);
+        let by_hulls = query.mesh_hulls && world.has_mesh(candidate);
+        let hulls = query.hulls && !by_hulls && bound <= margin && world.has_mesh(candidate);
         if !(bound < closest || (bound <= margin && (bound < pair_best || hulls))) {
             continue;
         }
@@ -81,13 +84,13 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
         }
         // A mesh pair's narrow phase walks triangle pairs; its hulls' distance, one convex query,
         // bounds it from below first (a mesh lies inside its hull).
-        if scratch.stages[index] == Stage::Capsuled && world.has_mesh(candidate) {
+        if scratch.stages[index] == Stage::Capsuled && world.has_mesh(candidate) && !by_hulls {
             let bound = hull_bound(world, index, scratch);
             scratch.queue.push(Reverse((order_key(bound), index)));
             continue;
         }
         *narrow_phase_calls += 1;
-        let (distance, hull_measured) = measure(world, index, scratch, findings, hulls, query.exact_depth);
+        let (distance, hull_measured) = measure(world, index, scratch, findings, hulls, query.exact_depth, by_hulls);
         closest = closest.min(distance);
         *hull_calls += usize::from(hull_measured);
     }
@@ -134,17 +137,16 @@ pub fn clear(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], margin: f
         let a = &world.colliders[candidate.a];
         let pose_a = &scratch.poses[candidate.a];
         // As `measure`: the allowance applies to pairs of links, the floor has none.
-        let distance = match candidate.b {
-            Other::Floor => measure_floor(pose_a, &a.geometry, world.floor.expect("floor pairs exist only with a floor")).distance,
-            Other::Link(j) => {
-                measure_shapes(pose_a, &a.geometry, &scratch.poses[j], &world.colliders[j].geometry, false).distance + candidate.allowance
-            }
+        let allowance = candidate.allowance;
+        let near = match candidate.b {
+            Other::Floor => measure_floor(pose_a, &a.geometry, world.floor.expect("floor pairs exist only with a floor")).distance <= margin,
+            Other::Link(j) => within(pose_a, &a.geometry, &scratch.poses[j], &world.colliders[j].geometry, margin, allowance),
             Other::Obstacle(k) => {
                 let obstacle = &world.obstacles[k];
-                measure_shapes(pose_a, &a.geometry, &obstacle.world_from_shape, &obstacle.geometry, false).distance + candidate.allowance
+                within(pose_a, &a.geometry, &obstacle.world_from_shape, &obstacle.geometry, margin, allowance)
             }
         };
-        if distance <= margin {
+        if near {
             return false;
         }
     }
@@ -205,6 +207,7 @@ fn measure(
     findings: &mut Vec<CollisionFinding>,
     with_hulls: bool,
     exact_depth: bool,
+    by_hulls: bool,
 ) -> (f64, bool) {
     let candidate = &world.candidates[index];
     let a = &world.colliders[candidate.a];
@@ -236,7 +239,13 @@ fn measure(
             (&world.obstacles[k].world_from_shape, &world.obstacles[k].geometry, part)
         }
     };
-    let measured = measure_shapes(pose_a, &a.geometry, pose_b, b, exact_depth);
+    let measured = if by_hulls {
+        let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);
+        let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
+        measure_convex(pose_a, &**hull_a, pose_b, &**hull_b, exact_depth)
+    } else {
+        measure_shapes_hinted(pose_a, &a.geometry, pose_b, b, exact_depth, &mut scratch.hints[index])
+    };
     let with_hulls = with_hulls && (a.geometry.is_mesh() || b.is_mesh());
     if with_hulls {
         let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);

@@ -137,13 +137,17 @@ impl SphereTree {
     /// The exact gap between this mesh at `pose` and `other` at `pose_other`, with witnesses;
     /// `None` when two triangles touch or overlap.
     ///
-    /// `leaf` measures two triangles as in [`SphereTree::gap_to_shape`].
+    /// `leaf` measures two triangles as in [`SphereTree::gap_to_shape`]. `hint` is a triangle
+    /// pair (this mesh's, `other`'s) that was nearest at a nearby pose, and becomes the nearest
+    /// pair of this one. Its gap here starts the search's bound, so that along a path most nodes
+    /// are pruned at once; the answer does not depend on it (see the comment at its use).
     pub(super) fn gap_to_tree(
         &self,
         pose: &Pose,
         other: &SphereTree,
         pose_other: &Pose,
         leaf: impl Fn(&Pose, &dyn Shape, &dyn Shape) -> Option<Contact>,
+        hint: &mut Option<[u32; 2]>,
     ) -> Option<Measured> {
         let pos12 = pose.inv_mul(pose_other);
         // The spheres' gap first (cheap); the capsules' only when the spheres cannot prune.
@@ -158,7 +162,19 @@ impl SphereTree {
         // Triangle pairs are ranked by the closed form; the nearest is then measured as parry's
         // descent measures it, so its witnesses are the same.
         let mut best_distance = f64::INFINITY;
-        let mut nearest: Option<(&Triangle, &Triangle)> = None;
+        let mut nearest: Option<(u32, u32)> = None;
+        // The hinted pair's gap `c`, computed exactly as the search computes it, is at least the
+        // smallest gap `m`. Starting the bound just above `c` prunes only nodes and pairs whose
+        // bounds exceed `m`; the first pair at `m` in the queue's order is still visited and still
+        // replaces the bound (strictly below it), and later ties still do not: the same pair wins
+        // as without a hint. A touching hinted pair means touching meshes, which the search
+        // would find anyway.
+        if let Some([ia, ib]) = *hint {
+            if let (Some(ta), Some(tb)) = (self.triangles.get(ia as usize), other.triangles.get(ib as usize)) {
+                let moved = tb.vertices().map(|v| pos12 * v);
+                best_distance = triangle_distance(ta.vertices(), &moved)?.next_up();
+            }
+        }
         let mut queue = BinaryHeap::with_capacity(64);
         queue.push(Reverse((
             order_key(bound(&self.nodes[0], &other.nodes[0], f64::INFINITY)),
@@ -179,9 +195,9 @@ impl SphereTree {
                     for ((slot, tb), (centre, radius)) in moved.iter_mut().zip(leaf_b).zip(&other.spheres[b.first as usize..]) {
                         *slot = (tb.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
                     }
-                    for (ta, &(centre_a, radius_a)) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]) {
+                    for ((ta, &(centre_a, radius_a)), index_a) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]).zip(a.first..) {
                         let ta_vertices = ta.vertices();
-                        for ((tb_vertices, centre_b, radius_b), tb) in moved.iter().zip(leaf_b) {
+                        for ((tb_vertices, centre_b, radius_b), index_b) in moved.iter().zip(b.first..b.first + b.count) {
                             let between = centre_b - centre_a;
                             if between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= best_distance
                                 || separation(ta_vertices, tb_vertices, between) >= best_distance
@@ -191,7 +207,7 @@ impl SphereTree {
                             let distance = triangle_distance(ta_vertices, tb_vertices)?;
                             if distance < best_distance {
                                 best_distance = distance;
-                                nearest = Some((ta, tb));
+                                nearest = Some((index_a, index_b));
                             }
                         }
                     }
@@ -210,10 +226,66 @@ impl SphereTree {
                 }
             }
         }
-        let (ta, tb) = nearest?;
-        let mut contact = leaf(&pos12, ta, tb)?;
+        let (ia, ib) = nearest?;
+        *hint = Some([ia, ib]);
+        let mut contact = leaf(&pos12, &self.triangles[ia as usize], &other.triangles[ib as usize])?;
         contact.transform_by_mut(pose, pose_other);
         Some(Measured::from_contact(&contact))
+    }
+
+    /// Whether some triangle pair of this mesh at `pose` and `other` at `pose_other` touches or
+    /// has a gap `d` with `accept(d)`, looking only where a gap can be at most `reach` (m): the
+    /// question [`SphereTree::gap_to_tree`] answers through the smallest gap, decided at the
+    /// first pair that settles it. `accept` must hold only for gaps up to `reach`.
+    pub(super) fn any_pair_within(&self, pose: &Pose, other: &SphereTree, pose_other: &Pose, reach: f64, accept: impl Fn(f64) -> bool) -> bool {
+        let pos12 = pose.inv_mul(pose_other);
+        let reach = reach + BOUND_ROUNDING_M;
+        let bound = |a: &Node, b: &Node| {
+            let spheres = (pos12 * b.center - a.center).length() - a.radius - b.radius - BOUND_ROUNDING_M;
+            if spheres > reach {
+                return spheres;
+            }
+            let axis = segment_segment(a.axis[0], a.axis[1], pos12 * b.axis[0], pos12 * b.axis[1]).sqrt();
+            spheres.max(axis - a.axis_radius - b.axis_radius - BOUND_ROUNDING_M)
+        };
+        let mut stack = Vec::with_capacity(64);
+        if bound(&self.nodes[0], &other.nodes[0]) <= reach {
+            stack.push((0u32, 0u32));
+        }
+        while let Some((ia, ib)) = stack.pop() {
+            let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
+            let split_a = match (a.children, b.children) {
+                (None, None) => {
+                    let leaf_b = other.leaf(b);
+                    for (ta, &(centre_a, radius_a)) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]) {
+                        for (tb, &(centre_b, radius_b)) in leaf_b.iter().zip(&other.spheres[b.first as usize..]) {
+                            let tb_vertices = tb.vertices().map(|v| pos12 * v);
+                            let between = pos12 * centre_b - centre_a;
+                            if between.length() - radius_a - radius_b - BOUND_ROUNDING_M > reach
+                                || separation(ta.vertices(), &tb_vertices, between) > reach
+                            {
+                                continue;
+                            }
+                            if triangle_distance(ta.vertices(), &tb_vertices).is_none_or(&accept) {
+                                return true;
+                            }
+                        }
+                    }
+                    continue;
+                }
+                (Some(_), None) => true,
+                (None, Some(_)) => false,
+                (Some(_), Some(_)) => a.radius >= b.radius,
+            };
+            let (left, right) = if split_a { a.children } else { b.children }.expect("the split node is inner");
+            for child in [left, right] {
+                let (ca, cb) = if split_a { (child, ib) } else { (ia, child) };
+                if bound(&self.nodes[ca as usize], &other.nodes[cb as usize]) <= reach {
+                    stack.push((ca, cb));
+                }
+            }
+        }
+        false
     }
 
     fn leaf(&self, node: &Node) -> &[Triangle] {

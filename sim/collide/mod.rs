@@ -152,6 +152,13 @@ pub struct QueryOptions {
     /// (away from touching within rounding). For loops that only need the sign and a direction,
     /// such as collision-aware IK's loss gradient.
     pub exact_depth: bool,
+    /// Measure a pair with a mesh side by the meshes' convex hulls, as convex shapes (with
+    /// `exact_depth`'s meaning), instead of walking triangle pairs; default `false`. A hull holds
+    /// its mesh, so a gap is at most the meshes' and an overlap may be the hulls' alone: neither
+    /// the sign nor the size is the exact geometry's. For loops that need a direction and a rough
+    /// size near the meshes, such as collision-aware IK's loss gradient, where one mesh pair walked
+    /// to its exact closest triangles costs 0.2 to 0.7 ms and its hulls a few microseconds.
+    pub mesh_hulls: bool,
 }
 
 impl Default for QueryOptions {
@@ -160,6 +167,7 @@ impl Default for QueryOptions {
             margin: 0.0,
             hulls: true,
             exact_depth: true,
+            mesh_hulls: false,
         }
     }
 }
@@ -365,6 +373,9 @@ struct Scratch {
     queue: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize)>>,
     /// Per pair: the smallest measured distance and its witness data.
     best: Vec<Option<PairDistance>>,
+    /// Per candidate with two mesh sides: its nearest triangle pair when last measured, which
+    /// speeds up the next query near that configuration without changing its answer.
+    hints: Vec<Option<[u32; 2]>>,
 }
 
 impl Distances {

@@ -12,6 +12,7 @@ const EVERY_PAIR_EXACTLY: QueryOptions = QueryOptions {
     margin: 1e3,
     hulls: false,
     exact_depth: true,
+    mesh_hulls: false,
 };
 
 /// Fills [`ContactInterval::parry_distance_m`] of each contact: the exact signed distance of its

@@ -51,6 +51,7 @@ pub fn paper_loss_terms(model: &Model, world: &CollisionWorld, goal: &Goal, q: &
         margin: COLLISION_THRESHOLD_M,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     approximate_distances(world, &ws.link_in_world, &query, &mut out);
     let scale = 1.0 / (1.0 - (-1.0f64).exp());

@@ -5,6 +5,9 @@
 //! `L(d) = (exp(-d / t) - e^-1) / (1 - e^-1)` for `d <= t`, else 0. Its gradient in joint space is
 //! `L'(d) * dd/dq`, with `dd/dq = n . (J_b(p_b) - J_a(p_a))` from the witness points `p_a`, `p_b`
 //! and the normal `n` (from `a` to `b`); `J_x(p)` is the linear Jacobian of point `p` on link `x`.
+//! The gradient only steers: its distances are cheap stand-ins (bounding capsules for depths,
+//! convex hulls for mesh links), while whether a configuration is free is always the exact sign
+//! of its clearance.
 //!
 //! Without redundancy (no more joints than the goal constrains: a 6-joint arm on a `pose` goal)
 //! the task has no null space: a solution is an isolated point, and a colliding one stays in
@@ -85,6 +88,7 @@ impl<'a> Checker<'a> {
             margin: 0.0,
             hulls: false,
             exact_depth,
+            mesh_hulls: false,
         };
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
         collide::approximate_distances(self.world, &self.ws.link_in_world, &query, &mut self.approximate);
@@ -120,14 +124,17 @@ impl<'a> Checker<'a> {
         self.kept_clear
     }
 
-    /// Exact clearance at `q`, and the gradient of the weighted collision loss in `self.gradient`.
-    fn loss_gradient(&mut self, q: &[f64]) -> f64 {
+    /// The gradient of the weighted collision loss at `q`, in `self.gradient`.
+    fn loss_gradient(&mut self, q: &[f64]) {
         self.model.forward(q, &mut self.ws);
         let query = QueryOptions {
             margin: COLLISION_THRESHOLD_M,
             hulls: false,
-            // The loss only needs a depth's sign and direction: bounding capsules, not EPA.
+            // The loss only steers the search, whose every answer is judged by the exact sign of
+            // the clearance ([`Self::keeps_margin`]): bounding capsules for depths, not EPA, and
+            // mesh links by their hulls, not their triangles.
             exact_depth: false,
+            mesh_hulls: true,
         };
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
         self.gradient.fill(0.0);
@@ -157,7 +164,6 @@ impl<'a> Checker<'a> {
                 );
             }
         }
-        self.exact.closest.map_or(f64::INFINITY, |c| c.distance)
     }
 }
 
@@ -196,19 +202,11 @@ pub(crate) fn refine<R: rand::Rng>(
     done: Convergence,
     rng: &mut R,
 ) -> bool {
-    let margin = checker.margin;
     let redundant = checker.model.dof() > constrained_dimensions(goal.tolerance);
-    let free = |checker: &mut Checker, q: &[f64]| {
-        if redundant {
-            checker.loss_gradient(q) > margin
-        } else {
-            checker.keeps_margin(q)
-        }
-    };
     let mut stuck = 0;
     let mut step = 0;
     while step < steps {
-        let is_free = free(checker, q);
+        let is_free = checker.keeps_margin(q);
         let pose_ok = solver.converged_at(goal, q, done);
         if is_free {
             if pose_ok {
@@ -229,6 +227,9 @@ pub(crate) fn refine<R: rand::Rng>(
             continue;
         }
         // Descend the loss inside the task's null space, then restore the task.
+        if redundant {
+            checker.loss_gradient(q);
+        }
         let largest = checker.gradient.amax();
         if redundant && largest > 0.0 {
             let scale = (MAX_AVOIDANCE_STEP / largest).min(1.0);
@@ -236,7 +237,7 @@ pub(crate) fn refine<R: rand::Rng>(
         }
         step += 1 + solver.solve(goal, q, 3, done, rng);
     }
-    free(checker, q) && solver.converged_at(goal, q, done)
+    checker.keeps_margin(q) && solver.converged_at(goal, q, done)
 }
 
 /// Dimensions of the tool pose a goal of this tolerance constrains.

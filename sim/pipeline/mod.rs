@@ -351,6 +351,7 @@ fn goal_clearances_by_kind(
         margin: f64::INFINITY,
         hulls: false,
         exact_depth: true,
+        mesh_hulls: false,
     };
     solutions
         .iter()

@@ -122,6 +122,7 @@ impl<'a> SegmentChecker<'a> {
             margin: self.opts.threshold_m,
             hulls: false,
             exact_depth: true,
+            mesh_hulls: false,
         };
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.out);
     }
@@ -172,7 +173,41 @@ impl<'a> SegmentChecker<'a> {
         (ok, check, roomy)
     }
 
+    /// `roomy_free(from, to, room).0`, the same answer for less: the advancement stops at the
+    /// first point that keeps neither `room` nor its ends' clearance, since that point alone
+    /// decides `false`. The end's clearance is measured first, at the configuration the
+    /// advancement would end at.
+    pub fn keeps_room(&mut self, from: &[f64], to: &[f64], room: f64) -> bool {
+        for (q, (a, b)) in self.q.iter_mut().zip(from.iter().zip(to)) {
+            *q = a + 1.0 * (b - a);
+        }
+        let end = std::mem::take(&mut self.q);
+        self.query(&end);
+        self.q = end;
+        let end_clearance = self.out.closest.map_or(f64::INFINITY, |c| c.distance);
+        let mut roomy = None;
+        let mut ends = [f64::NAN; 2];
+        let give_up = (self.opts.threshold_m + room).min(end_clearance);
+        let check = self.advance_until(from, to, room, &mut roomy, &mut ends, give_up);
+        let needed = give_up.min(ends[0]).min(ends[1]);
+        check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed)
+    }
+
     fn advance_inner(&mut self, from: &[f64], to: &[f64], room: f64, roomy: &mut Option<f64>, ends: &mut [f64; 2]) -> SegmentCheck {
+        self.advance_until(from, to, room, roomy, ends, f64::NEG_INFINITY)
+    }
+
+    /// The advancement; it gives up (not free) at the first point whose clearance is below both
+    /// `give_up` and the start's.
+    fn advance_until(
+        &mut self,
+        from: &[f64],
+        to: &[f64],
+        room: f64,
+        roomy: &mut Option<f64>,
+        ends: &mut [f64; 2],
+        give_up: f64,
+    ) -> SegmentCheck {
         let threshold = self.opts.threshold_m;
         for (d, (a, b)) in self.delta.iter_mut().zip(from.iter().zip(to)) {
             *d = b - a;
@@ -209,6 +244,15 @@ impl<'a> SegmentChecker<'a> {
                     closest,
                     certified_clearance_m: certified,
                     touch: here,
+                    queries,
+                };
+            }
+            if s > 0.0 && smallest < give_up.min(ends[0]) {
+                return SegmentCheck {
+                    free: false,
+                    closest,
+                    certified_clearance_m: certified.min(smallest),
+                    touch: None,
                     queries,
                 };
             }

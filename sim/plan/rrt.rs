@@ -346,7 +346,7 @@ fn greedy(checker: &mut SegmentChecker<'_>, points: &[Vec<f64>]) -> Vec<Vec<f64>
     while i + 1 < points.len() {
         let mut next = i + 1;
         for j in (i + 2..points.len()).rev() {
-            if checker.roomy_free(&points[i], &points[j], ROOM_M).0 {
+            if checker.keeps_room(&points[i], &points[j], ROOM_M) {
                 next = j;
                 break;
             }
@@ -375,7 +375,7 @@ fn random_shortcuts(checker: &mut SegmentChecker<'_>, mut points: Vec<Vec<f64>>,
         if saved <= 1e-9 {
             continue;
         }
-        if !checker.roomy_free(&a, &b, ROOM_M).0 {
+        if !checker.keeps_room(&a, &b, ROOM_M) {
             continue;
         }
         let mut shorter = points[..=first].to_vec();
