@@ -41,7 +41,10 @@ fn mesh_robot(c: &mut Criterion) {
     let urdf = "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf";
     let mut group = c.benchmark_group("validate-design");
     group.sample_size(10);
-    for (name, scenario) in [("cluttered-00", "scenarios/cluttered/task-00.json"), ("course", "scenarios/course.json")] {
+    for (name, scenario) in [
+        ("cluttered-00", "scenarios/cluttered/task-00.json"),
+        ("course", "scenarios/course.json"),
+    ] {
         group.bench_function(format!("ur5-gripper-urdf/{name}/binary"), |b| {
             b.iter(|| {
                 let status = Command::new(env!("CARGO_BIN_EXE_validate-design"))

@@ -1564,10 +1564,19 @@ fn mesh_hulls_never_measure_farther_than_the_meshes() {
         assert_eq!(exact.within_margin.len(), hulls.within_margin.len());
         for (e, h) in exact.within_margin.iter().zip(&hulls.within_margin) {
             assert_eq!(e.pair, h.pair);
-            assert!(h.distance <= e.distance + 2e-5, "pair {}: hulls {} m, exact {} m", e.pair, h.distance, e.distance);
+            assert!(
+                h.distance <= e.distance + 2e-5,
+                "pair {}: hulls {} m, exact {} m",
+                e.pair,
+                h.distance,
+                e.distance
+            );
             compared += 1;
             closer += usize::from(h.distance < e.distance - 1e-3);
         }
     }
-    assert!(compared > 1000 && closer > 100, "{closer} of {compared} pairs closer by their hulls");
+    assert!(
+        compared > 1000 && closer > 100,
+        "{closer} of {compared} pairs closer by their hulls"
+    );
 }

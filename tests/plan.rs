@@ -248,7 +248,10 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
 fn keeps_room_answers_as_roomy_free() {
     let fixtures = repo().join("tests/fixtures/urdf");
     let robots = [
-        (fixtures.join("example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf"), "scenarios/cluttered/task-00.json"),
+        (
+            fixtures.join("example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf"),
+            "scenarios/cluttered/task-00.json",
+        ),
         (repo().join("designs/modular-elbow.json"), "scenarios/cluttered/task-06.json"),
     ];
     let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -264,7 +267,12 @@ fn keeps_room_answers_as_roomy_free() {
             let to: Vec<f64> = from.iter().map(|x| x + rng.random_range(-0.4..0.4)).collect();
             let room = [0.002, 0.02, 0.05][segment % 3];
             let (expected, _) = checker.roomy_free(&from, &to, room);
-            assert_eq!(checker.keeps_room(&from, &to, room), expected, "{}: segment {segment}", robot.display());
+            assert_eq!(
+                checker.keeps_room(&from, &to, room),
+                expected,
+                "{}: segment {segment}",
+                robot.display()
+            );
             kept += usize::from(expected);
             refused += usize::from(!expected);
         }

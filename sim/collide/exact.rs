@@ -139,11 +139,27 @@ pub fn clear(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], margin: f
         // As `measure`: the allowance applies to pairs of links, the floor has none.
         let allowance = candidate.allowance;
         let near = match candidate.b {
-            Other::Floor => measure_floor(pose_a, &a.geometry, world.floor.expect("floor pairs exist only with a floor")).distance <= margin,
-            Other::Link(j) => within(pose_a, &a.geometry, &scratch.poses[j], &world.colliders[j].geometry, margin, allowance),
+            Other::Floor => {
+                measure_floor(pose_a, &a.geometry, world.floor.expect("floor pairs exist only with a floor")).distance <= margin
+            }
+            Other::Link(j) => within(
+                pose_a,
+                &a.geometry,
+                &scratch.poses[j],
+                &world.colliders[j].geometry,
+                margin,
+                allowance,
+            ),
             Other::Obstacle(k) => {
                 let obstacle = &world.obstacles[k];
-                within(pose_a, &a.geometry, &obstacle.world_from_shape, &obstacle.geometry, margin, allowance)
+                within(
+                    pose_a,
+                    &a.geometry,
+                    &obstacle.world_from_shape,
+                    &obstacle.geometry,
+                    margin,
+                    allowance,
+                )
             }
         };
         if near {

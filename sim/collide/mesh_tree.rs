@@ -195,7 +195,8 @@ impl SphereTree {
                     for ((slot, tb), (centre, radius)) in moved.iter_mut().zip(leaf_b).zip(&other.spheres[b.first as usize..]) {
                         *slot = (tb.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
                     }
-                    for ((ta, &(centre_a, radius_a)), index_a) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]).zip(a.first..) {
+                    for ((ta, &(centre_a, radius_a)), index_a) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]).zip(a.first..)
+                    {
                         let ta_vertices = ta.vertices();
                         for ((tb_vertices, centre_b, radius_b), index_b) in moved.iter().zip(b.first..b.first + b.count) {
                             let between = centre_b - centre_a;
@@ -237,7 +238,14 @@ impl SphereTree {
     /// has a gap `d` with `accept(d)`, looking only where a gap can be at most `reach` (m): the
     /// question [`SphereTree::gap_to_tree`] answers through the smallest gap, decided at the
     /// first pair that settles it. `accept` must hold only for gaps up to `reach`.
-    pub(super) fn any_pair_within(&self, pose: &Pose, other: &SphereTree, pose_other: &Pose, reach: f64, accept: impl Fn(f64) -> bool) -> bool {
+    pub(super) fn any_pair_within(
+        &self,
+        pose: &Pose,
+        other: &SphereTree,
+        pose_other: &Pose,
+        reach: f64,
+        accept: impl Fn(f64) -> bool,
+    ) -> bool {
         let pos12 = pose.inv_mul(pose_other);
         let reach = reach + BOUND_ROUNDING_M;
         let bound = |a: &Node, b: &Node| {
