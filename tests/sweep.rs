@@ -318,21 +318,16 @@ fn a_crash_at_any_write_step_of_a_sweep_or_a_merge_is_repaired_by_running_it_aga
     let dir = tempfile::tempdir().expect("temp dir");
     let whole = dir.path().join("whole");
     sweep(&whole, &[]);
+    let same_as_whole = |folder: &Path| {
+        assert_same_files(&whole, folder);
+        assert_no_litter(folder);
+    };
     let mut args = vec!["sweep"];
     args.extend(DESIGNS);
     args.push("--scenarios");
     args.extend(SCENARIOS);
     args.extend(["--quiet", "--out"]);
-    crash_at_every_step(
-        "sweep",
-        &args,
-        |at| dir.path().join(format!("sweep-{at}")),
-        &[],
-        |folder| {
-            assert_same_files(&whole, folder);
-            assert_no_litter(folder);
-        },
-    );
+    crash_at_every_step("sweep", &args, |at| dir.path().join(format!("sweep-{at}")), &[], same_as_whole);
     let shards: Vec<String> = (1..=2)
         .map(|k| {
             let shard = dir.path().join(format!("shard-{k}"));
@@ -343,16 +338,7 @@ fn a_crash_at_any_write_step_of_a_sweep_or_a_merge_is_repaired_by_running_it_aga
     let mut args = vec!["merge", "--quiet"];
     args.extend(shards.iter().map(String::as_str));
     args.push("--out");
-    crash_at_every_step(
-        "merge",
-        &args,
-        |at| dir.path().join(format!("merge-{at}")),
-        &[],
-        |folder| {
-            assert_same_files(&whole, folder);
-            assert_no_litter(folder);
-        },
-    );
+    crash_at_every_step("merge", &args, |at| dir.path().join(format!("merge-{at}")), &[], same_as_whole);
 }
 
 #[test]

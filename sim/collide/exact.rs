@@ -256,17 +256,13 @@ fn measure(
         }
     };
     let measured = if by_hulls {
-        let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);
-        let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
-        measure_convex(pose_a, &**hull_a, pose_b, &**hull_b, exact_depth)
+        measure_convex(pose_a, a.geometry.hull_or_shape(), pose_b, b.hull_or_shape(), exact_depth)
     } else {
         measure_shapes_hinted(pose_a, &a.geometry, pose_b, b, exact_depth, &mut scratch.hints[index])
     };
     let with_hulls = with_hulls && (a.geometry.is_mesh() || b.is_mesh());
     if with_hulls {
-        let hull_a = a.geometry.hull.as_ref().unwrap_or(&a.geometry.shape);
-        let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
-        let hull_distance = measure_convex(pose_a, &**hull_a, pose_b, &**hull_b, true).distance;
+        let hull_distance = measure_convex(pose_a, a.geometry.hull_or_shape(), pose_b, b.hull_or_shape(), true).distance;
         if hull_distance <= 0.0 && measured.distance > 0.0 {
             findings.push(CollisionFinding::HullDisagreement {
                 pair: candidate.pair,
@@ -317,9 +313,7 @@ fn hull_bound(world: &CollisionWorld, index: usize, scratch: &mut super::Scratch
         scratch.stages[index] = Stage::Hulled;
         return scratch.bounds[index];
     }
-    let hull_a = a.hull.as_ref().unwrap_or(&a.shape);
-    let hull_b = b.hull.as_ref().unwrap_or(&b.shape);
-    let gap = measure_convex(&scratch.poses[candidate.a], &**hull_a, pose_b, &**hull_b, false).distance - HULL_SLACK_M;
+    let gap = measure_convex(&scratch.poses[candidate.a], a.hull_or_shape(), pose_b, b.hull_or_shape(), false).distance - HULL_SLACK_M;
     let bound = &mut scratch.bounds[index];
     if gap > 0.0 {
         *bound = bound.max(gap + candidate.allowance);

@@ -91,6 +91,11 @@ impl Geometry {
         self.hull.is_some()
     }
 
+    /// The convex hull of a mesh, or the convex shape itself.
+    pub(super) fn hull_or_shape(&self) -> &dyn parry3d_f64::shape::Shape {
+        &**self.hull.as_ref().unwrap_or(&self.shape)
+    }
+
     pub(super) fn convex(shape: SharedShape) -> Self {
         let bounding = BoundingCapsule::of(&shape);
         Self {

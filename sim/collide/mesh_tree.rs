@@ -150,15 +150,7 @@ impl SphereTree {
         hint: &mut Option<[u32; 2]>,
     ) -> Option<Measured> {
         let pos12 = pose.inv_mul(pose_other);
-        // The spheres' gap first (cheap); the capsules' only when the spheres cannot prune.
-        let bound = |a: &Node, b: &Node, best: f64| {
-            let spheres = (pos12 * b.center - a.center).length() - a.radius - b.radius - BOUND_ROUNDING_M;
-            if spheres >= best {
-                return spheres;
-            }
-            let axis = segment_segment(a.axis[0], a.axis[1], pos12 * b.axis[0], pos12 * b.axis[1]).sqrt();
-            spheres.max(axis - a.axis_radius - b.axis_radius - BOUND_ROUNDING_M)
-        };
+        let bound = |a: &Node, b: &Node, best: f64| node_pair_bound(a, b, &pos12, best);
         // Triangle pairs are ranked by the closed form; the nearest is then measured as parry's
         // descent measures it, so its witnesses are the same.
         let mut best_distance = f64::INFINITY;
@@ -186,37 +178,21 @@ impl SphereTree {
                 break;
             }
             let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
-            // Split the larger node, so both sides shrink at the same pace.
-            let split_a = match (a.children, b.children) {
-                (None, None) => {
-                    // Leaf b's triangles in the frame of a, once for the whole leaf pair.
-                    let mut moved = [([Vector::ZERO; 3], Vector::ZERO, 0.0); LEAF_TRIANGLES];
-                    let leaf_b = other.leaf(b);
-                    for ((slot, tb), (centre, radius)) in moved.iter_mut().zip(leaf_b).zip(&other.spheres[b.first as usize..]) {
-                        *slot = (tb.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
-                    }
-                    for ((ta, &(centre_a, radius_a)), index_a) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]).zip(a.first..)
-                    {
-                        let ta_vertices = ta.vertices();
-                        for ((tb_vertices, centre_b, radius_b), index_b) in moved.iter().zip(b.first..b.first + b.count) {
-                            let between = centre_b - centre_a;
-                            if between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= best_distance
-                                || separation(ta_vertices, tb_vertices, between) >= best_distance
-                            {
-                                continue;
-                            }
-                            let distance = triangle_distance(ta_vertices, tb_vertices)?;
-                            if distance < best_distance {
-                                best_distance = distance;
-                                nearest = Some((index_a, index_b));
-                            }
+            let Some(split_a) = split_first(a, b) else {
+                let moved = other.moved_leaf(b, &pos12);
+                for (index_a, ta, sphere_a) in self.leaf_spheres(a) {
+                    for (index_b, tb) in (b.first..).zip(&moved[..b.count as usize]) {
+                        if apart(ta.vertices(), sphere_a, tb, best_distance) {
+                            continue;
+                        }
+                        let distance = triangle_distance(ta.vertices(), &tb.0)?;
+                        if distance < best_distance {
+                            best_distance = distance;
+                            nearest = Some((index_a, index_b));
                         }
                     }
-                    continue;
                 }
-                (Some(_), None) => true,
-                (None, Some(_)) => false,
-                (Some(_), Some(_)) => a.radius >= b.radius,
+                continue;
             };
             let (left, right) = if split_a { a.children } else { b.children }.expect("the split node is inner");
             for child in [left, right] {
@@ -247,48 +223,30 @@ impl SphereTree {
         accept: impl Fn(f64) -> bool,
     ) -> bool {
         let pos12 = pose.inv_mul(pose_other);
-        let reach = reach + BOUND_ROUNDING_M;
-        let bound = |a: &Node, b: &Node| {
-            let spheres = (pos12 * b.center - a.center).length() - a.radius - b.radius - BOUND_ROUNDING_M;
-            if spheres > reach {
-                return spheres;
-            }
-            let axis = segment_segment(a.axis[0], a.axis[1], pos12 * b.axis[0], pos12 * b.axis[1]).sqrt();
-            spheres.max(axis - a.axis_radius - b.axis_radius - BOUND_ROUNDING_M)
-        };
+        // A bound beyond `reach` prunes: at least the next number above it.
+        let cutoff = (reach + BOUND_ROUNDING_M).next_up();
+        let bound = |a: &Node, b: &Node| node_pair_bound(a, b, &pos12, cutoff);
         let mut stack = Vec::with_capacity(64);
-        if bound(&self.nodes[0], &other.nodes[0]) <= reach {
+        if bound(&self.nodes[0], &other.nodes[0]) < cutoff {
             stack.push((0u32, 0u32));
         }
         while let Some((ia, ib)) = stack.pop() {
             let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
-            let split_a = match (a.children, b.children) {
-                (None, None) => {
-                    let leaf_b = other.leaf(b);
-                    for (ta, &(centre_a, radius_a)) in self.leaf(a).iter().zip(&self.spheres[a.first as usize..]) {
-                        for (tb, &(centre_b, radius_b)) in leaf_b.iter().zip(&other.spheres[b.first as usize..]) {
-                            let tb_vertices = tb.vertices().map(|v| pos12 * v);
-                            let between = pos12 * centre_b - centre_a;
-                            if between.length() - radius_a - radius_b - BOUND_ROUNDING_M > reach
-                                || separation(ta.vertices(), &tb_vertices, between) > reach
-                            {
-                                continue;
-                            }
-                            if triangle_distance(ta.vertices(), &tb_vertices).is_none_or(&accept) {
-                                return true;
-                            }
+            let Some(split_a) = split_first(a, b) else {
+                let moved = other.moved_leaf(b, &pos12);
+                for (_, ta, sphere_a) in self.leaf_spheres(a) {
+                    for tb in &moved[..b.count as usize] {
+                        if !apart(ta.vertices(), sphere_a, tb, cutoff) && triangle_distance(ta.vertices(), &tb.0).is_none_or(&accept) {
+                            return true;
                         }
                     }
-                    continue;
                 }
-                (Some(_), None) => true,
-                (None, Some(_)) => false,
-                (Some(_), Some(_)) => a.radius >= b.radius,
+                continue;
             };
             let (left, right) = if split_a { a.children } else { b.children }.expect("the split node is inner");
             for child in [left, right] {
                 let (ca, cb) = if split_a { (child, ib) } else { (ia, child) };
-                if bound(&self.nodes[ca as usize], &other.nodes[cb as usize]) <= reach {
+                if bound(&self.nodes[ca as usize], &other.nodes[cb as usize]) < cutoff {
                     stack.push((ca, cb));
                 }
             }
@@ -296,9 +254,60 @@ impl SphereTree {
         false
     }
 
+    /// Leaf `node`'s triangles of this tree (from [`Self::moved_leaf`]'s other side) with their
+    /// indices and bounding spheres.
+    fn leaf_spheres<'t>(&'t self, node: &Node) -> impl Iterator<Item = (u32, &'t Triangle, (Vector, f64))> + 't {
+        (node.first..)
+            .zip(self.leaf(node))
+            .zip(&self.spheres[node.first as usize..])
+            .map(|((index, triangle), &sphere)| (index, triangle, sphere))
+    }
+
+    /// Leaf `node`'s triangles and bounding spheres moved by `pos12` (into the other mesh's
+    /// frame), once for a whole leaf pair; the first `node.count` entries are filled.
+    fn moved_leaf(&self, node: &Node, pos12: &Pose) -> [MovedTriangle; LEAF_TRIANGLES] {
+        let mut moved = [([Vector::ZERO; 3], Vector::ZERO, 0.0); LEAF_TRIANGLES];
+        for ((slot, triangle), (centre, radius)) in moved.iter_mut().zip(self.leaf(node)).zip(&self.spheres[node.first as usize..]) {
+            *slot = (triangle.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
+        }
+        moved
+    }
+
     fn leaf(&self, node: &Node) -> &[Triangle] {
         &self.triangles[node.first as usize..(node.first + node.count) as usize]
     }
+}
+
+/// A triangle's vertices, its bounding sphere's centre and its radius, in another mesh's frame.
+type MovedTriangle = ([Vector; 3], Vector, f64);
+
+/// A lower bound on the gap between two nodes' triangles (`b` at `pos12` in `a`'s frame): the
+/// spheres' gap (cheap), and the capsules' only when the spheres' stays below `cutoff`.
+fn node_pair_bound(a: &Node, b: &Node, pos12: &Pose, cutoff: f64) -> f64 {
+    let spheres = (pos12 * b.center - a.center).length() - a.radius - b.radius - BOUND_ROUNDING_M;
+    if spheres >= cutoff {
+        return spheres;
+    }
+    let axis = segment_segment(a.axis[0], a.axis[1], pos12 * b.axis[0], pos12 * b.axis[1]).sqrt();
+    spheres.max(axis - a.axis_radius - b.axis_radius - BOUND_ROUNDING_M)
+}
+
+/// Which node of a pair to split: `a` (true), `b`, or `None` for two leaves. The larger one,
+/// so both sides shrink at the same pace.
+fn split_first(a: &Node, b: &Node) -> Option<bool> {
+    match (a.children, b.children) {
+        (None, None) => None,
+        (Some(_), None) => Some(true),
+        (None, Some(_)) => Some(false),
+        (Some(_), Some(_)) => Some(a.radius >= b.radius),
+    }
+}
+
+/// Whether triangle `a` (with its sphere) and the moved triangle `b` are at least `cutoff` apart
+/// by their spheres or by their projections, without measuring them.
+fn apart(a: &[Vector; 3], (centre_a, radius_a): (Vector, f64), (b, centre_b, radius_b): &MovedTriangle, cutoff: f64) -> bool {
+    let between = centre_b - centre_a;
+    between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= cutoff || separation(a, b, between) >= cutoff
 }
 
 /// A lower bound on the distance between a triangle and a convex shape at `pos12` (the

@@ -72,10 +72,9 @@ pub(super) fn measure_shapes_hinted(
 /// Signed distance between a body and the floor (the half-space below `z = height`); a mesh by
 /// its hull, whose lowest point is the mesh's lowest vertex.
 pub(super) fn measure_floor(pose_a: &Pose, a: &Geometry, height: f64) -> Measured {
-    let shape = a.hull.as_ref().unwrap_or(&a.shape);
     let floor_pose = Pose::from_translation(Vector::new(0.0, 0.0, height));
     // The half-space goes first: parry 0.31 mishandles it as the second shape.
-    match query::contact(&floor_pose, &HalfSpace::new(Vector::Z), pose_a, &**shape, UNBOUNDED_M) {
+    match query::contact(&floor_pose, &HalfSpace::new(Vector::Z), pose_a, a.hull_or_shape(), UNBOUNDED_M) {
         Ok(Some(contact)) => Measured::from_contact(&contact.flipped()),
         _ => touching(pose_a, &floor_pose),
     }
@@ -467,15 +466,48 @@ mod tests {
     use super::*;
     use parry3d_f64::shape::{Capsule, Cuboid, Cylinder};
 
+    const UR5_GRIPPER: &str = "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf";
+
+    /// A robot of the repository (to `tip`) placed in a scenario's collision world.
+    fn robot_world(robot: &str, tip: &str, scenario: &str) -> (crate::model::Model, crate::collide::CollisionWorld) {
+        use crate::pipeline::{collision_world, load_model, LoadOptions};
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let opts = LoadOptions {
+            tip_link: Some(tip.into()),
+            ..Default::default()
+        };
+        let model = load_model(&root.join(robot), &opts).expect("robot loads");
+        let scenario = crate::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
+        let model = model.placed(&scenario.world_from_base);
+        let world = collision_world(&model, &scenario, &[]).expect("valid world");
+        (model, world)
+    }
+
+    /// Every candidate of `world` but the floor's at the link poses `ws` holds: its index, then
+    /// each side's pose and geometry.
+    fn each_shape_pair(
+        world: &crate::collide::CollisionWorld,
+        ws: &crate::model::KinematicsWorkspace,
+        mut visit: impl FnMut(usize, &Pose, &Geometry, &Pose, &Geometry),
+    ) {
+        use crate::collide::world::Other;
+        let pose = |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
+        for (index, candidate) in world.candidates.iter().enumerate() {
+            let (pose_b, b) = match candidate.b {
+                Other::Link(j) => (pose(j), &world.colliders[j].geometry),
+                Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
+                Other::Floor => continue,
+            };
+            visit(index, &pose(candidate.a), &world.colliders[candidate.a].geometry, &pose_b, b);
+        }
+    }
+
     /// The trees against parry's descent of every triangle (the oracle), on every mesh pair and
     /// mesh-obstacle pair of two real robots, at random configurations: same distances, and
     /// witnesses at that distance.
     #[test]
     fn trees_measure_what_parry_descent_measures_on_real_robots() {
-        use crate::collide::world::Other;
-        use crate::pipeline::{collision_world, load_model, LoadOptions};
         use rand::SeedableRng;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let robots = [
             (
                 "designs/urdf/example-robot-data/robots/panda_description/urdf/panda.urdf",
@@ -490,38 +522,22 @@ mod tests {
         ];
         let (mut separated, mut compared) = (0, 0);
         for (robot, tip, scenario) in robots {
-            let opts = LoadOptions {
-                tip_link: Some(tip.into()),
-                ..Default::default()
-            };
-            let model = load_model(&root.join(robot), &opts).expect("shipped robot loads");
-            let scenario = crate::scenario::load(&root.join(scenario)).expect("shipped scenario loads");
-            let model = model.placed(&scenario.world_from_base);
-            let world = collision_world(&model, &scenario, &[]).expect("valid world");
+            let (model, world) = robot_world(robot, tip, scenario);
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
             let mut ws = model.workspace();
             for _ in 0..16 {
                 model.forward(&model.random_configuration(&mut rng), &mut ws);
-                let pose =
-                    |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
-                for candidate in &world.candidates {
-                    let a = &world.colliders[candidate.a];
-                    let (pose_b, b) = match candidate.b {
-                        Other::Link(j) => (pose(j), &world.colliders[j].geometry),
-                        Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
-                        Other::Floor => continue,
-                    };
-                    if !a.geometry.is_mesh() && !b.is_mesh() {
-                        continue;
+                each_shape_pair(&world, &ws, |index, pose_a, a, pose_b, b| {
+                    if !a.is_mesh() && !b.is_mesh() {
+                        return;
                     }
-                    let pose_a = pose(candidate.a);
-                    let fast = measure_shapes(&pose_a, &a.geometry, &pose_b, b, true);
-                    let oracle = measure_mesh_descent(&pose_a, &a.geometry, &pose_b, b);
+                    let fast = measure_shapes(pose_a, a, pose_b, b, true);
+                    let oracle = measure_mesh_descent(pose_a, a, pose_b, b);
                     compared += 1;
                     separated += usize::from(oracle.distance > 0.0);
                     assert!(
                         (fast.distance - oracle.distance).abs() < 1e-9,
-                        "{robot}: candidate {candidate:?}: trees {} m, parry {} m",
+                        "{robot}: candidate {index}: trees {} m, parry {} m",
                         fast.distance,
                         oracle.distance
                     );
@@ -531,7 +547,7 @@ mod tests {
                         "witnesses {witnesses} m apart, distance {}",
                         fast.distance
                     );
-                }
+                });
             }
         }
         assert!(
@@ -544,19 +560,8 @@ mod tests {
     /// no triangle) changes nothing in the answer, bit for bit, along short paths of a real robot.
     #[test]
     fn a_hint_changes_no_answer() {
-        use crate::collide::world::Other;
-        use crate::pipeline::{collision_world, load_model, LoadOptions};
         use rand::{Rng, SeedableRng};
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let opts = LoadOptions {
-            tip_link: Some("tool0".into()),
-            ..Default::default()
-        };
-        let robot = "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf";
-        let model = load_model(&root.join(robot), &opts).expect("fixture loads");
-        let scenario = crate::scenario::load(&root.join("scenarios/cluttered/task-00.json")).expect("shipped scenario loads");
-        let model = model.placed(&scenario.world_from_base);
-        let world = collision_world(&model, &scenario, &[]).expect("valid world");
+        let (model, world) = robot_world(UR5_GRIPPER, "tool0", "scenarios/cluttered/task-00.json");
         let bits = |m: &Measured| {
             let v = |x: Vector| x.to_array().map(f64::to_bits);
             (m.distance.to_bits(), v(m.point_a), v(m.point_b), v(m.normal), m.enclosed)
@@ -571,16 +576,11 @@ mod tests {
             for _ in 0..8 {
                 q.iter_mut().zip(&step).for_each(|(x, d)| *x += d);
                 model.forward(&q, &mut ws);
-                let pose =
-                    |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
-                for (index, candidate) in world.candidates.iter().enumerate() {
-                    let Other::Link(j) = candidate.b else { continue };
-                    let (a, b) = (&world.colliders[candidate.a].geometry, &world.colliders[j].geometry);
+                each_shape_pair(&world, &ws, |index, pose_a, a, pose_b, b| {
                     if !(a.is_mesh() && b.is_mesh()) {
-                        continue;
+                        return;
                     }
-                    let (pose_a, pose_b) = (pose(candidate.a), pose(j));
-                    let plain = measure_shapes(&pose_a, a, &pose_b, b, true);
+                    let plain = measure_shapes(pose_a, a, pose_b, b, true);
                     // Every third path: a random pair, or indices beyond the meshes.
                     if path % 3 == 1 {
                         hints[index] = Some([rng.random_range(0..400), rng.random_range(0..400)]);
@@ -588,10 +588,10 @@ mod tests {
                         hints[index] = Some([u32::MAX, 7]);
                     }
                     hinted += usize::from(hints[index].is_some());
-                    let with_hint = measure_shapes_hinted(&pose_a, a, &pose_b, b, true, &mut hints[index]);
+                    let with_hint = measure_shapes_hinted(pose_a, a, pose_b, b, true, &mut hints[index]);
                     assert_eq!(bits(&plain), bits(&with_hint), "candidate {index} on path {path}");
                     compared += 1;
-                }
+                });
             }
         }
         assert!(compared > 500 && hinted > compared / 2, "{hinted} hinted of {compared}");
@@ -602,41 +602,25 @@ mod tests {
     /// touching within a margin, and apart).
     #[test]
     fn within_answers_as_the_measured_distance() {
-        use crate::collide::world::Other;
-        use crate::pipeline::{collision_world, load_model, LoadOptions};
         use rand::SeedableRng;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let robot = "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf";
-        let model = load_model(&root.join(robot), &LoadOptions::default()).expect("fixture loads");
-        let scenario = crate::scenario::load(&root.join("scenarios/cluttered/task-00.json")).expect("shipped scenario loads");
-        let model = model.placed(&scenario.world_from_base);
-        let world = collision_world(&model, &scenario, &[]).expect("valid world");
+        let (model, world) = robot_world(UR5_GRIPPER, "tool0", "scenarios/cluttered/task-00.json");
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let mut ws = model.workspace();
         let mut counts = [0usize; 2];
         for _ in 0..40 {
             model.forward(&model.random_configuration(&mut rng), &mut ws);
-            let pose =
-                |i: usize| crate::frames::parry_pose(&ws.link_in_world[world.colliders[i].link]) * world.colliders[i].link_from_shape;
-            for candidate in &world.candidates {
-                let a = &world.colliders[candidate.a];
-                let (pose_b, b) = match candidate.b {
-                    Other::Link(j) => (pose(j), &world.colliders[j].geometry),
-                    Other::Obstacle(k) => (world.obstacles[k].world_from_shape, &world.obstacles[k].geometry),
-                    Other::Floor => continue,
-                };
-                let pose_a = pose(candidate.a);
-                let distance = measure_shapes(&pose_a, &a.geometry, &pose_b, b, false).distance;
+            each_shape_pair(&world, &ws, |index, pose_a, a, pose_b, b| {
+                let distance = measure_shapes(pose_a, a, pose_b, b, false).distance;
                 for (margin, allowance) in [(0.0, 0.0), (0.005, 0.0), (0.03, 0.01), (0.0, 0.02), (0.1, 0.0)] {
                     let expected = distance + allowance <= margin;
                     assert_eq!(
-                        within(&pose_a, &a.geometry, &pose_b, b, margin, allowance),
+                        within(pose_a, a, pose_b, b, margin, allowance),
                         expected,
-                        "candidate {candidate:?}: distance {distance} m, margin {margin}, allowance {allowance}"
+                        "candidate {index}: distance {distance} m, margin {margin}, allowance {allowance}"
                     );
                     counts[usize::from(expected)] += 1;
                 }
-            }
+            });
         }
         assert!(counts[0] > 200 && counts[1] > 200, "{counts:?} (apart, within)");
     }

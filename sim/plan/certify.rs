@@ -150,7 +150,7 @@ impl<'a> SegmentChecker<'a> {
     pub fn advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (SegmentCheck, Option<f64>) {
         let mut roomy = None;
         let mut ends = [f64::NAN; 2];
-        let check = self.advance_inner(from, to, room, &mut roomy, &mut ends);
+        let check = self.advance_until(from, to, room, &mut roomy, &mut ends, f64::NEG_INFINITY);
         (check, roomy)
     }
 
@@ -167,9 +167,8 @@ impl<'a> SegmentChecker<'a> {
     pub fn roomy_advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck, Option<f64>) {
         let mut roomy = None;
         let mut ends = [f64::NAN; 2];
-        let check = self.advance_inner(from, to, room, &mut roomy, &mut ends);
-        let needed = (self.opts.threshold_m + room).min(ends[0]).min(ends[1]);
-        let ok = check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed);
+        let check = self.advance_until(from, to, room, &mut roomy, &mut ends, f64::NEG_INFINITY);
+        let ok = keeps(&check, (self.opts.threshold_m + room).min(ends[0]).min(ends[1]));
         (ok, check, roomy)
     }
 
@@ -189,12 +188,7 @@ impl<'a> SegmentChecker<'a> {
         let mut ends = [f64::NAN; 2];
         let give_up = (self.opts.threshold_m + room).min(end_clearance);
         let check = self.advance_until(from, to, room, &mut roomy, &mut ends, give_up);
-        let needed = give_up.min(ends[0]).min(ends[1]);
-        check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed)
-    }
-
-    fn advance_inner(&mut self, from: &[f64], to: &[f64], room: f64, roomy: &mut Option<f64>, ends: &mut [f64; 2]) -> SegmentCheck {
-        self.advance_until(from, to, room, roomy, ends, f64::NEG_INFINITY)
+        keeps(&check, give_up.min(ends[0]).min(ends[1]))
     }
 
     /// The advancement; it gives up (not free) at the first point whose clearance is below both
@@ -321,4 +315,9 @@ impl<'a> SegmentChecker<'a> {
         }
         smallest
     }
+}
+
+/// Whether a checked segment is free and keeps `needed` (m) at every advancement point.
+fn keeps(check: &SegmentCheck, needed: f64) -> bool {
+    check.free && check.closest.as_ref().is_none_or(|c| c.distance_m >= needed)
 }
