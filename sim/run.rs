@@ -203,8 +203,11 @@ pub fn validate_loaded(input: &Path, loaded: Loaded, scenario: Scenario, opts: &
 /// [`validate_loaded`] without the exports' writes.
 fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Options, progress: &dyn Progress) -> Result<Run, Error> {
     let model = &loaded.model;
-    for diagnostic in &model.diagnostics {
-        progress.warning(&diagnostic.to_string());
+    // Under `--strict` the warnings are the error below, which lists them: printed once.
+    if !opts.strict {
+        for diagnostic in &model.diagnostics {
+            progress.warning(&diagnostic.to_string());
+        }
     }
     for choice in model.source.choices() {
         progress.info(&format!("{}: {choice}", input.display()));

@@ -446,6 +446,9 @@ fn strict_turns_warnings_into_errors() {
         .output()
         .expect("runs");
     assert_eq!(output.status.code(), Some(2));
+    // The error lists the warning; it is not printed a second time as a warning.
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.matches("the joint cannot move").count(), 1, "{stderr}");
 }
 
 #[test]
