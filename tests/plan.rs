@@ -242,6 +242,42 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
     assert!(queries < 5000, "{queries} queries for the tour");
 }
 
+/// Each kind's certified bound (obstacles, self, floor) is below that kind's exact clearance at
+/// 50 samples of every segment of the course tour, and the lowest kind is the whole bound.
+#[test]
+fn each_kind_of_pair_has_a_certified_bound_below_its_sampled_clearance() {
+    let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
+    let scenario = generate::course(generate::COURSE_SEED);
+    let placed = model.placed(&scenario.world_from_base);
+    let world = collision_world(&placed, &scenario, &[]).expect("builds");
+    let mut checker = SegmentChecker::new(&placed, &world, CertifyOptions::default());
+    let every_pair = collide::QueryOptions {
+        margin: f64::INFINITY,
+        ..Default::default()
+    };
+    let (mut out, mut ws) = (collide::Distances::new(), placed.workspace());
+    let mut previous = generate::COURSE_HOME.to_vec();
+    for (goal, q) in generate::course_configurations().into_iter().enumerate() {
+        let check = checker.check(&previous, &q);
+        let bound = check.certified_by_kind;
+        let kinds = |k: collide::ClearanceByKind| [k.obstacles_m, k.self_m, k.floor_m];
+        let lowest = kinds(bound).into_iter().flatten().fold(f64::INFINITY, f64::min);
+        assert_eq!(lowest, check.certified_clearance_m, "goal {goal}: {bound:?}");
+        for i in 0..=50 {
+            let s = f64::from(i) / 50.0;
+            let at: Vec<f64> = previous.iter().zip(&q).map(|(a, b)| a + s * (b - a)).collect();
+            placed.forward(&at, &mut ws);
+            collide::distances(&world, &ws.link_in_world, &every_pair, &mut out);
+            let sampled = collide::ClearanceByKind::of(&out);
+            for (kind, (b, x)) in kinds(bound).into_iter().zip(kinds(sampled)).enumerate() {
+                let (b, x) = (b.expect("every kind is checked on the course"), x.expect("measured"));
+                assert!(b <= x + 1e-12, "goal {goal}, kind {kind}, s = {s}: bound {b} m, sampled {x} m");
+            }
+        }
+        previous = q;
+    }
+}
+
 /// `keeps_room` stops early but answers as `roomy_free` does, on short random segments of a mesh
 /// robot among obstacles (free with room, free but grazing, and colliding ones) and of a design.
 #[test]

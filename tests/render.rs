@@ -108,6 +108,27 @@ fn pictures_parse_back_with_their_views_bodies_and_plot_marks() {
             assert_eq!(marks("attempts"), attempts, "one shaded band per attempt");
             assert!(touches >= 3, "task 00 with the straight planner has three blocked goals: {touches}");
             assert!(tree.node_by_id("closest-pair").is_some(), "the closest pair is marked");
+            // Each kind's bound: a line per segment with a pair of that kind; the lowest of the
+            // kinds is the segment's whole bound.
+            for (id, kind) in [("certified-obstacles", 0), ("certified-self", 1), ("certified-floor", 2)] {
+                let lines = validation
+                    .replayed
+                    .iter()
+                    .filter(|s| {
+                        let k = &s.certified.certified_by_kind;
+                        [k.obstacles_m, k.self_m, k.floor_m][kind].is_some()
+                    })
+                    .count();
+                assert!(lines > 0 && marks(id) == lines, "{id}: {} lines, {lines} segments", marks(id));
+            }
+            for segment in &validation.replayed {
+                let k = &segment.certified.certified_by_kind;
+                let lowest = [k.obstacles_m, k.self_m, k.floor_m]
+                    .into_iter()
+                    .flatten()
+                    .fold(f64::INFINITY, f64::min);
+                assert_eq!(lowest, segment.certified.certified_clearance_m, "{k:?}");
+            }
         } else {
             // Four view labels, title, subtitle, seven legend entries and the scale bar's label: 14.
             assert!(texts >= 14, "{}: {texts} texts", picture.name);

@@ -246,14 +246,36 @@ impl ClearanceByKind {
     pub fn of(distances: &Distances) -> Self {
         let mut out = Self::default();
         for pair in &distances.within_margin {
-            let slot = match pair.b.body {
-                Body::Obstacle(_) => &mut out.obstacles_m,
-                Body::Link(_) => &mut out.self_m,
-                Body::Floor => &mut out.floor_m,
-            };
-            *slot = Some(slot.map_or(pair.distance, |d: f64| d.min(pair.distance)));
+            out.lower(pair.b.body, pair.distance);
         }
         out
+    }
+
+    /// Takes `distance` (m) for the kind of a pair whose second body is `b` (the first is always
+    /// a link) when it is smaller; an infinite distance (a pair without geometry) is none.
+    pub fn lower(&mut self, b: Body, distance: f64) {
+        if !distance.is_finite() {
+            return;
+        }
+        let slot = match b {
+            Body::Obstacle(_) => &mut self.obstacles_m,
+            Body::Link(_) => &mut self.self_m,
+            Body::Floor => &mut self.floor_m,
+        };
+        *slot = Some(slot.map_or(distance, |d: f64| d.min(distance)));
+    }
+
+    /// Each kind's smaller value of the two.
+    pub fn min(self, other: Self) -> Self {
+        let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        Self {
+            obstacles_m: min(self.obstacles_m, other.obstacles_m),
+            self_m: min(self.self_m, other.self_m),
+            floor_m: min(self.floor_m, other.floor_m),
+        }
     }
 }
 

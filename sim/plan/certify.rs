@@ -14,7 +14,7 @@
 //! (or a collision), reported with the pair and where.
 
 pub use crate::collide::MotionBounds;
-use crate::collide::{self, CollisionWorld, Distances, QueryOptions};
+use crate::collide::{self, ClearanceByKind, CollisionWorld, Distances, QueryOptions};
 use crate::model::{KinematicsWorkspace, Model};
 use serde::Serialize;
 
@@ -63,6 +63,9 @@ pub struct SegmentCheck {
     /// A lower bound on the clearance over the whole segment (m), or over the part checked before
     /// a touch; certified by the motion bounds.
     pub certified_clearance_m: f64,
+    /// The same bound for each kind of pair (obstacles, self, floor); the smallest of them is
+    /// `certified_clearance_m`.
+    pub certified_by_kind: ClearanceByKind,
     /// Where the advancement stopped at a touch or collision, when it did.
     pub touch: Option<SegmentPoint>,
     /// Collision queries made.
@@ -218,6 +221,7 @@ impl<'a> SegmentChecker<'a> {
         let mut queries = 0;
         let mut closest: Option<SegmentPoint> = None;
         let mut certified = f64::INFINITY;
+        let mut by_kind = ClearanceByKind::default();
         loop {
             for (q, (a, d)) in self.q.iter_mut().zip(from.iter().zip(&self.delta)) {
                 *q = a + s * d;
@@ -228,6 +232,11 @@ impl<'a> SegmentChecker<'a> {
             let here = self.closest_point(s, &q);
             self.q = q;
             let smallest = here.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
+            // Each pair's estimate here: the closest pair's kind takes `smallest`, as the whole
+            // bound does where the advancement ends.
+            for estimate in &self.out.estimates {
+                by_kind.lower(estimate.b, estimate.distance);
+            }
             if closest.as_ref().is_none_or(|c| smallest < c.distance_m) {
                 closest.clone_from(&here);
             }
@@ -237,6 +246,7 @@ impl<'a> SegmentChecker<'a> {
                     free: false,
                     closest,
                     certified_clearance_m: certified,
+                    certified_by_kind: by_kind,
                     touch: here,
                     queries,
                 };
@@ -246,6 +256,7 @@ impl<'a> SegmentChecker<'a> {
                     free: false,
                     closest,
                     certified_clearance_m: certified.min(smallest),
+                    certified_by_kind: by_kind,
                     touch: None,
                     queries,
                 };
@@ -277,7 +288,9 @@ impl<'a> SegmentChecker<'a> {
                 }
             }
             for (estimate, rate) in self.out.estimates.iter().zip(&self.rates) {
-                lowest = lowest.min(estimate.distance - rate * step);
+                let bound = estimate.distance - rate * step;
+                lowest = lowest.min(bound);
+                by_kind.lower(estimate.b, bound);
             }
             certified = certified.min(lowest);
             if queries >= MAX_STEPS {
@@ -285,6 +298,7 @@ impl<'a> SegmentChecker<'a> {
                     free: false,
                     closest,
                     certified_clearance_m: certified,
+                    certified_by_kind: by_kind,
                     touch: None,
                     queries,
                 };
@@ -295,6 +309,7 @@ impl<'a> SegmentChecker<'a> {
             free: true,
             closest,
             certified_clearance_m: certified,
+            certified_by_kind: by_kind,
             touch: None,
             queries,
         }

@@ -122,8 +122,9 @@ pub enum GoalStep {
         /// Joint-space distance from the search's nearest configuration to the goal set.
         gap: Option<f64>,
         /// The straight segment to the nearest solution, from the previous configuration: the
-        /// motion the paper's heuristic would have made. The engines replay it too.
-        attempt: Option<Attempt>,
+        /// motion the paper's heuristic would have made. The engines replay it too. Boxed: a
+        /// step that reached its goal need not be as large.
+        attempt: Option<Box<Attempt>>,
     },
 }
 
@@ -148,7 +149,7 @@ impl GoalStep {
     pub fn attempt(&self) -> Option<&Attempt> {
         match self {
             GoalStep::Reached { .. } | GoalStep::Unreachable { .. } => None,
-            GoalStep::NoPath { attempt, .. } => attempt.as_ref(),
+            GoalStep::NoPath { attempt, .. } => attempt.as_deref(),
         }
     }
 }
@@ -662,11 +663,11 @@ fn not_reached(
             samples: failure.samples,
             stop: failure.stop,
             gap: failure.gap,
-            attempt: Some(Attempt {
+            attempt: Some(Box::new(Attempt {
                 from: previous.to_vec(),
                 segment: checker.check(previous, &nearest),
                 to: nearest,
-            }),
+            })),
         },
     }
 }

@@ -204,6 +204,7 @@ fn data(validation: &Validation, report: &Report) -> Value {
                 "from": s.from,
                 "to": s.to,
                 "bound": finite(s.certified.certified_clearance_m),
+                "by_kind": s.certified.certified_by_kind,
                 "closest": s.certified.closest.as_ref().map(point),
                 "touch": s.certified.touch.as_ref().map(point),
             })

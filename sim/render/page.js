@@ -209,7 +209,12 @@
       const seg = segments[k];
       const goal = data.goals[seg.goal] || { name: "?" };
       text = `segment ${k} to goal ${seg.goal} ${goal.name}${seg.planned ? "" : " (blocked attempt)"}, s = ${s.toFixed(3)}`;
-      if (seg.bound !== null) text += `\ncertified clearance >= ${(seg.bound * 1000).toFixed(1)} mm`;
+      if (seg.bound !== null) {
+        const kinds = [["obstacles", seg.by_kind.obstacles_m], ["self", seg.by_kind.self_m], ["floor", seg.by_kind.floor_m]]
+          .filter(([, bound]) => bound !== null)
+          .map(([kind, bound]) => `${kind} ${(bound * 1000).toFixed(1)}`);
+        text += `\ncertified clearance >= ${(seg.bound * 1000).toFixed(1)} mm (${kinds.join(", ")})`;
+      }
       if (seg.closest) {
         paint(seg.closest.a, colours.closest); paint(seg.closest.b, colours.closest);
         text += `\nclosest: ${seg.closest.a} and ${seg.closest.b}, ${(seg.closest.distance * 1000).toFixed(1)} mm at s = ${seg.closest.s.toFixed(3)}`;

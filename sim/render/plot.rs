@@ -1,7 +1,8 @@
 //! The clearance-along-the-trajectory plot: per replayed segment (the planned edges and each
 //! blocked goal's attempt, in order, segment `k` spanning `[k, k + 1)` of the replay clock) the
-//! certified lower bound on its clearance, the closest approach measured on it, where it is
-//! blocked, and the run's closest pair.
+//! certified lower bound on its clearance (and that bound for each kind of pair: obstacles, the
+//! robot itself, the floor), the closest approach measured on it, where it is blocked, and the
+//! run's closest pair.
 
 use super::svg::{self, px};
 use crate::plan::ReplaySegment;
@@ -22,6 +23,7 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
     let mut values: Vec<f64> = vec![0.0, margin_m];
     for segment in segments {
         values.push(segment.certified.certified_clearance_m);
+        values.extend(kinds(segment).into_iter().flatten());
         values.extend(segment.certified.closest.as_ref().map(|c| c.distance_m));
         values.extend(segment.certified.touch.as_ref().map(|c| c.distance_m));
     }
@@ -47,7 +49,7 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
         12,
         "start",
         "#333333",
-        "per segment: certified lower bound (blue line), closest approach measured (orange dot), blocked at (red x); shaded: a blocked goal's attempt",
+        "per segment: certified bound (blue; thin by kind: obstacles black, self purple dashed, floor brown dotted), closest (orange), blocked (red x); shaded: attempt",
     );
     // Attempts (not on the trajectory) behind everything.
     out.open("g", [("id", "attempts")]);
@@ -137,6 +139,25 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
             "#d62728",
             &format!("margin {}", svg::mm(margin_m)),
         );
+    }
+    // Each kind's bound, thin and under the whole bound, which hides the kind that sets it.
+    for (kind, (id, colour, dashes)) in KIND_STYLES.iter().enumerate() {
+        out.open(
+            "g",
+            [
+                ("id", *id),
+                ("stroke", *colour),
+                ("stroke-width", "1.2"),
+                ("stroke-dasharray", *dashes),
+            ],
+        );
+        for (k, segment) in segments.iter().enumerate() {
+            let Some(bound) = kinds(segment)[kind] else { continue };
+            let extent = segment.certified.touch.as_ref().map_or(1.0, |t| t.s);
+            let end = px(x(k as f64 + extent).max(x(k as f64) + 1.0));
+            line(out, px(x(k as f64)), px(y(bound)), end, px(y(bound)), &[]);
+        }
+        out.close("g");
     }
     out.open("g", [("id", "certified"), ("stroke", "#1f5fb4"), ("stroke-width", "2")]);
     for (k, segment) in segments.iter().enumerate() {
@@ -231,6 +252,20 @@ pub(super) fn clearance(segments: &[ReplaySegment], goal_names: &[String], margi
     ];
     out.empty("rect", frame);
     svg::finish(doc)
+}
+
+/// Per kind of pair, as [`kinds`] orders them: group id, colour and dashes (none of the status
+/// colours).
+const KIND_STYLES: [(&str, &str, &str); 3] = [
+    ("certified-obstacles", "#222222", "none"),
+    ("certified-self", "#6a3d9a", "5 3"),
+    ("certified-floor", "#8c564b", "1.5 2.5"),
+];
+
+/// A segment's certified bound per kind of pair: obstacles, self, floor (`None`: no such pair).
+fn kinds(segment: &ReplaySegment) -> [Option<f64>; 3] {
+    let by_kind = &segment.certified.certified_by_kind;
+    [by_kind.obstacles_m, by_kind.self_m, by_kind.floor_m]
 }
 
 /// A `<line>` from `(x1, y1)` to `(x2, y2)` px, with `style` attributes.

@@ -15,7 +15,7 @@ pub use inputs::{EngineRuns, Settings, Validation};
 pub use loss::PaperLoss;
 pub use render::{render, summary, verdict_line};
 
-use crate::collide::ExcludedPair;
+use crate::collide::{ClearanceByKind, ExcludedPair};
 use crate::engine::{ContactInterval, StaticLoad};
 use crate::ik::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use crate::plan::{GoalStep, SegmentPoint};
@@ -217,6 +217,8 @@ pub struct TrajectoryReport {
     pub replayed_segments: usize,
     /// The smallest certified clearance over the trajectory (m).
     pub certified_clearance_m: Option<f64>,
+    /// The same for each kind of pair: obstacles, the robot itself, the floor.
+    pub certified_by_kind: Option<ClearanceByKind>,
     /// Joint-space length (rad and m summed).
     pub joint_length: f64,
     /// Joint-space length before the planner's shortcutting.
@@ -247,6 +249,8 @@ pub struct SegmentReport {
     /// Certified lower bound on its clearance (m), over every edge (an attempt: up to where it
     /// stopped).
     pub certified_clearance_m: Option<f64>,
+    /// The same bound for each kind of pair: obstacles, the robot itself, the floor.
+    pub certified_by_kind: Option<ClearanceByKind>,
     /// Closest approach measured, with the pair.
     pub closest: Option<SegmentPoint>,
     /// Where the planner's closest attempt of a goal without a path stops: pair and
@@ -524,6 +528,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                     joint_length: Some(length),
                     joint_length_before_shortcut: Some(*length_before_shortcut),
                     certified_clearance_m: segments.iter().map(|s| s.certified_clearance_m).reduce(f64::min),
+                    certified_by_kind: segments.iter().map(|s| s.certified_by_kind).reduce(ClearanceByKind::min),
                     closest: segments
                         .iter()
                         .filter_map(|s| s.closest.clone())
@@ -543,6 +548,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                 joint_length: None,
                 joint_length_before_shortcut: None,
                 certified_clearance_m: None,
+                certified_by_kind: None,
                 closest: None,
                 stop: None,
                 attempt_stop: None,
@@ -565,6 +571,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
                 joint_length: None,
                 joint_length_before_shortcut: None,
                 certified_clearance_m: attempt.as_ref().map(|a| a.segment.certified_clearance_m),
+                certified_by_kind: attempt.as_ref().map(|a| a.segment.certified_by_kind),
                 closest: attempt.as_ref().and_then(|a| a.segment.closest.clone()),
                 stop: stop.clone(),
                 attempt_stop: attempt.as_ref().and_then(|a| a.segment.touch.clone()),
@@ -573,11 +580,9 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
             },
         })
         .collect();
-    let certified = segments
-        .iter()
-        .filter(|s| s.planned)
-        .filter_map(|s| s.certified_clearance_m)
-        .reduce(f64::min);
+    let planned = || segments.iter().filter(|s| s.planned);
+    let certified = planned().filter_map(|s| s.certified_clearance_m).reduce(f64::min);
+    let certified_by_kind = planned().filter_map(|s| s.certified_by_kind).reduce(ClearanceByKind::min);
     TrajectoryReport {
         home: trajectory.home.clone(),
         home_clearance_m: trajectory.home_clearance.as_ref().map(|c| c.distance_m),
@@ -594,6 +599,7 @@ fn trajectory_report(validation: &Validation, trajectory: &crate::plan::Trajecto
         segments,
         replayed_segments: validation.replayed.len(),
         certified_clearance_m: certified,
+        certified_by_kind,
         joint_length: trajectory.joint_length,
         joint_length_before_shortcut: trajectory.joint_length_before_shortcut,
         tool_path_m: trajectory.tool_path_m,

@@ -238,13 +238,18 @@ fn trajectory_lines(out: &mut String, t: &super::TrajectoryReport) {
     let detours = t.segments.iter().filter(|s| s.edges > 1).count();
     let _ = writeln!(
         out,
-        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} undecided, {} without a path; certified clearance {} mm; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
+        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} undecided, {} without a path; certified clearance {} mm{}; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
         t.reached,
         t.edges,
         t.unreachable,
         t.undecided,
         t.no_path,
         mm(t.certified_clearance_m),
+        t.certified_by_kind.map_or(String::new(), |k| {
+            let kinds = [("obstacles", k.obstacles_m), ("self", k.self_m), ("floor", k.floor_m)];
+            let listed: Vec<String> = kinds.iter().filter(|(_, m)| m.is_some()).map(|(kind, m)| format!("{kind} {}", mm(*m))).collect();
+            format!(" ({})", listed.join(", "))
+        }),
         t.joint_length,
         t.joint_length_before_shortcut,
         t.tool_path_m,
