@@ -33,6 +33,8 @@ pub(super) struct SphereTree {
     triangles: Vec<Triangle>,
     /// Each triangle's bounding sphere (centre, radius), in the same order.
     spheres: Vec<(Vector, f64)>,
+    /// Each triangle's unit normal (zero for a degenerate one), in the same order.
+    normals: Vec<Vector>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -70,7 +72,13 @@ impl SphereTree {
                 (centre, t.vertices().iter().map(|v| (v - centre).length()).fold(0.0, f64::max))
             })
             .collect();
-        Self { nodes, triangles, spheres }
+        let normals = triangles.iter().map(normal).collect();
+        Self {
+            nodes,
+            triangles,
+            spheres,
+            normals,
+        }
     }
 
     /// The exact gap between this mesh at `pose` and a convex (non-mesh) `shape` at `pose_other`,
@@ -110,13 +118,13 @@ impl SphereTree {
                     }
                 }
                 None => {
-                    for (triangle, &(centre, radius)) in self.leaf(node).iter().zip(&self.spheres[node.first as usize..]) {
+                    for (triangle, (_, placed)) in self.leaf(node).iter().zip(self.leaf_bounds(node)) {
                         // A triangle's own sphere, then the shape's extent across the triangle's
                         // plane, before its contact (GJK).
                         if let Some(best) = &best {
-                            let sphere =
-                                shape.distance_to_local_point(pos12.inverse_transform_point(centre), true) - radius - BOUND_ROUNDING_M;
-                            if sphere >= best.dist || support.is_some_and(|support| plane_gap(triangle, support, &pos12) >= best.dist) {
+                            let centre = pos12.inverse_transform_point(placed.centre);
+                            let sphere = shape.distance_to_local_point(centre, true) - placed.radius - BOUND_ROUNDING_M;
+                            if sphere >= best.dist || support.is_some_and(|support| plane_gap(&placed, support, &pos12) >= best.dist) {
                                 continue;
                             }
                         }
@@ -180,12 +188,12 @@ impl SphereTree {
             let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
             let Some(split_a) = split_first(a, b) else {
                 let moved = other.moved_leaf(b, &pos12);
-                for (index_a, ta, sphere_a) in self.leaf_spheres(a) {
+                for (index_a, ta) in self.leaf_bounds(a) {
                     for (index_b, tb) in (b.first..).zip(&moved[..b.count as usize]) {
-                        if apart(ta.vertices(), sphere_a, tb, best_distance) {
+                        if apart(&ta, tb, best_distance) {
                             continue;
                         }
-                        let distance = triangle_distance(ta.vertices(), &tb.0)?;
+                        let distance = triangle_distance(&ta.vertices, &tb.vertices)?;
                         if distance < best_distance {
                             best_distance = distance;
                             nearest = Some((index_a, index_b));
@@ -234,9 +242,9 @@ impl SphereTree {
             let (a, b) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
             let Some(split_a) = split_first(a, b) else {
                 let moved = other.moved_leaf(b, &pos12);
-                for (_, ta, sphere_a) in self.leaf_spheres(a) {
+                for (_, ta) in self.leaf_bounds(a) {
                     for tb in &moved[..b.count as usize] {
-                        if !apart(ta.vertices(), sphere_a, tb, cutoff) && triangle_distance(ta.vertices(), &tb.0).is_none_or(&accept) {
+                        if !apart(&ta, tb, cutoff) && triangle_distance(&ta.vertices, &tb.vertices).is_none_or(&accept) {
                             return true;
                         }
                     }
@@ -254,21 +262,33 @@ impl SphereTree {
         false
     }
 
-    /// Leaf `node`'s triangles of this tree (from [`Self::moved_leaf`]'s other side) with their
-    /// indices and bounding spheres.
-    fn leaf_spheres<'t>(&'t self, node: &Node) -> impl Iterator<Item = (u32, &'t Triangle, (Vector, f64))> + 't {
-        (node.first..)
-            .zip(self.leaf(node))
-            .zip(&self.spheres[node.first as usize..])
-            .map(|((index, triangle), &sphere)| (index, triangle, sphere))
+    /// Leaf `node`'s triangles with their indices, bounding spheres and normals, in this mesh's
+    /// frame.
+    fn leaf_bounds(&self, node: &Node) -> impl Iterator<Item = (u32, Placed)> + '_ {
+        (node.first..node.first + node.count).map(|index| {
+            let i = index as usize;
+            let (centre, radius) = self.spheres[i];
+            let placed = Placed {
+                vertices: *self.triangles[i].vertices(),
+                centre,
+                radius,
+                normal: self.normals[i],
+            };
+            (index, placed)
+        })
     }
 
-    /// Leaf `node`'s triangles and bounding spheres moved by `pos12` (into the other mesh's
-    /// frame), once for a whole leaf pair; the first `node.count` entries are filled.
-    fn moved_leaf(&self, node: &Node, pos12: &Pose) -> [MovedTriangle; LEAF_TRIANGLES] {
-        let mut moved = [([Vector::ZERO; 3], Vector::ZERO, 0.0); LEAF_TRIANGLES];
-        for ((slot, triangle), (centre, radius)) in moved.iter_mut().zip(self.leaf(node)).zip(&self.spheres[node.first as usize..]) {
-            *slot = (triangle.vertices().map(|v| pos12 * v), pos12 * *centre, *radius);
+    /// [`Self::leaf_bounds`] moved by `pos12` (into the other mesh's frame), once for a whole
+    /// leaf pair; the first `node.count` entries are filled.
+    fn moved_leaf(&self, node: &Node, pos12: &Pose) -> [Placed; LEAF_TRIANGLES] {
+        let mut moved = [Placed::default(); LEAF_TRIANGLES];
+        for (slot, (_, placed)) in moved.iter_mut().zip(self.leaf_bounds(node)) {
+            *slot = Placed {
+                vertices: placed.vertices.map(|v| pos12 * v),
+                centre: pos12 * placed.centre,
+                radius: placed.radius,
+                normal: pos12.rotation * placed.normal,
+            };
         }
         moved
     }
@@ -278,8 +298,14 @@ impl SphereTree {
     }
 }
 
-/// A triangle's vertices, its bounding sphere's centre and its radius, in another mesh's frame.
-type MovedTriangle = ([Vector; 3], Vector, f64);
+/// A triangle with its bounding sphere and unit normal, in some mesh's frame.
+#[derive(Debug, Clone, Copy, Default)]
+struct Placed {
+    vertices: [Vector; 3],
+    centre: Vector,
+    radius: f64,
+    normal: Vector,
+}
 
 /// A lower bound on the gap between two nodes' triangles (`b` at `pos12` in `a`'s frame): the
 /// spheres' gap (cheap), and the capsules' only when the spheres' stays below `cutoff`.
@@ -303,18 +329,17 @@ fn split_first(a: &Node, b: &Node) -> Option<bool> {
     }
 }
 
-/// Whether triangle `a` (with its sphere) and the moved triangle `b` are at least `cutoff` apart
-/// by their spheres or by their projections, without measuring them.
-fn apart(a: &[Vector; 3], (centre_a, radius_a): (Vector, f64), (b, centre_b, radius_b): &MovedTriangle, cutoff: f64) -> bool {
-    let between = centre_b - centre_a;
-    between.length() - radius_a - radius_b - BOUND_ROUNDING_M >= cutoff || separation(a, b, between) >= cutoff
+/// Whether triangles `a` and `b` (in one frame) are at least `cutoff` apart by their spheres or
+/// by their projections, without measuring them.
+fn apart(a: &Placed, b: &Placed, cutoff: f64) -> bool {
+    let between = b.centre - a.centre;
+    between.length() - a.radius - b.radius - BOUND_ROUNDING_M >= cutoff || separation(a, b, between) >= cutoff
 }
 
 /// A lower bound on the distance between a triangle and a convex shape at `pos12` (the
 /// triangle's frame): how far the shape lies beyond the triangle's plane, on either side.
-fn plane_gap(triangle: &Triangle, support: &dyn SupportMap, pos12: &Pose) -> f64 {
-    let [a, b, c] = *triangle.vertices();
-    let normal = (b - a).cross(c - a).normalize_or_zero();
+fn plane_gap(triangle: &Placed, support: &dyn SupportMap, pos12: &Pose) -> f64 {
+    let (a, normal) = (triangle.vertices[0], triangle.normal);
     let extreme = |direction: Vector| pos12 * support.local_support_point(pos12.rotation.inverse() * direction);
     let above = normal.dot(extreme(-normal) - a);
     let below = normal.dot(a - extreme(normal));
@@ -323,16 +348,21 @@ fn plane_gap(triangle: &Triangle, support: &dyn SupportMap, pos12: &Pose) -> f64
 
 /// A lower bound on the distance between two triangles: the gap between their projections on
 /// the line through their spheres' centres and on each one's normal (a gap along any axis is).
-fn separation(a: &[Vector; 3], b: &[Vector; 3], centres: Vector) -> f64 {
+fn separation(a: &Placed, b: &Placed, centres: Vector) -> f64 {
     let gap = |axis: Vector| {
-        let (pa, pb) = (a.map(|v| v.dot(axis)), b.map(|v| v.dot(axis)));
+        let (pa, pb) = (a.vertices.map(|v| v.dot(axis)), b.vertices.map(|v| v.dot(axis)));
         let (lo_a, hi_a) = (pa[0].min(pa[1]).min(pa[2]), pa[0].max(pa[1]).max(pa[2]));
         let (lo_b, hi_b) = (pb[0].min(pb[1]).min(pb[2]), pb[0].max(pb[1]).max(pb[2]));
         (lo_b - hi_a).max(lo_a - hi_b)
     };
-    let normal = |t: &[Vector; 3]| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
     let along = centres.normalize_or_zero();
-    gap(along).max(gap(normal(a))).max(gap(normal(b))) - BOUND_ROUNDING_M
+    gap(along).max(gap(a.normal)).max(gap(b.normal)) - BOUND_ROUNDING_M
+}
+
+/// A triangle's unit normal, zero when it is degenerate.
+fn normal(triangle: &Triangle) -> Vector {
+    let [a, b, c] = *triangle.vertices();
+    (b - a).cross(c - a).normalize_or_zero()
 }
 
 /// Builds the subtree over `order` (a range of triangle indices starting at `first` in the final
