@@ -1292,6 +1292,68 @@ fn panda_meshes_build_and_branch_and_bound_matches_an_exhaustive_margin() {
     }
 }
 
+/// A partial query measures the pairs it must (below their level, or within the margin) exactly
+/// as the whole query does, bounds the others it looks at from below, and leaves the rest alone.
+#[test]
+fn partial_queries_measure_below_each_level_and_bound_the_rest() {
+    let model = load_model(&panda_urdf(), &LoadOptions::default()).expect("the Panda loads");
+    let table = obstacle(
+        "table",
+        Isometry3::translation(0.5, 0.0, 0.2),
+        Shape::Box {
+            half_extents: [0.2, 0.4, 0.02],
+        },
+    );
+    let world = collide::world(&model, &scenario(vec![table], Some(0.0)), &CollideOptions::default()).expect("valid");
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let mut ws = model.workspace();
+    let (mut partial, mut exact) = (Distances::new(), Distances::new());
+    let everything = QueryOptions {
+        margin: 100.0,
+        ..QueryOptions::default()
+    };
+    let (mut measured, mut bounded, mut skipped) = (0, 0, 0);
+    for _ in 0..20 {
+        let q = model.random_configuration(&mut rng);
+        model.forward(&q, &mut ws);
+        distances(&world, &ws.link_in_world, &everything, &mut exact);
+        let levels: Vec<Option<f64>> = (0..world.pairs().len())
+            .map(|_| match rng.random_range(0..3) {
+                0 => None,
+                1 => Some(rng.random_range(0.0..0.3)),
+                _ => Some(f64::NEG_INFINITY),
+            })
+            .collect();
+        collide::distances_among(&world, &ws.link_in_world, &QueryOptions::default(), Some(&levels), &mut partial);
+        for ((level, got), truth) in levels.iter().zip(&partial.estimates).zip(&exact.estimates) {
+            match level {
+                None => {
+                    assert!(got.distance == f64::INFINITY && !got.exact, "{got:?}");
+                    skipped += 1;
+                }
+                Some(level) if truth.distance < *level => {
+                    assert!((got.distance - truth.distance).abs() < 1e-9, "{got:?} vs {truth:?}");
+                    measured += 1;
+                }
+                Some(_) => {
+                    assert!(got.distance <= truth.distance + 1e-9, "{got:?} vs {truth:?}");
+                    bounded += usize::from(got.distance < truth.distance - 1e-6);
+                }
+            }
+        }
+        let closest = partial.closest.map(|c| c.distance);
+        let smallest_measured = partial
+            .within_margin
+            .iter()
+            .map(|p| p.distance)
+            .chain(closest)
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(closest.unwrap_or(f64::INFINITY), smallest_measured);
+    }
+    // Not vacuous: each case happened.
+    assert!(measured > 10 && bounded > 10 && skipped > 10, "{measured} {bounded} {skipped}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Pairs and exclusions
 

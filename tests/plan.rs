@@ -147,8 +147,19 @@ fn a_safety_margin_is_a_threshold_the_segment_must_keep() {
     assert!(!close.free, "{close:?}");
 }
 
-/// Points on a collider to follow: its centre and the ends of its extents along each local axis.
+/// Points on a collider to follow: its centre and the ends of its extents along each local axis;
+/// for a mesh, up to 64 of its vertices (the bounds measure each point's distance from the
+/// joint axes, which a mesh's extreme vertices decide).
 fn probe_points(collider: &Collider) -> Vec<Vector3<f64>> {
+    if let Shape::Mesh(mesh) = &collider.shape {
+        let stride = mesh.vertices.len().div_ceil(64).max(1);
+        return mesh
+            .vertices
+            .iter()
+            .step_by(stride)
+            .map(|v| (collider.link_from_shape * nalgebra::Point3::from(*v)).coords)
+            .collect();
+    }
     let extent = match &collider.shape {
         Shape::Sphere { radius } => Vector3::repeat(*radius),
         Shape::Cylinder { radius, length } => Vector3::new(*radius, *radius, length / 2.0),
@@ -180,6 +191,8 @@ fn motion_bounds_hold_for_every_collider_point_on_random_segments() {
         "designs/ur5e.json",
         "designs/free-redundant-7dof.json",
         "designs/economic-scara.json",
+        // Meshes whose joint axes run along the links: the bounds' distances from each axis.
+        "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf",
     ] {
         let model = load_model(&repo().join(design), &LoadOptions::default()).expect("loads");
         let bounds = MotionBounds::of(&model);

@@ -26,11 +26,40 @@ use std::cmp::Reverse;
 /// # Panics
 /// When `link_in_world.len()` differs from [`CollisionWorld::link_count`].
 pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query: &QueryOptions, out: &mut Distances) {
+    distances_among(world, link_in_world, query, None, out);
+}
+
+/// [`distances`] over some pairs, each measured only as far as it must be. `levels` has one
+/// entry per pair ([`CollisionWorld::pairs`] order; `None` for the slice: every pair, as
+/// [`distances`]): `None`, the pair is not looked at (its estimate infinite, not exact); a level,
+/// the pair is measured when it could be below it (or within the margin), else its estimate is
+/// the bound that showed it is not. `closest` is the closest pair measured, if any. A continuous
+/// check re-measures only the pairs whose certified stretch has run out, and exactly only those
+/// whose bound would not do.
+///
+/// # Panics
+/// As [`distances`], and when `levels` has not one entry per pair.
+pub fn distances_among(
+    world: &CollisionWorld,
+    link_in_world: &[Isometry3<f64>],
+    query: &QueryOptions,
+    levels: Option<&[Option<f64>]>,
+    out: &mut Distances,
+) {
     assert_eq!(
         link_in_world.len(),
         world.link_count(),
         "one pose per link of the model the collision world was built for"
     );
+    if let Some(levels) = levels {
+        assert_eq!(levels.len(), world.pairs.len(), "one level per checked pair");
+    }
+    let looked_at = |pair: usize| levels.is_none_or(|levels| levels[pair].is_some());
+    // The whole query looks for the closest pair; a partial one for each pair's level.
+    let level = |pair: usize| levels.and_then(|levels| levels[pair]).unwrap_or(f64::NEG_INFINITY);
+    let highest_level = levels.map_or(f64::NEG_INFINITY, |levels| {
+        levels.iter().flatten().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+    });
     let margin = effective_margin(query.margin);
     out.reset(margin, world.pairs.len());
     let Distances {
@@ -47,8 +76,14 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
     scratch.hints.resize(world.candidates.len(), None);
     scratch.bounds.clear();
     scratch.stages.clear();
-    for index in 0..world.candidates.len() {
-        scratch.bounds.push(box_bound(world, index, scratch));
+    for (index, candidate) in world.candidates.iter().enumerate() {
+        // A pair not looked at is bounded by nothing: never queued, never measured.
+        let bound = if looked_at(candidate.pair) {
+            box_bound(world, index, scratch)
+        } else {
+            f64::INFINITY
+        };
+        scratch.bounds.push(bound);
         scratch.stages.push(Stage::Boxed);
     }
 
@@ -56,25 +91,26 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
     // a pair's distance within the margin (it could be below the pair's best so far), the
     // closest pair (it could be below the closest so far), or a hull finding. Its bounding
     // capsules are tried before its shapes.
-    let mut closest = f64::INFINITY;
+    let mut closest = if levels.is_some() { f64::NEG_INFINITY } else { f64::INFINITY };
     scratch.queue.clear();
     scratch.queue.extend(
         scratch
             .bounds
             .iter()
             .enumerate()
+            .filter(|&(index, _)| looked_at(world.candidates[index].pair))
             .map(|(index, &bound)| Reverse((order_key(bound), index))),
     );
     while let Some(Reverse((_, index))) = scratch.queue.pop() {
         let bound = scratch.bounds[index];
-        if bound > margin && bound >= closest {
+        if bound > margin && bound >= closest.max(highest_level) {
             break;
         }
         let candidate = &world.candidates[index];
         let pair_best = scratch.best[candidate.pair].map_or(f64::INFINITY, |best| best.distance);
         let by_hulls = query.mesh_hulls && world.has_mesh(candidate);
         let hulls = query.hulls && !by_hulls && bound <= margin && world.has_mesh(candidate);
-        if !(bound < closest || (bound <= margin && (bound < pair_best || hulls))) {
+        if !(bound < closest.max(level(candidate.pair)) || (bound <= margin && (bound < pair_best || hulls))) {
             continue;
         }
         if scratch.stages[index] == Stage::Boxed && candidate.b != Other::Floor {
@@ -96,12 +132,19 @@ pub fn distances(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], query
     }
 
     // A pair's estimate is exact when no unmeasured collider pair of it could be closer.
-    estimates.extend(world.pairs.iter().zip(&scratch.best).map(|(pair, best)| PairEstimate {
-        a: pair.a,
-        b: pair.b,
-        distance: best.map_or(f64::INFINITY, |best| best.distance),
-        exact: true,
-    }));
+    estimates.extend(
+        world
+            .pairs
+            .iter()
+            .zip(&scratch.best)
+            .enumerate()
+            .map(|(index, (pair, best))| PairEstimate {
+                a: pair.a,
+                b: pair.b,
+                distance: best.map_or(f64::INFINITY, |best| best.distance),
+                exact: looked_at(index),
+            }),
+    );
     for (index, candidate) in world.candidates.iter().enumerate() {
         let estimate = &mut estimates[candidate.pair];
         if scratch.stages[index] != Stage::Measured && scratch.bounds[index] < estimate.distance {

@@ -112,7 +112,7 @@ mod world;
 pub use approx::approximate_distances;
 pub(crate) use approx::{capsule_floor, capsule_model, capsule_shape_distance, CapsuleModel, CapsuleOther};
 pub use compare::compare;
-pub use exact::{clear, distances};
+pub use exact::{clear, distances, distances_among};
 pub use motion::MotionBounds;
 pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 pub(crate) use primitives::{capsules, Closest};
@@ -257,12 +257,25 @@ impl ClearanceByKind {
         if !distance.is_finite() {
             return;
         }
-        let slot = match b {
+        let slot = self.slot(b);
+        *slot = Some(slot.map_or(distance, |d: f64| d.min(distance)));
+    }
+
+    /// The value of the kind of a pair whose second body is `b`.
+    pub fn for_body(&self, b: Body) -> Option<f64> {
+        match b {
+            Body::Obstacle(_) => self.obstacles_m,
+            Body::Link(_) => self.self_m,
+            Body::Floor => self.floor_m,
+        }
+    }
+
+    fn slot(&mut self, b: Body) -> &mut Option<f64> {
+        match b {
             Body::Obstacle(_) => &mut self.obstacles_m,
             Body::Link(_) => &mut self.self_m,
             Body::Floor => &mut self.floor_m,
-        };
-        *slot = Some(slot.map_or(distance, |d: f64| d.min(distance)));
+        }
     }
 
     /// Each kind's smaller value of the two.

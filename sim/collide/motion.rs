@@ -3,7 +3,8 @@
 //! reach a free configuration.
 
 use super::Body;
-use crate::model::{JointKind, Model, Shape};
+use crate::model::{Collider, JointKind, Model, Shape};
+use nalgebra::{Point3, Vector3};
 
 /// The per-joint radius bounds of a model: `radius[j][k]` bounds the distance from joint `j`'s
 /// axis to any point of link `k` (0 for links joint `j` does not move).
@@ -27,25 +28,44 @@ impl MotionBounds {
                     .fold(0.0, f64::max)
             })
             .collect();
+        // A prismatic joint's travel (the largest of its limits' magnitudes).
+        let travel: Vec<f64> = model
+            .joints
+            .iter()
+            .map(|joint| match joint.kind {
+                JointKind::Prismatic => joint.limits.map_or(f64::INFINITY, |[lo, hi]| lo.abs().max(hi.abs())),
+                _ => 0.0,
+            })
+            .collect();
         // Link i + 1's origin is at most `reach[i]` from link i's origin: the joint offset, plus
         // the travel of a prismatic joint.
         let reach: Vec<f64> = model
             .joints
             .iter()
-            .map(|joint| {
-                let travel = match joint.kind {
-                    JointKind::Prismatic => joint.limits.map_or(f64::INFINITY, |[lo, hi]| lo.abs().max(hi.abs())),
-                    _ => 0.0,
-                };
-                joint.parent_from_joint.translation.vector.norm() + travel
-            })
+            .zip(&travel)
+            .map(|(joint, travel)| joint.parent_from_joint.translation.vector.norm() + travel)
             .collect();
         let mut radius = vec![vec![0.0; links]; model.dof()];
         for (j, row) in radius.iter_mut().enumerate() {
-            // Joint j's axis passes through link j + 1's origin.
-            let mut offset = 0.0;
-            for k in j + 1..links {
-                if k > j + 1 {
+            let joint = &model.joints[j];
+            if joint.kind == JointKind::Prismatic {
+                continue; // its points move at rate 1, whatever their place
+            }
+            // Joint j's axis passes through link j + 1's origin, along `axis` in that link's
+            // frame, and keeps its place there: what counts is each point's distance from that
+            // line, not from the origin. Link j + 1's own colliders are measured; a later link's
+            // points lie within the chain's reach of link j + 2's origin.
+            let axis = joint.axis.into_inner();
+            let from_axis = |p: Vector3<f64>| (p - axis * p.dot(&axis)).norm();
+            row[j + 1] = model.links[j + 1]
+                .colliders
+                .iter()
+                .map(|c| collider_axis_distance(c, &from_axis))
+                .fold(0.0, f64::max);
+            let Some(next) = model.joints.get(j + 1) else { continue };
+            let mut offset = from_axis(next.parent_from_joint.translation.vector) + travel[j + 1];
+            for k in j + 2..links {
+                if k > j + 2 {
                     offset += reach[k - 1];
                 }
                 row[k] = offset + extent[k];
@@ -78,6 +98,26 @@ impl MotionBounds {
             (Body::Link(link), _) | (_, Body::Link(link)) => moving(0..link.min(delta.len()), link),
             _ => 0.0,
         }
+    }
+}
+
+/// Largest distance `from_axis` (a convex function of the point, in the link frame) of any point
+/// of the collider: at a vertex for a mesh or a box, at a cap centre plus the radius for the
+/// round shapes (a cylinder lies inside the capsule of its radius and length).
+fn collider_axis_distance(collider: &Collider, from_axis: &impl Fn(Vector3<f64>) -> f64) -> f64 {
+    let at = |p: [f64; 3]| from_axis((collider.link_from_shape * Point3::from(p)).coords);
+    let widest = |points: &mut dyn Iterator<Item = [f64; 3]>| points.map(at).fold(0.0, f64::max);
+    match &collider.shape {
+        Shape::Sphere { radius } => at([0.0; 3]) + radius,
+        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+            widest(&mut [-0.5, 0.5].into_iter().map(|end| [0.0, 0.0, end * length])) + radius
+        }
+        Shape::Box { half_extents: [x, y, z] } => widest(
+            &mut (0..8)
+                .map(|corner| [(corner & 1) as f64, (corner >> 1 & 1) as f64, (corner >> 2) as f64].map(|bit| 2.0 * bit - 1.0))
+                .map(|[a, b, c]| [a * x, b * y, c * z]),
+        ),
+        Shape::Mesh(mesh) => widest(&mut mesh.vertices.iter().copied()),
     }
 }
 

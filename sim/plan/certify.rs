@@ -83,6 +83,47 @@ pub struct SegmentChecker<'a> {
     q: Vec<f64>,
     delta: Vec<f64>,
     rates: Vec<f64>,
+    /// Per pair, its last measurement along the segment being checked.
+    known: Vec<Stretch>,
+    /// Per pair, whether the next advancement point measures it.
+    due: Vec<bool>,
+    /// Per pair, how far the next advancement point measures it.
+    levels: Vec<Option<f64>>,
+}
+
+/// A pair's clearance (or its lower bound) where it was last measured, at path parameter `at`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Stretch {
+    distance: f64,
+    at: f64,
+}
+
+impl Stretch {
+    /// Lower bound on the pair's clearance at `s >= at`, for relative motion bound `rate`.
+    fn bound_at(&self, s: f64, rate: f64) -> f64 {
+        if s == self.at || self.distance == f64::INFINITY {
+            // Also for an infinite rate, where the product is not a number.
+            self.distance
+        } else {
+            self.distance - rate * (s - self.at)
+        }
+    }
+
+    /// Where the pair has lost half its excess over `threshold`: the end of its certified
+    /// stretch. Infinite for a pair that does not move (or has no geometry); `at` itself for
+    /// one whose motion has no finite bound.
+    fn until(&self, threshold: f64, rate: f64) -> f64 {
+        let excess = self.distance - threshold;
+        if rate > 0.0 && excess.is_finite() {
+            if rate.is_finite() {
+                self.at + excess / (2.0 * rate)
+            } else {
+                self.at
+            }
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 impl<'a> SegmentChecker<'a> {
@@ -105,6 +146,9 @@ impl<'a> SegmentChecker<'a> {
             q: vec![0.0; model.dof()],
             delta: vec![0.0; model.dof()],
             rates: Vec::new(),
+            known: Vec::new(),
+            due: Vec::new(),
+            levels: Vec::new(),
         }
     }
 
@@ -120,6 +164,12 @@ impl<'a> SegmentChecker<'a> {
     }
 
     fn query(&mut self, q: &[f64]) {
+        self.query_among(q, false);
+    }
+
+    /// A query at `q`: of every pair, or (`due_only`) of the pairs due, each as far as its level
+    /// asks (see [`collide::distances_among`]).
+    fn query_among(&mut self, q: &[f64], due_only: bool) {
         self.model.forward(q, &mut self.ws);
         let query = QueryOptions {
             margin: self.opts.threshold_m,
@@ -127,7 +177,8 @@ impl<'a> SegmentChecker<'a> {
             exact_depth: true,
             mesh_hulls: false,
         };
-        collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.out);
+        let levels = due_only.then_some(self.levels.as_slice());
+        collide::distances_among(self.world, &self.ws.link_in_world, &query, levels, &mut self.out);
     }
 
     fn closest_point(&self, s: f64, q: &[f64]) -> Option<SegmentPoint> {
@@ -145,11 +196,14 @@ impl<'a> SegmentChecker<'a> {
         self.advance(from, to, f64::INFINITY).0
     }
 
-    /// [`check`](Self::check), also returning how far the segment is certified with room to
-    /// spare: the largest path parameter `s` among the advancement points at which every pair
-    /// keeps at least `room` (m) beyond the threshold (`[0, s]` is certified free, since the
-    /// whole advancement up to any of its points is). `None` when no point past the start does.
-    /// A planner grows its trees to such points, where a next motion is not born grazing.
+    /// How far the segment is certified with room to spare: the largest path parameter `s` among
+    /// the advancement points at which every pair keeps at least `room` (m) beyond the threshold
+    /// (`[0, s]` is certified free, since the whole advancement up to any of its points is), up
+    /// to the first point that keeps neither `room` nor the start's clearance: the advancement
+    /// ends there, not free, rather than crawl on towards a touch whose place nobody uses.
+    /// `None` when no point past the start keeps room. A planner grows its trees to such
+    /// points, where a next motion is not born grazing; the check is whole (free) only when the
+    /// segment keeps room throughout.
     pub fn advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (SegmentCheck, Option<f64>) {
         let mut roomy = None;
         let mut ends = [f64::NAN; 2];
@@ -165,13 +219,13 @@ impl<'a> SegmentChecker<'a> {
         (ok, check)
     }
 
-    /// [`roomy_free`](Self::roomy_free) and [`advance`](Self::advance) in one check: whether the
-    /// segment is free with room, the check, and how far it is certified with room.
+    /// [`roomy_free`](Self::roomy_free)'s answer and [`advance`](Self::advance)'s roomy point
+    /// in one check that stops early as [`keeps_room`](Self::keeps_room) does: whether the
+    /// segment is free with room, the check (whole only when it is), and how far it is certified
+    /// with room up to where it stopped.
     pub fn roomy_advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck, Option<f64>) {
         let mut roomy = None;
-        let mut ends = [f64::NAN; 2];
-        let check = self.advance_until(from, to, room, &mut roomy, &mut ends, f64::NEG_INFINITY);
-        let ok = keeps(&check, (self.opts.threshold_m + room).min(ends[0]).min(ends[1]));
+        let (ok, check) = self.keeps_room_from_end(from, to, room, &mut roomy);
         (ok, check, roomy)
     }
 
@@ -180,6 +234,10 @@ impl<'a> SegmentChecker<'a> {
     /// decides `false`. The end's clearance is measured first, at the configuration the
     /// advancement would end at.
     pub fn keeps_room(&mut self, from: &[f64], to: &[f64], room: f64) -> bool {
+        self.keeps_room_from_end(from, to, room, &mut None).0
+    }
+
+    fn keeps_room_from_end(&mut self, from: &[f64], to: &[f64], room: f64, roomy: &mut Option<f64>) -> (bool, SegmentCheck) {
         for (q, (a, b)) in self.q.iter_mut().zip(from.iter().zip(to)) {
             *q = a + 1.0 * (b - a);
         }
@@ -187,15 +245,21 @@ impl<'a> SegmentChecker<'a> {
         self.query(&end);
         self.q = end;
         let end_clearance = self.out.closest.map_or(f64::INFINITY, |c| c.distance);
-        let mut roomy = None;
         let mut ends = [f64::NAN; 2];
         let give_up = (self.opts.threshold_m + room).min(end_clearance);
-        let check = self.advance_until(from, to, room, &mut roomy, &mut ends, give_up);
-        keeps(&check, give_up.min(ends[0]).min(ends[1]))
+        let check = self.advance_until(from, to, room, roomy, &mut ends, give_up);
+        (keeps(&check, give_up.min(ends[0]).min(ends[1])), check)
     }
 
     /// The advancement; it gives up (not free) at the first point whose clearance is below both
     /// `give_up` and the start's.
+    ///
+    /// Each pair keeps its own stretch: measured at `s_p` with clearance `d_p`, it is certified
+    /// until `s_p + (d_p - threshold) / (2 M_p)`, and it is measured again only where that runs
+    /// out (or, when `room` is finite, where its bound falls below `threshold + room`, so that
+    /// whether a point keeps room is known). Each advancement point is the nearest end of a
+    /// stretch; both ends of the segment measure every pair. A pair far away or slow is then
+    /// measured a few times per segment, not at every step the closest one forces.
     fn advance_until(
         &mut self,
         from: &[f64],
@@ -209,13 +273,14 @@ impl<'a> SegmentChecker<'a> {
         for (d, (a, b)) in self.delta.iter_mut().zip(from.iter().zip(to)) {
             *d = b - a;
         }
+        let pairs = self.world.pairs();
         self.rates.clear();
-        self.rates.extend(
-            self.world
-                .pairs()
-                .iter()
-                .map(|pair| self.bounds.relative_motion(pair.a, pair.b, &self.delta)),
-        );
+        self.rates
+            .extend(pairs.iter().map(|pair| self.bounds.relative_motion(pair.a, pair.b, &self.delta)));
+        self.known.clear();
+        self.known.resize(pairs.len(), Stretch::default());
+        self.due.clear();
+        self.due.resize(pairs.len(), true);
 
         let mut s = 0.0;
         let mut queries = 0;
@@ -227,16 +292,26 @@ impl<'a> SegmentChecker<'a> {
                 *q = a + s * d;
             }
             let q = std::mem::take(&mut self.q);
-            self.query(&q);
+            let every_pair = s == 0.0 || s >= 1.0;
+            if every_pair {
+                self.query_among(&q, false);
+            } else {
+                self.set_levels(s, room, give_up, &by_kind);
+                self.query_among(&q, true);
+            }
             queries += 1;
             let here = self.closest_point(s, &q);
             self.q = q;
-            let smallest = here.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
-            // Each pair's estimate here: the closest pair's kind takes `smallest`, as the whole
-            // bound does where the advancement ends.
-            for estimate in &self.out.estimates {
-                by_kind.lower(estimate.b, estimate.distance);
+            for ((known, estimate), due) in self.known.iter_mut().zip(&self.out.estimates).zip(&self.due) {
+                if every_pair || *due {
+                    *known = Stretch {
+                        distance: estimate.distance,
+                        at: s,
+                    };
+                    by_kind.lower(estimate.b, estimate.distance);
+                }
             }
+            let smallest = here.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
             if closest.as_ref().is_none_or(|c| smallest < c.distance_m) {
                 closest.clone_from(&here);
             }
@@ -261,7 +336,15 @@ impl<'a> SegmentChecker<'a> {
                     queries,
                 };
             }
-            if s > 0.0 && smallest >= threshold + room {
+            // Roomy when every pair's bound here keeps room (a pair measured here: its clearance).
+            let needed = threshold + room;
+            if s > 0.0
+                && self
+                    .known
+                    .iter()
+                    .zip(&self.rates)
+                    .all(|(known, rate)| known.bound_at(s, *rate) >= needed)
+            {
                 *roomy = Some(s);
             }
             if s == 0.0 {
@@ -269,30 +352,20 @@ impl<'a> SegmentChecker<'a> {
             }
             if s >= 1.0 {
                 ends[1] = smallest;
-            }
-            if s >= 1.0 {
                 certified = certified.min(smallest);
                 break;
             }
-            // The largest step every pair allows while losing at most half its excess clearance.
-            let mut step = 1.0 - s;
-            let mut lowest = f64::INFINITY;
-            for (estimate, rate) in self.out.estimates.iter().zip(&self.rates) {
-                let excess = estimate.distance - threshold;
-                // An infinite distance is a pair with no geometry; an infinite rate is not
-                // certifiable: no step then.
-                if *rate > 0.0 && excess.is_finite() {
-                    step = step.min(excess / (2.0 * rate));
-                } else if !rate.is_finite() && excess.is_finite() {
-                    step = 0.0;
-                }
+            // The nearest end of a pair's stretch, where it has lost half its excess clearance.
+            let mut next = 1.0f64;
+            for (known, rate) in self.known.iter().zip(&self.rates) {
+                next = next.min(known.until(threshold, *rate));
             }
-            for (estimate, rate) in self.out.estimates.iter().zip(&self.rates) {
-                let bound = estimate.distance - rate * step;
-                lowest = lowest.min(bound);
-                by_kind.lower(estimate.b, bound);
+            let next = next.max(s);
+            for ((known, rate), pair) in self.known.iter().zip(&self.rates).zip(pairs) {
+                let bound = known.bound_at(next, *rate);
+                certified = certified.min(bound);
+                by_kind.lower(pair.b, bound);
             }
-            certified = certified.min(lowest);
             if queries >= MAX_STEPS {
                 return SegmentCheck {
                     free: false,
@@ -303,7 +376,10 @@ impl<'a> SegmentChecker<'a> {
                     queries,
                 };
             }
-            s = (s + step).min(1.0);
+            for ((due, known), rate) in self.due.iter_mut().zip(&self.known).zip(&self.rates) {
+                *due = known.until(threshold, *rate) <= next || (room.is_finite() && known.bound_at(next, *rate) < needed);
+            }
+            s = next;
         }
         SegmentCheck {
             free: true,
@@ -313,6 +389,35 @@ impl<'a> SegmentChecker<'a> {
             touch: None,
             queries,
         }
+    }
+
+    /// The level each due pair is measured to at path parameter `s`: exactly when it could be
+    /// the closest pair here, below the room or the clearance that decides what this point is,
+    /// or when its bound would lower its kind's certified clearance (a bound `b` certifies
+    /// `threshold + (b - threshold) / 2`); else its cheaper bound serves.
+    fn set_levels(&mut self, s: f64, room: f64, give_up: f64, by_kind: &ClearanceByKind) {
+        let threshold = self.opts.threshold_m;
+        let rest = self
+            .known
+            .iter()
+            .zip(&self.rates)
+            .zip(&self.due)
+            .filter(|(_, due)| !**due)
+            .map(|((known, rate), _)| known.bound_at(s, *rate))
+            .fold(f64::INFINITY, f64::min);
+        let deciding = if room.is_finite() {
+            threshold + room
+        } else {
+            threshold + TOUCH_TOLERANCE_M
+        };
+        let floor = rest.max(deciding).max(give_up);
+        self.levels.clear();
+        self.levels.extend(self.world.pairs().iter().zip(&self.due).map(|(pair, due)| {
+            due.then(|| {
+                let kind = by_kind.for_body(pair.b).map_or(f64::INFINITY, |c| 2.0 * c - threshold);
+                floor.max(kind)
+            })
+        }));
     }
 
     /// The same segment checked only at `samples + 1` evenly spaced configurations (both ends

@@ -263,7 +263,11 @@ impl Planner for RrtConnect {
 
 /// Straight segments to `goals` in order: the first that keeps [`ROOM_M`] (or its ends'
 /// clearance); else the first free one, which grazes, if any, and where the first one stops.
-fn straight_with_room(checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>]) -> Result<Path, (Option<Path>, Failure)> {
+pub(super) fn straight_with_room(
+    checker: &mut SegmentChecker<'_>,
+    start: &[f64],
+    goals: &[Vec<f64>],
+) -> Result<Path, (Option<Path>, Failure)> {
     let mut tight = None;
     let mut failure = Failure {
         samples: 0,

@@ -587,8 +587,14 @@ impl GoalPlanner for RrtConnect {
             previous,
             stream,
         } = *request;
-        let fresh = ik.solve(goal, index, Some(previous));
         let mut candidates = free_candidates(ik, model, given, previous, &[]);
+        // The scenario's solutions come first in the goal set, so a straight segment with room
+        // to one of them is the answer whatever IK solved again would add: it is tried before
+        // that (costly) solve, with the same result.
+        if let Ok(path) = super::rrt::straight_with_room(checker, previous, &candidates) {
+            return reached(index, path, 0, false);
+        }
+        let fresh = ik.solve(goal, index, Some(previous));
         let from_given = candidates.len();
         candidates.extend(free_candidates(ik, model, &fresh.solutions, previous, &candidates));
         if candidates.is_empty() {
