@@ -7,7 +7,10 @@ use crate::model::{Collider, JointKind, Model, Shape};
 use nalgebra::{Point3, Vector3};
 
 /// The per-joint radius bounds of a model: `radius[j][k]` bounds the distance from joint `j`'s
-/// axis to any point of link `k` (0 for links joint `j` does not move).
+/// axis line to any point of link `k` (0 for links joint `j` does not move), in every
+/// configuration: for the link the joint turns, its collider points' largest distance from the
+/// axis; for a later link, the next joint's origin's distance from the axis plus the offsets (and
+/// prismatic travel) beyond it and the link's furthest collider point from its own origin.
 #[derive(Debug, Clone)]
 pub struct MotionBounds {
     radius: Vec<Vec<f64>>,

@@ -3,15 +3,15 @@
 //!
 //! Along `q(s) = q0 + s (q1 - q0)`, `s` in [0, 1], a point `p` of link `k` moves at most
 //! `sum_j |dq_j| R_jk` per unit of `s`, where `R_jk` bounds the distance from joint `j`'s axis to
-//! any point of link `k` whatever the configuration: the lengths of the joint offsets between
-//! them (plus prismatic travel) and link `k`'s furthest collider point from its own origin. A link
-//! against an obstacle or the floor moves by that bound; a link pair `a < b` by the joints between
-//! them only (the joints before `a` move both rigidly). So from a configuration where pair `p` has
-//! clearance `d_p` (exact, or the broad phase's lower bound), the step
-//! `(d_p - threshold) / (2 M_p)` keeps it above `threshold + (d_p - threshold) / 2`: every step is
-//! certified, with a lower bound on the clearance over it. The advancement stops at the end of
-//! the segment, or where a clearance falls within [`TOUCH_TOLERANCE_M`] of the threshold: a touch
-//! (or a collision), reported with the pair and where.
+//! any point of link `k` whatever the configuration (see [`MotionBounds`]). A link against an
+//! obstacle or the floor moves by that bound; a link pair `a < b` by the joints between them only
+//! (the joints before `a` move both rigidly). So a pair `p` measured at `s_p` with clearance
+//! `d_p` (exact, or a broad-phase lower bound) keeps more than `threshold + (d_p - threshold) / 2`
+//! until `s_p + (d_p - threshold) / (2 M_p)`: its certified stretch. Each pair is measured again
+//! only where its stretch runs out, the advancement points being the nearest ends of stretches;
+//! every stretch is certified, with a lower bound on its pair's clearance. The advancement stops
+//! at the end of the segment, or where a clearance falls within [`TOUCH_TOLERANCE_M`] of the
+//! threshold: a touch (or a collision), reported with the pair and where.
 
 pub use crate::collide::MotionBounds;
 use crate::collide::{self, ClearanceByKind, CollisionWorld, Distances, QueryOptions};
@@ -287,6 +287,8 @@ impl<'a> SegmentChecker<'a> {
         let mut closest: Option<SegmentPoint> = None;
         let mut certified = f64::INFINITY;
         let mut by_kind = ClearanceByKind::default();
+        // Each kind's smallest clearance measured exactly so far along the segment.
+        let mut measured = ClearanceByKind::default();
         loop {
             for (q, (a, d)) in self.q.iter_mut().zip(from.iter().zip(&self.delta)) {
                 *q = a + s * d;
@@ -296,7 +298,7 @@ impl<'a> SegmentChecker<'a> {
             if every_pair {
                 self.query_among(&q, false);
             } else {
-                self.set_levels(s, room, give_up, &by_kind);
+                self.set_levels(s, room, give_up, &measured);
                 self.query_among(&q, true);
             }
             queries += 1;
@@ -309,6 +311,9 @@ impl<'a> SegmentChecker<'a> {
                         at: s,
                     };
                     by_kind.lower(estimate.b, estimate.distance);
+                    if estimate.exact {
+                        measured.lower(estimate.b, estimate.distance);
+                    }
                 }
             }
             let smallest = here.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
@@ -392,10 +397,10 @@ impl<'a> SegmentChecker<'a> {
     }
 
     /// The level each due pair is measured to at path parameter `s`: exactly when it could be
-    /// the closest pair here, below the room or the clearance that decides what this point is,
-    /// or when its bound would lower its kind's certified clearance (a bound `b` certifies
-    /// `threshold + (b - threshold) / 2`); else its cheaper bound serves.
-    fn set_levels(&mut self, s: f64, room: f64, give_up: f64, by_kind: &ClearanceByKind) {
+    /// the closest pair here, or the closest of its kind so far (`measured`: each kind's smallest
+    /// exact clearance along the segment, which its certified bound follows), or below the room
+    /// or the clearance that decides what this point is; else its cheaper bound serves.
+    fn set_levels(&mut self, s: f64, room: f64, give_up: f64, measured: &ClearanceByKind) {
         let threshold = self.opts.threshold_m;
         let rest = self
             .known
@@ -412,12 +417,13 @@ impl<'a> SegmentChecker<'a> {
         };
         let floor = rest.max(deciding).max(give_up);
         self.levels.clear();
-        self.levels.extend(self.world.pairs().iter().zip(&self.due).map(|(pair, due)| {
-            due.then(|| {
-                let kind = by_kind.for_body(pair.b).map_or(f64::INFINITY, |c| 2.0 * c - threshold);
-                floor.max(kind)
-            })
-        }));
+        self.levels.extend(
+            self.world
+                .pairs()
+                .iter()
+                .zip(&self.due)
+                .map(|(pair, due)| due.then(|| floor.max(measured.for_body(pair.b).unwrap_or(f64::INFINITY)))),
+        );
     }
 
     /// The same segment checked only at `samples + 1` evenly spaced configurations (both ends
