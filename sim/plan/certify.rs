@@ -382,7 +382,12 @@ impl<'a> SegmentChecker<'a> {
                 };
             }
             for ((due, known), rate) in self.due.iter_mut().zip(&self.known).zip(&self.rates) {
-                *due = known.until(threshold, *rate) <= next || (room.is_finite() && known.bound_at(next, *rate) < needed);
+                // A stretch two thirds used is renewed with the others: a point of its own later
+                // would cost more than measuring it now (on primitive shapes, where queries are
+                // cheap, the points are what costs).
+                let until = known.until(threshold, *rate);
+                *due =
+                    until <= next || until - next < (next - known.at) / 2.0 || (room.is_finite() && known.bound_at(next, *rate) < needed);
             }
             s = next;
         }
