@@ -8,7 +8,8 @@
 //! (the joints before `a` move both rigidly). So a pair `p` measured at `s_p` with clearance
 //! `d_p` (exact, or a broad-phase lower bound) keeps more than `threshold + (d_p - threshold) / 2`
 //! until `s_p + (d_p - threshold) / (2 M_p)`: its certified stretch. Each pair is measured again
-//! only where its stretch runs out, the advancement points being the nearest ends of stretches;
+//! where its stretch runs out (or, two thirds used, at a point made for another pair), the
+//! advancement points being the nearest ends of stretches;
 //! every stretch is certified, with a lower bound on its pair's clearance. The advancement stops
 //! at the end of the segment, or where a clearance falls within [`TOUCH_TOLERANCE_M`] of the
 //! threshold: a touch (or a collision), reported with the pair and where.
@@ -255,10 +256,10 @@ impl<'a> SegmentChecker<'a> {
     /// `give_up` and the start's.
     ///
     /// Each pair keeps its own stretch: measured at `s_p` with clearance `d_p`, it is certified
-    /// until `s_p + (d_p - threshold) / (2 M_p)`, and it is measured again only where that runs
-    /// out (or, when `room` is finite, where its bound falls below `threshold + room`, so that
-    /// whether a point keeps room is known). Each advancement point is the nearest end of a
-    /// stretch; both ends of the segment measure every pair. A pair far away or slow is then
+    /// until `s_p + (d_p - threshold) / (2 M_p)`, and it is measured again where that runs out,
+    /// at a point made anyway once two thirds of it are used, or, when `room` is finite, where
+    /// its bound falls below `threshold + room` (so that whether a point keeps room is known).
+    /// Each advancement point is the nearest end of a stretch; both ends of the segment measure every pair. A pair far away or slow is then
     /// measured a few times per segment, not at every step the closest one forces.
     fn advance_until(
         &mut self,
