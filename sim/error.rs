@@ -74,6 +74,9 @@ pub enum Error {
         /// The robot.
         robot: String,
     },
+    /// The caller stopped the run ([`crate::progress::Progress::stopped`]) before it finished.
+    #[error("stopped before the run finished")]
+    Stopped,
     /// The report could not be serialised (a bug: every field is plain data).
     #[error("cannot write the report as JSON: {message}")]
     Report {

@@ -11,6 +11,12 @@ pub trait Progress: Sync {
     fn warning(&self, _line: &str) {}
     /// A note about the input: a choice the loader made, what an SRDF left out (one line).
     fn info(&self, _line: &str) {}
+    /// Whether the caller wants the run to stop (e.g. Ctrl-C in Python): read before each goal
+    /// IK solves and the planner joins, and before the engines; the run then ends with
+    /// [`crate::error::Error::Stopped`] and no report.
+    fn stopped(&self) -> bool {
+        false
+    }
 }
 
 /// Shows nothing.

@@ -413,3 +413,50 @@ fn a_link_mesh_in_contact_is_named_after_its_link_in_both_engines() {
         assert!((start - first_touch).abs() <= 0.0101, "{}: {start} vs {first_touch}", run.engine);
     }
 }
+
+/// Counts the goals done and asks the run to stop after `after` of them.
+struct StopAfter {
+    after: usize,
+    done: std::sync::atomic::AtomicUsize,
+}
+
+impl proving_ground::progress::Progress for StopAfter {
+    fn stage(&self, _name: &str, _total: Option<u64>) {}
+    fn advance(&self) {
+        self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn stopped(&self) -> bool {
+        self.done.load(std::sync::atomic::Ordering::Relaxed) >= self.after
+    }
+}
+
+/// A run asked to stop ends with `Error::Stopped` and no report, in the IK stage (whose goals
+/// not yet started are skipped) and in the planner's; asked never, it finishes.
+#[test]
+fn a_run_asked_to_stop_ends_stopped_without_a_report() {
+    let scenario = proving_ground::scenario::load(&repo().join("scenarios/course.json")).expect("loads");
+    let opts = ValidateOptions {
+        engines: Engines::none(),
+        ..ValidateOptions::default()
+    };
+    let goals = scenario.goals.len();
+    for (after, stops) in [(1, true), (goals + 1, true), (usize::MAX, false)] {
+        let progress = StopAfter {
+            after,
+            done: Default::default(),
+        };
+        let result = proving_ground::pipeline::validate_with_progress(paper_robot(), scenario.clone(), &opts, &progress);
+        let done = progress.done.load(std::sync::atomic::Ordering::Relaxed);
+        if stops {
+            assert!(
+                matches!(result, Err(proving_ground::error::Error::Stopped)),
+                "after {after}: {result:?}"
+            );
+            // Stopped promptly: IK's two threads finish the goals they hold, the planner its goal.
+            assert!(done <= after + 2, "after {after}: {done} goals done");
+        } else {
+            assert!(result.is_ok(), "{result:?}");
+            assert_eq!(done, 2 * goals, "every goal solved and joined");
+        }
+    }
+}

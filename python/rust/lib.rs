@@ -72,13 +72,26 @@ fn validate(py: Python<'_>, design: Source, scenario: Option<Source>, options: &
     let opts = named.options().map_err(error)?;
     let (input, robot) = load_robot(&design, &opts)?;
     let scenario = load_scenario(scenario.as_ref())?;
-    py.detach(|| {
-        let run = proving_ground::run::validate_loaded(&input, robot, scenario, &opts, &proving_ground::progress::Silent)
-            .map_err(|e| e.to_string())?;
+    run_interruptibly(py, |stop| {
+        let run = match proving_ground::run::validate_loaded(&input, robot, scenario, &opts, &Stoppable(stop)) {
+            Ok(run) => run,
+            Err(proving_ground::error::Error::Stopped) => return Ok(None),
+            Err(e) => return Err(e.to_string()),
+        };
         let report = run.report.ok_or_else(|| "the run stopped before the scenario".to_string())?;
-        proving_ground::run::report_json(&report).map_err(|e| e.to_string())
+        proving_ground::run::report_json(&report).map(Some).map_err(|e| e.to_string())
     })
-    .map_err(error)
+}
+
+/// Shows nothing and stops the run when its flag is set (by Ctrl-C, see [`run_interruptibly`]).
+struct Stoppable<'a>(&'a AtomicBool);
+
+impl proving_ground::progress::Progress for Stoppable<'_> {
+    fn stage(&self, _name: &str, _total: Option<u64>) {}
+    fn advance(&self) {}
+    fn stopped(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
 }
 
 /// How often the caller's thread looks for Ctrl-C while a batch runs.
@@ -110,7 +123,7 @@ fn run_interruptibly<T: Send>(py: Python<'_>, work: impl FnOnce(&AtomicBool) -> 
     }
     match done {
         Ok(Ok(Some(value))) => Ok(value),
-        Ok(Ok(None)) => Err(error("the batch was stopped")),
+        Ok(Ok(None)) => Err(error("the run was stopped")),
         Ok(Err(e)) => Err(error(e)),
         Err(_) => Err(error("the batch's worker thread panicked; please report this with the inputs")),
     }

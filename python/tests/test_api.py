@@ -109,6 +109,24 @@ def test_ctrl_c_stops_a_long_batch():
     assert stopped < 1.0 + 0.5 * (time.perf_counter() - start - stopped), stopped
 
 
+def test_ctrl_c_stops_a_long_validation():
+    # A mesh robot with detours planned on a cluttered task: seconds of IK and planning. A SIGINT
+    # 0.3 s in stops it at the next goal.
+    urdf = repo("tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf")
+    task = repo("scenarios/cluttered/task-00.json")
+    start = time.perf_counter()
+    whole = pg.validate(urdf, task, engines="none")
+    took = time.perf_counter() - start
+    assert whole["trajectory"]["reached"] >= 1
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        pg.validate(urdf, task, engines="none")
+    stopped = time.perf_counter() - start
+    assert stopped < 0.5 * took, (stopped, took)
+
+
 def test_gradients_match_central_differences():
     design = pg.Design.load("designs/free-offset-6dof.json")
     rng = np.random.default_rng(3)

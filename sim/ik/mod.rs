@@ -949,17 +949,18 @@ fn rank(error: &GoalError) -> f64 {
 /// own seeded random starts. With a collision world, solutions are checked and refined with
 /// exact geometry.
 pub fn solve_goals(model: &Model, scenario: &Scenario, world: Option<&CollisionWorld>, opts: &IkOptions) -> Vec<GoalSolutions> {
-    solve_goals_counted(model, scenario, world, opts, &|| {})
+    solve_goals_counted(model, scenario, world, opts, &|| true)
 }
 
 /// [`solve_goals`], calling `done` after each goal (from the thread that solved it), for a
-/// progress count.
+/// progress count; when it answers `false` the goals not yet started are left unsolved (no
+/// solution, not complete): the caller is stopping the run and discards them.
 pub fn solve_goals_counted(
     model: &Model,
     scenario: &Scenario,
     world: Option<&CollisionWorld>,
     opts: &IkOptions,
-    done: &(dyn Fn() + Sync),
+    done: &(dyn Fn() -> bool + Sync),
 ) -> Vec<GoalSolutions> {
     use rayon::prelude::*;
     // Each goal's starts are seeded by its index alone, so goals solve independently, on any
@@ -967,13 +968,26 @@ pub fn solve_goals_counted(
     // The methods are detected once; each thread's solver gets a copy.
     let methods = Methods::of(model);
     let make = || Ik::build(model, world, opts.clone(), &methods);
+    let stop = std::sync::atomic::AtomicBool::new(false);
     scenario
         .goals
         .par_iter()
         .enumerate()
         .map_init(make, |ik, (index, goal)| {
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                return GoalSolutions {
+                    solutions: Vec::new(),
+                    starts: 0,
+                    iterations: 0,
+                    complete: false,
+                    proof: None,
+                    undecided: None,
+                };
+            }
             let found = ik.solve(goal, index, None);
-            done();
+            if !done() {
+                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
             found
         })
         .collect()

@@ -100,7 +100,13 @@ pub fn validate_with_progress(
         clearance_m: opts.certify.threshold_m,
         ..opts.ik.clone()
     };
-    let solutions = crate::ik::solve_goals_counted(&model, &scenario, Some(&world), &ik, &|| progress.advance());
+    let solutions = crate::ik::solve_goals_counted(&model, &scenario, Some(&world), &ik, &|| {
+        progress.advance();
+        !progress.stopped()
+    });
+    if progress.stopped() {
+        return Err(Error::Stopped);
+    }
     let proofs: Vec<Option<String>> = scenario
         .goals
         .iter()
@@ -220,7 +226,19 @@ impl Motion {
             timing: None,
             planner: opts.planner,
         };
-        let trajectory = crate::plan::plan_counted(model, scenario, world, solutions, &trajectory_options, &|| progress.advance())?;
+        let trajectory = crate::plan::plan_counted(
+            model,
+            scenario,
+            world,
+            solutions,
+            &trajectory_options,
+            &|| progress.advance(),
+            &|| progress.stopped(),
+        )
+        .map_err(|e| match e {
+            crate::plan::PlanError::Stopped => Error::Stopped,
+            e => e.into(),
+        })?;
         let replayed = crate::plan::replay_segments(&trajectory);
         let loss_terms = scenario
             .goals
@@ -262,6 +280,9 @@ impl Motion {
             std::iter::once(trajectory.home.clone()).chain(crate::plan::replay_sample_iter(&replayed).filter(on_trajectory).map(|(_, q)| q))
         };
         let gravity = opts.engine.gravity_m_s2;
+        if progress.stopped() {
+            return Err(Error::Stopped);
+        }
         progress.stage(&format!("running the engines ({:.1} s simulated)", timed.duration_s()), None);
         // The engines are independent and each deterministic: running them side by side changes
         // no number. Each also measures the static load where it can cross-check ours.

@@ -90,6 +90,8 @@ pub struct SegmentChecker<'a> {
     due: Vec<bool>,
     /// Per pair, how far the next advancement point measures it.
     levels: Vec<Option<f64>>,
+    /// Whether the caller is stopping the run: a planner using this checker gives up.
+    stop: Option<&'a (dyn Fn() -> bool + 'a)>,
 }
 
 /// A pair's clearance (or its lower bound) where it was last measured, at path parameter `at`.
@@ -150,7 +152,20 @@ impl<'a> SegmentChecker<'a> {
             known: Vec::new(),
             due: Vec::new(),
             levels: Vec::new(),
+            stop: None,
         }
+    }
+
+    /// The same checker, with `stop` telling a planner that uses it to give up (the caller is
+    /// stopping the run and discards what it finds).
+    pub fn with_stop(mut self, stop: &'a (dyn Fn() -> bool + 'a)) -> Self {
+        self.stop = Some(stop);
+        self
+    }
+
+    /// Whether the caller is stopping the run (see [`with_stop`](Self::with_stop)).
+    pub fn stopped(&self) -> bool {
+        self.stop.is_some_and(|stop| stop())
     }
 
     /// The clearance every segment must keep (m).

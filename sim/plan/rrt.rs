@@ -212,6 +212,9 @@ impl Planner for RrtConnect {
         let mut sample = vec![0.0; dof];
         let mut grow_start = true;
         for samples in 1..=self.budget {
+            if checker.stopped() {
+                return Err(Failure { samples, ..first_failure });
+            }
             for (x, [lo, hi]) in sample.iter_mut().zip(&bounds) {
                 *x = if hi > lo { rng.random_range(*lo..=*hi) } else { *lo };
             }

@@ -30,6 +30,9 @@ const TOOL_PATH_SAMPLES: usize = 64;
 /// Why a trajectory cannot be planned at all.
 #[derive(Debug, thiserror::Error)]
 pub enum PlanError {
+    /// The caller stopped the planning (see [`plan_counted`]).
+    #[error("stopped before the planning finished")]
+    Stopped,
     /// The scenario's `home` does not fit the model.
     #[error("scenario {scenario}: `home` has {found} values, the robot has {dof} joints")]
     HomeLength {
@@ -379,13 +382,14 @@ pub fn plan(
     solutions: &[GoalSolutions],
     opts: &TrajectoryOptions,
 ) -> Result<Trajectory, PlanError> {
-    plan_counted(model, scenario, world, solutions, opts, &|| {})
+    plan_counted(model, scenario, world, solutions, opts, &|| {}, &|| false)
 }
 
-/// [`plan`], calling `done` after each goal is joined (or given up), for a progress count.
+/// [`plan`], calling `done` after each goal is joined (or given up), for a progress count, and
+/// stopping (between goals, or within a goal's sampling) once `stopped` answers `true`.
 ///
 /// # Errors
-/// As [`plan`].
+/// As [`plan`], and [`PlanError::Stopped`] when it stopped.
 pub fn plan_counted(
     model: &Model,
     scenario: &Scenario,
@@ -393,10 +397,11 @@ pub fn plan_counted(
     solutions: &[GoalSolutions],
     opts: &TrajectoryOptions,
     done: &dyn Fn(),
+    stopped: &dyn Fn() -> bool,
 ) -> Result<Trajectory, PlanError> {
     let (mut home, replaced) = home_for(model, scenario);
     let mut home_replaced = replaced.map(|reason| reason.to_string());
-    let mut checker = SegmentChecker::new(model, world, opts.certify);
+    let mut checker = SegmentChecker::new(model, world, opts.certify).with_stop(stopped);
     let mut home_clearance = checker.clearance(&home);
     let threshold = opts.certify.threshold_m;
     // A default home in collision (zero folds many modular arms onto themselves) would block every
@@ -463,6 +468,9 @@ pub fn plan_counted(
         };
         let step = planner.step(&mut ik, &mut checker, model, &request);
         done();
+        if stopped() {
+            return Err(PlanError::Stopped);
+        }
         let mut step = step;
         if let GoalStep::Reached { q, clearance, .. } = &mut step {
             *clearance = checker.clearance(q);

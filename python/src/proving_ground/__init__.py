@@ -135,7 +135,8 @@ def validate(design: Any, scenario: Any = None, **options: Any) -> Dict[str, Any
     ``options``: named as on the command line with ``_`` for ``-`` (``engines="mujoco"``,
     ``seed=1``, ``ik_seeds=8``, ``search_boxes``, ``tolerance="z_symmetric"``, ``margin``,
     ``contact_depth``, ``planner``, ``plan_budget``, ``reach_only=True``, ``srdf``, ``strict``,
-    ``mujoco_checks``, ``base``, ``tip``, ``package_path``).
+    ``mujoco_checks``, ``base``, ``tip``, ``package_path``). Ctrl-C stops the run at the next
+    goal (or within the planner's search) and raises ``KeyboardInterrupt``.
     """
     options = {k: os.fspath(v) if isinstance(v, os.PathLike) else v for k, v in options.items()}
     return json.loads(_native.validate(_source(design, Design), None if scenario is None else _source(scenario, Scenario), json.dumps(options)))
