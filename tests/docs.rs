@@ -253,3 +253,18 @@ fn the_readme_synopsis_lists_every_option_of_every_subcommand() {
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
+
+/// The Python package installs the MuJoCo that build.rs pins: one version in the tree.
+#[test]
+fn the_python_package_pins_the_mujoco_of_mujoco_pin() {
+    let pin = std::fs::read_to_string(repo().join("mujoco/PIN")).expect("mujoco/PIN");
+    let version = pin
+        .lines()
+        .find_map(|line| line.strip_prefix("version="))
+        .expect("mujoco/PIN has version=");
+    let pyproject = std::fs::read_to_string(repo().join("python/pyproject.toml")).expect("pyproject");
+    assert!(
+        pyproject.contains(&format!("\"mujoco=={version}\"")),
+        "python/pyproject.toml must depend on mujoco=={version}"
+    );
+}

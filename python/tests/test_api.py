@@ -218,3 +218,16 @@ def test_the_design_objective_is_the_least_loss_per_goal_plus_the_hardware_cost(
         minus["joints"][j]["a"] -= step
         numeric = (pg.loss_and_grad(plus, TASK, q, samples)["objective"][0] - pg.loss_and_grad(minus, TASK, q, samples)["objective"][0]) / (2 * step)
         assert numeric == pytest.approx(out["objective_grad_a"][0, j], rel=1e-5, abs=1e-5), j
+
+
+def test_mujoco_comes_from_the_installed_package_not_the_checkout():
+    # The module runs MuJoCo from the `mujoco` package pip installed beside it, so it keeps
+    # working when the checkout it was built in moves or is deleted.
+    library = os.environ.get("MUJOCO_LIBRARY", "")
+    import mujoco
+
+    assert os.path.dirname(library) == os.path.dirname(mujoco.__file__), library
+    assert not library.startswith(REPO + os.sep), library
+    report = pg.validate(repo("designs/paper-real-world.json"), engines="mujoco")
+    assert report["verdict"]["passed"], report["verdict"]
+    assert [e["engine"] for e in report["engines"]] == ["mujoco"]

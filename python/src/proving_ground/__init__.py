@@ -16,6 +16,25 @@ from typing import Any, Dict, Iterable, List, Optional, Sequence, Union
 
 import numpy as np
 
+
+def _use_mujoco_package() -> None:
+    """Points the engines at the MuJoCo library of the ``mujoco`` package (a pinned dependency),
+    unless ``MUJOCO_LIBRARY`` already names one: the installed module then needs nothing from the
+    checkout it was built in. The library's version is checked at its first use."""
+    if "MUJOCO_LIBRARY" in os.environ:
+        return
+    import importlib.util
+
+    spec = importlib.util.find_spec("mujoco")
+    for folder in (spec.submodule_search_locations or []) if spec else []:
+        names = sorted(n for n in os.listdir(folder) if n.startswith("libmujoco.so."))
+        if names:
+            os.environ["MUJOCO_LIBRARY"] = os.path.join(folder, names[-1])
+            return
+
+
+_use_mujoco_package()
+
 # MuJoCo is loaded at its first use, not with the module (as in the `validate-design` binary):
 # its symbols are bound lazily, which Python's default RTLD_NOW for extension modules forbids.
 _flags = sys.getdlopenflags()
