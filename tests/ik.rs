@@ -293,3 +293,51 @@ fn on_non_ur_6r_designs_the_default_finds_most_solutions_of_a_500_start_oracle()
         assert!(fraction >= 0.95, "{design}: the default found {found} of {union}");
     }
 }
+
+/// The caller's starts per goal (`IkOptions::goal_starts`, an optimizer's configurations) are
+/// tried beside the random ones: with no random start and the search off, a 5-joint arm on a pose
+/// it reaches finds it from a start near the solution, and nothing without.
+#[test]
+fn given_starts_are_tried_per_goal() {
+    let model = load_model(&common::repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(22);
+    let mut found = 0;
+    for _ in 0..10 {
+        let q0 = model.random_configuration(&mut rng);
+        let tool = model.tool_pose(&q0);
+        let goal = Goal {
+            name: "fk".into(),
+            position: tool.translation.vector,
+            rotation: tool.rotation,
+            tolerance: Tolerance::Pose,
+        };
+        let near: Vec<f64> = q0.iter().map(|x| x + 0.02).collect();
+        let opts = IkOptions {
+            seeds: 0,
+            search_boxes: 0,
+            ..Default::default()
+        };
+        let alone = Ik::new(&model, opts.clone()).solve(&goal, 0, None);
+        assert!(!alone.reached(), "no start, no solution: {alone:?}");
+        let given = IkOptions {
+            goal_starts: vec![vec![near]],
+            ..opts
+        };
+        let result = Ik::new(&model, given).solve(&goal, 0, None);
+        assert_eq!(result.starts, 1);
+        found += usize::from(result.reached());
+        // Another goal's starts are not this goal's.
+        let other = Ik::new(
+            &model,
+            IkOptions {
+                goal_starts: vec![vec![], vec![q0.clone()]],
+                seeds: 0,
+                search_boxes: 0,
+                ..Default::default()
+            },
+        )
+        .solve(&goal, 0, None);
+        assert!(!other.reached());
+    }
+    assert!(found >= 9, "{found} of 10 found from a start 0.02 rad off");
+}

@@ -703,3 +703,50 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(output.status.signal(), Some(libc::SIGPIPE), "{:?} {stderr}", output.status);
 }
+
+/// What the optimizer found is what the validation checks: each tuned design is validated with
+/// the optimizer's configurations (one per start and goal) as IK starts besides its own. Extra
+/// starts only add solutions: every goal reached without them is reached with them.
+#[test]
+fn the_optimizers_configurations_are_ik_starts_of_the_validation() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let designs: Vec<Design> = generated_designs(dir.path())
+        .iter()
+        .map(|path| design::load(path).expect("generated design"))
+        .collect();
+    let scenario = scenario("scenarios/cluttered/task-00.json");
+    let opts = OptimizeOptions {
+        steps: 60,
+        ..Default::default()
+    };
+    let tuned = optimize::tune(&designs, &scenario, &opts, &mut Tensors::default()).expect("tunes");
+    let plain = pipeline::ValidateOptions {
+        reach_only: true,
+        ..Default::default()
+    };
+    let (mut without, mut with) = (0, 0);
+    for t in &tuned {
+        assert_eq!(t.configurations.len(), scenario.goals.len());
+        assert!(t.configurations.iter().all(|goal| goal.len() == opts.seeds), "{}", t.design.name);
+        let run = |opts: &pipeline::ValidateOptions| {
+            let loaded = pipeline::Loaded {
+                model: proving_ground::model::from_design(&t.design),
+                design: Some(t.design.clone()),
+            };
+            pipeline::validate(loaded, scenario.clone(), opts).expect("validates").solutions
+        };
+        let mut seeded = plain.clone();
+        seeded.ik.goal_starts = t.configurations.clone();
+        let (before, after) = (run(&plain), run(&seeded));
+        for (index, (b, a)) in before.iter().zip(&after).enumerate() {
+            assert!(
+                !b.reached() || a.reached(),
+                "{}: goal {index} lost with the optimizer's starts",
+                t.design.name
+            );
+            without += usize::from(b.reached());
+            with += usize::from(a.reached());
+        }
+    }
+    eprintln!("goals reached: {without} without the optimizer's starts, {with} with them");
+}

@@ -158,7 +158,7 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
             );
             let original = input.design.clone();
             let (before, after) =
-                optimize::before_and_after(&input.path, input.loaded, &input.out, &neighbour, &scenario, &validate_options)?;
+                optimize::before_and_after(&input.path, input.loaded, &input.out, &neighbour, &[], &scenario, &validate_options)?;
             print!("{}", side_by_side(&before, &after));
             let description = format!(
                 "{} with {what}: the best module swap found by validate-design optimize",
@@ -195,11 +195,19 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
             t.best_step,
         );
         let original = input.design.clone();
-        let (before, after) = optimize::before_and_after(&input.path, input.loaded, &input.out, &t.design, &scenario, &validate_options)?;
+        let (before, after) = optimize::before_and_after(
+            &input.path,
+            input.loaded,
+            &input.out,
+            &t.design,
+            &t.configurations,
+            &scenario,
+            &validate_options,
+        )?;
         print!("{}", side_by_side(&before, &after));
         if let Some(validated) = after.paper_loss.as_ref().and_then(|p| p.total) {
             println!(
-                "objective {:.4} at the optimizer's own configurations; paper loss {validated:.4} at the IK solutions the validation found for the tuned design (IK solves each goal again: a goal it reaches costs no distance, a missed one its closest attempt)",
+                "objective {:.4} at the optimizer's own configurations; paper loss {validated:.4} at the IK solutions the validation found for the tuned design (IK solves each goal again, from its own starts and the optimizer's configurations: a goal it reaches costs no distance, a missed one its closest attempt)",
                 t.objective.1
             );
         }

@@ -79,6 +79,11 @@ pub struct IkOptions {
     /// Boxes at most the joint-space search visits for a goal nothing else decides (default
     /// 200 000; 0 turns it off), see [`search`].
     pub search_boxes: usize,
+    /// Per goal (scenario order), configurations tried as starts beside the random ones: an
+    /// optimizer's configurations, so that what it found is what the validation checks (default
+    /// none). A goal whose solutions the closed form lists tries them only when none of those is
+    /// collision-free, refined against collisions as any start.
+    pub goal_starts: Vec<Vec<Vec<f64>>>,
 }
 
 impl Default for IkOptions {
@@ -93,6 +98,7 @@ impl Default for IkOptions {
             analytic: true,
             branch_starts: 32,
             search_boxes: SEARCH_BOXES,
+            goal_starts: Vec::new(),
         }
     }
 }
@@ -410,6 +416,20 @@ impl<'a> Ik<'a> {
                     }
                 } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
                     closest = Some(solution);
+                }
+            }
+        }
+        if !found.iter().any(|s| s.reached) {
+            // The caller's starts may hold a free configuration within the tolerance that the
+            // exact solutions' refinement would not reach.
+            let mut rng = self.rng(goal_index);
+            for q in self.given_starts(goal_index) {
+                starts += 1;
+                let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
+                iterations += used;
+                if solution.reached && !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
+                    found.insert(0, solution);
+                    break;
                 }
             }
         }
@@ -751,6 +771,15 @@ impl<'a> Ik<'a> {
             iterations += used;
             self.keep(solution, &mut found, &mut closest);
         }
+        for q in self.given_starts(goal_index) {
+            if found.iter().any(|s| self.same_configuration(&s.q, &q)) {
+                continue;
+            }
+            starts += 1;
+            let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
+            iterations += used;
+            self.keep(solution, &mut found, &mut closest);
+        }
         if goal.tolerance == Tolerance::Pose && branches::applies(self.model) {
             let (branch_starts, used) = self.branch_restarts(goal, &mut found, &mut closest, margin, &mut rng);
             starts += branch_starts;
@@ -879,6 +908,21 @@ impl<'a> Ik<'a> {
     /// The solver's settings.
     pub fn options(&self) -> &IkOptions {
         &self.opts
+    }
+
+    /// The caller's starts for goal `goal_index` ([`IkOptions::goal_starts`]) that fit the model.
+    fn given_starts(&self, goal_index: usize) -> Vec<Vec<f64>> {
+        self.opts
+            .goal_starts
+            .get(goal_index)
+            .map(|starts| {
+                starts
+                    .iter()
+                    .filter(|q| q.len() == self.model.dof() && q.iter().all(|x| x.is_finite()))
+                    .cloned()
+                    .collect()
+            })
+            .unwrap_or_default()
     }
 
     /// Whether two configurations are the same solution: every joint within the tolerance,

@@ -25,6 +25,9 @@ pub struct Tuned {
     pub batch_size: usize,
     /// Wall time of its batch (s).
     pub seconds: f64,
+    /// The optimizer's configurations of the tuned design, per goal (one per start): IK's
+    /// starts when the tuned design is validated ([`crate::ik::IkOptions::goal_starts`]).
+    pub configurations: Vec<Vec<Vec<f64>>>,
 }
 
 /// The designs grouped into batches, in input order: a design joins the first batch whose
@@ -78,7 +81,16 @@ pub fn tune(
                     "{name}: the tuned design does not read back to itself"
                 )));
             }
+            let mut configurations = vec![Vec::new(); scenario.goals.len()];
+            for (sample, q) in batch.samples.iter().zip(optimized.params.q.chunks(batch.dof)) {
+                if sample.design == index {
+                    if let Some(goal) = configurations.get_mut(sample.goal) {
+                        goal.push(q.to_vec());
+                    }
+                }
+            }
             tuned[i] = Some(Tuned {
+                configurations,
                 design: back,
                 text,
                 objective: (optimized.objective.0[index], optimized.objective.1[index]),
@@ -93,7 +105,8 @@ pub fn tune(
 
 /// The reports of the runs `validate-design` makes (without MuJoCo's kinematics check) of the
 /// design as it was (`loaded`, read from `path`) and as tuned (`tuned`, written to
-/// `tuned_path`), on `scenario` under the same options: before, after.
+/// `tuned_path`), on `scenario` under the same options (the tuned design's IK also starts from
+/// `configurations`, the optimizer's per goal): before, after.
 ///
 /// # Errors
 /// As [`crate::run::validated`].
@@ -102,6 +115,7 @@ pub fn before_and_after(
     loaded: Loaded,
     tuned_path: &Path,
     tuned: &Design,
+    configurations: &[Vec<Vec<f64>>],
     scenario: &Scenario,
     opts: &ValidateOptions,
 ) -> Result<(Report, Report), crate::error::Error> {
@@ -110,7 +124,9 @@ pub fn before_and_after(
         model: crate::model::from_design(tuned),
         design: Some(tuned.clone()),
     };
-    let after = validation(tuned_path, after_loaded, scenario, opts)?;
+    let mut after_opts = opts.clone();
+    after_opts.ik.goal_starts = configurations.to_vec();
+    let after = validation(tuned_path, after_loaded, scenario, &after_opts)?;
     Ok((before, after))
 }
 
