@@ -274,8 +274,9 @@ impl<'a> SegmentChecker<'a> {
     /// until `s_p + (d_p - threshold) / (2 M_p)`, and it is measured again where that runs out,
     /// at a point made anyway once two thirds of it are used, or, when `room` is finite, where
     /// its bound falls below `threshold + room` (so that whether a point keeps room is known).
-    /// Each advancement point is the nearest end of a stretch; both ends of the segment measure every pair. A pair far away or slow is then
-    /// measured a few times per segment, not at every step the closest one forces.
+    /// Each advancement point is the nearest end of a stretch; both ends of the segment measure
+    /// every pair. A pair far away or slow is then measured a few times per segment, not at every
+    /// step the closest one forces.
     fn advance_until(
         &mut self,
         from: &[f64],
