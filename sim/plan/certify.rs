@@ -94,14 +94,33 @@ pub struct SegmentChecker<'a> {
     stop: Option<&'a (dyn Fn() -> bool + 'a)>,
 }
 
-/// A pair's clearance (or its lower bound) where it was last measured, at path parameter `at`.
+/// A pair's clearance (or its lower bound) where it was last measured, at path parameter `at`,
+/// and the end of the stretch that certifies (see [`Stretch::new`]).
 #[derive(Debug, Clone, Copy, Default)]
 struct Stretch {
     distance: f64,
     at: f64,
+    until: f64,
 }
 
 impl Stretch {
+    /// A pair measured at `at` with clearance `distance`; its stretch ends where it has lost
+    /// half its excess over `threshold` for relative motion bound `rate`: never for a pair that
+    /// does not move (or has no geometry), at once for one whose motion has no finite bound.
+    fn new(distance: f64, at: f64, threshold: f64, rate: f64) -> Self {
+        let excess = distance - threshold;
+        let until = if rate > 0.0 && excess.is_finite() {
+            if rate.is_finite() {
+                at + excess / (2.0 * rate)
+            } else {
+                at
+            }
+        } else {
+            f64::INFINITY
+        };
+        Self { distance, at, until }
+    }
+
     /// Lower bound on the pair's clearance at `s >= at`, for relative motion bound `rate`.
     fn bound_at(&self, s: f64, rate: f64) -> f64 {
         if s == self.at || self.distance == f64::INFINITY {
@@ -109,22 +128,6 @@ impl Stretch {
             self.distance
         } else {
             self.distance - rate * (s - self.at)
-        }
-    }
-
-    /// Where the pair has lost half its excess over `threshold`: the end of its certified
-    /// stretch. Infinite for a pair that does not move (or has no geometry); `at` itself for
-    /// one whose motion has no finite bound.
-    fn until(&self, threshold: f64, rate: f64) -> f64 {
-        let excess = self.distance - threshold;
-        if rate > 0.0 && excess.is_finite() {
-            if rate.is_finite() {
-                self.at + excess / (2.0 * rate)
-            } else {
-                self.at
-            }
-        } else {
-            f64::INFINITY
         }
     }
 }
@@ -321,12 +324,9 @@ impl<'a> SegmentChecker<'a> {
             queries += 1;
             let here = self.closest_point(s, &q);
             self.q = q;
-            for ((known, estimate), due) in self.known.iter_mut().zip(&self.out.estimates).zip(&self.due) {
+            for (((known, estimate), due), rate) in self.known.iter_mut().zip(&self.out.estimates).zip(&self.due).zip(&self.rates) {
                 if every_pair || *due {
-                    *known = Stretch {
-                        distance: estimate.distance,
-                        at: s,
-                    };
+                    *known = Stretch::new(estimate.distance, s, threshold, *rate);
                     by_kind.lower(estimate.b, estimate.distance);
                     if estimate.exact {
                         measured.lower(estimate.b, estimate.distance);
@@ -378,11 +378,7 @@ impl<'a> SegmentChecker<'a> {
                 break;
             }
             // The nearest end of a pair's stretch, where it has lost half its excess clearance.
-            let mut next = 1.0f64;
-            for (known, rate) in self.known.iter().zip(&self.rates) {
-                next = next.min(known.until(threshold, *rate));
-            }
-            let next = next.max(s);
+            let next = self.known.iter().fold(1.0f64, |next, known| next.min(known.until)).max(s);
             for ((known, rate), pair) in self.known.iter().zip(&self.rates).zip(pairs) {
                 let bound = known.bound_at(next, *rate);
                 certified = certified.min(bound);
@@ -402,7 +398,7 @@ impl<'a> SegmentChecker<'a> {
                 // A stretch two thirds used is renewed with the others: a point of its own later
                 // would cost more than measuring it now (on primitive shapes, where queries are
                 // cheap, the points are what costs).
-                let until = known.until(threshold, *rate);
+                let until = known.until;
                 *due =
                     until <= next || until - next < (next - known.at) / 2.0 || (room.is_finite() && known.bound_at(next, *rate) < needed);
             }
