@@ -136,6 +136,36 @@ fn grazing_contact_ends_at_the_threshold_in_few_steps() {
     }
 }
 
+/// A straight segment that is free but keeps less than the planner's room is its fallback when
+/// no detour with room is found (here: no samples at all), and a blocked one reports where it
+/// stops.
+#[test]
+fn a_free_grazing_straight_segment_is_the_fallback_and_a_blocked_one_says_where_it_stops() {
+    use proving_ground::plan::{Planner, RrtConnect, ROOM_M};
+    let model = wand();
+    for (lift, free) in [(1e-3, true), (0.0, false)] {
+        assert!(lift < ROOM_M);
+        let scenario = with_obstacles(vec![ball("cap", Vector3::new(0.0, 0.7, 2.0 * WAND_RADIUS_M + lift), WAND_RADIUS_M)]);
+        let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("valid");
+        let mut checker = SegmentChecker::new(&model, &world, CertifyOptions::default());
+        let mut planner = RrtConnect {
+            limits: vec![None],
+            budget: 0,
+            straight_attempts: 1,
+        };
+        let result = planner.connect(&mut checker, &[0.0], &[vec![3.0]], 0);
+        if free {
+            let path = result.expect("the grazing straight segment");
+            assert_eq!(path.waypoints, vec![vec![3.0]]);
+            assert!(path.segments[0].free && path.segments[0].closest.as_ref().is_some_and(|c| c.distance_m < ROOM_M));
+        } else {
+            let failure = result.expect_err("blocked");
+            let stop = failure.stop.expect("where it stops");
+            assert!(stop.distance_m <= TOUCH_TOLERANCE_M, "{stop:?}");
+        }
+    }
+}
+
 #[test]
 fn a_safety_margin_is_a_threshold_the_segment_must_keep() {
     let model = wand();

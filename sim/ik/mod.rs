@@ -427,7 +427,9 @@ impl<'a> Ik<'a> {
                 starts += 1;
                 let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
                 iterations += used;
-                if solution.reached && !found.iter().any(|s| self.same_configuration(&s.q, &solution.q)) {
+                if solution.reached {
+                    // A free configuration of a colliding exact solution's branch stands for it.
+                    found.retain(|s| !self.same_configuration(&s.q, &solution.q));
                     found.insert(0, solution);
                     break;
                 }
@@ -771,19 +773,22 @@ impl<'a> Ik<'a> {
             iterations += used;
             self.keep(solution, &mut found, &mut closest);
         }
+        if goal.tolerance == Tolerance::Pose && branches::applies(self.model) {
+            let (branch_starts, used) = self.branch_restarts(goal, &mut found, &mut closest, margin, &mut rng);
+            starts += branch_starts;
+            iterations += used;
+        }
+        // The caller's starts last, on a stream of their own: everything above runs as without
+        // them, and they can only add solutions.
+        let mut given_rng = self.rng(goal_index);
         for q in self.given_starts(goal_index) {
             if found.iter().any(|s| self.same_configuration(&s.q, &q)) {
                 continue;
             }
             starts += 1;
-            let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
+            let (solution, used) = self.attempt(goal, q, true, margin, &mut given_rng);
             iterations += used;
             self.keep(solution, &mut found, &mut closest);
-        }
-        if goal.tolerance == Tolerance::Pose && branches::applies(self.model) {
-            let (branch_starts, used) = self.branch_restarts(goal, &mut found, &mut closest, margin, &mut rng);
-            starts += branch_starts;
-            iterations += used;
         }
         // Clearances were estimated while searching (overlap depths from bounding capsules, gaps
         // unpolished); the solutions kept are measured exactly.

@@ -109,7 +109,10 @@ impl Stretch {
     /// does not move (or has no geometry), at once for one whose motion has no finite bound.
     fn new(distance: f64, at: f64, threshold: f64, rate: f64) -> Self {
         let excess = distance - threshold;
-        let until = if rate > 0.0 && excess.is_finite() {
+        let until = if excess.is_nan() || rate.is_nan() {
+            // Nothing is certified by a number that is none: measured again at the next point.
+            at
+        } else if rate > 0.0 && excess.is_finite() {
             if rate.is_finite() {
                 at + excess / (2.0 * rate)
             } else {
@@ -234,7 +237,11 @@ impl<'a> SegmentChecker<'a> {
     /// beyond the threshold or at least the clearance of its closer end: a free edge that does
     /// not come nearer its obstacles than it must. With the check.
     pub fn roomy_free(&mut self, from: &[f64], to: &[f64], room: f64) -> (bool, SegmentCheck) {
-        let (ok, check, _) = self.roomy_advance(from, to, room);
+        // The whole advancement, not one that gives up at the first point without room: a free
+        // segment that grazes is still a fallback, and a blocked one is reported where it stops.
+        let mut ends = [f64::NAN; 2];
+        let check = self.advance_until(from, to, room, &mut None, &mut ends, f64::NEG_INFINITY);
+        let ok = keeps(&check, (self.opts.threshold_m + room).min(ends[0]).min(ends[1]));
         (ok, check)
     }
 

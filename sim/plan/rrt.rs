@@ -186,10 +186,29 @@ impl RrtConnect {
 
 impl Planner for RrtConnect {
     fn connect(&mut self, checker: &mut SegmentChecker<'_>, start: &[f64], goals: &[Vec<f64>], stream: u64) -> Result<Path, Failure> {
+        self.connect_after(checker, start, goals, stream, None)
+    }
+}
+
+/// What the straight segments to the first goals of a goal set gave: how many were tried, the
+/// first grazing one among them and the first goal's stop.
+pub(super) type TriedStraight = (usize, (Option<Path>, Failure));
+
+impl RrtConnect {
+    /// [`Planner::connect`], with the straight segments to the first goals already tried when
+    /// `tried` says so (none of them kept room): they are not checked again.
+    pub(super) fn connect_after(
+        &mut self,
+        checker: &mut SegmentChecker<'_>,
+        start: &[f64],
+        goals: &[Vec<f64>],
+        stream: u64,
+        tried: Option<TriedStraight>,
+    ) -> Result<Path, Failure> {
         let firsts = &goals[..self.straight_attempts.min(goals.len())];
         // A straight segment that keeps room first; one that grazes only when no detour with
         // room is found, since an engine's tracking error would turn its graze into a contact.
-        let (tight, first_failure) = match straight_with_room(checker, start, firsts) {
+        let (tight, first_failure) = match straight_with_room_after(checker, start, firsts, tried) {
             Ok(path) => return Ok(path),
             Err(not_roomy) => not_roomy,
         };
@@ -271,13 +290,25 @@ pub(super) fn straight_with_room(
     start: &[f64],
     goals: &[Vec<f64>],
 ) -> Result<Path, (Option<Path>, Failure)> {
-    let mut tight = None;
-    let mut failure = Failure {
-        samples: 0,
-        stop: None,
-        gap: goals.first().map(|g| distance(start, g)),
-    };
-    for (target, goal) in goals.iter().enumerate() {
+    straight_with_room_after(checker, start, goals, None)
+}
+
+/// [`straight_with_room`], going on from what the straight segments to the first goals gave.
+fn straight_with_room_after(
+    checker: &mut SegmentChecker<'_>,
+    start: &[f64],
+    goals: &[Vec<f64>],
+    tried: Option<TriedStraight>,
+) -> Result<Path, (Option<Path>, Failure)> {
+    let (done, (mut tight, mut failure)) = tried.unwrap_or_else(|| {
+        let failure = Failure {
+            samples: 0,
+            stop: None,
+            gap: goals.first().map(|g| distance(start, g)),
+        };
+        (0, (None, failure))
+    });
+    for (target, goal) in goals.iter().enumerate().skip(done) {
         let (roomy, segment) = checker.roomy_free(start, goal, ROOM_M);
         if target == 0 && !segment.free {
             failure.stop = segment.touch.clone().or_else(|| segment.closest.clone());

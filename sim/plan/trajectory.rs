@@ -599,9 +599,10 @@ impl GoalPlanner for RrtConnect {
         // The scenario's solutions come first in the goal set, so a straight segment with room
         // to one of them is the answer whatever IK solved again would add: it is tried before
         // that (costly) solve, with the same result.
-        if let Ok(path) = super::rrt::straight_with_room(checker, previous, &candidates) {
-            return reached(index, path, 0, false);
-        }
+        let tried = match super::rrt::straight_with_room(checker, previous, &candidates) {
+            Ok(path) => return reached(index, path, 0, false),
+            Err(tried) => tried,
+        };
         let fresh = ik.solve(goal, index, Some(previous));
         let from_given = candidates.len();
         candidates.extend(free_candidates(ik, model, &fresh.solutions, previous, &candidates));
@@ -618,7 +619,9 @@ impl GoalPlanner for RrtConnect {
             );
         }
         self.straight_attempts = candidates.len();
-        match self.connect(checker, previous, &goal_set, stream) {
+        // The straight segments to the scenario's solutions (the goal set's first) are not
+        // checked again.
+        match self.connect_after(checker, previous, &goal_set, stream, Some((from_given, tried))) {
             Ok(path) => {
                 // Which solution the reached configuration came from.
                 let origin = if path.target < candidates.len() {
