@@ -262,12 +262,18 @@ fn motion_bounds_hold_for_every_collider_point_on_random_segments() {
     assert!(tightest > 0.33, "tightest ratio {tightest}");
 }
 
-#[test]
-fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample() {
+/// The paper's robot placed on the course (the generated one), with its collision world.
+fn paper_robot_on_the_course() -> (Scenario, Model, collide::CollisionWorld) {
     let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
     let scenario = generate::course(generate::COURSE_SEED);
     let placed = model.placed(&scenario.world_from_base);
     let world = collision_world(&placed, &scenario, &[]).expect("builds");
+    (scenario, placed, world)
+}
+
+#[test]
+fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample() {
+    let (_, placed, world) = paper_robot_on_the_course();
     let mut checker = SegmentChecker::new(&placed, &world, CertifyOptions::default());
     let mut previous = generate::COURSE_HOME.to_vec();
     let mut queries = 0;
@@ -289,10 +295,7 @@ fn the_course_tour_is_certified_free_and_the_certificate_is_below_every_sample()
 /// 50 samples of every segment of the course tour, and the lowest kind is the whole bound.
 #[test]
 fn each_kind_of_pair_has_a_certified_bound_below_its_sampled_clearance() {
-    let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
-    let scenario = generate::course(generate::COURSE_SEED);
-    let placed = model.placed(&scenario.world_from_base);
-    let world = collision_world(&placed, &scenario, &[]).expect("builds");
+    let (_, placed, world) = paper_robot_on_the_course();
     let mut checker = SegmentChecker::new(&placed, &world, CertifyOptions::default());
     let every_pair = collide::QueryOptions {
         margin: f64::INFINITY,
@@ -386,10 +389,7 @@ fn position_goal(name: &str, x: f64, y: f64) -> Goal {
 
 #[test]
 fn the_paper_robot_tours_the_course_with_every_segment_certified() {
-    let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");
-    let scenario = generate::course(generate::COURSE_SEED);
-    let placed = model.placed(&scenario.world_from_base);
-    let world = collision_world(&placed, &scenario, &[]).expect("builds");
+    let (scenario, placed, world) = paper_robot_on_the_course();
     let solutions = solve_goals(&placed, &scenario, Some(&world), &IkOptions::default());
     let trajectory = plan(&placed, &scenario, &world, &solutions, &TrajectoryOptions::default()).expect("plans");
     assert_eq!(trajectory.home, generate::COURSE_HOME.to_vec());

@@ -262,12 +262,8 @@ impl ClearanceByKind {
     }
 
     /// The value of the kind of a pair whose second body is `b`.
-    pub fn for_body(&self, b: Body) -> Option<f64> {
-        match b {
-            Body::Obstacle(_) => self.obstacles_m,
-            Body::Link(_) => self.self_m,
-            Body::Floor => self.floor_m,
-        }
+    pub fn for_body(mut self, b: Body) -> Option<f64> {
+        *self.slot(b)
     }
 
     fn slot(&mut self, b: Body) -> &mut Option<f64> {

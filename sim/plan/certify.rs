@@ -9,10 +9,10 @@
 //! `d_p` (exact, or a broad-phase lower bound) keeps more than `threshold + (d_p - threshold) / 2`
 //! until `s_p + (d_p - threshold) / (2 M_p)`: its certified stretch. Each pair is measured again
 //! where its stretch runs out (or, two thirds used, at a point made for another pair), the
-//! advancement points being the nearest ends of stretches;
-//! every stretch is certified, with a lower bound on its pair's clearance. The advancement stops
-//! at the end of the segment, or where a clearance falls within [`TOUCH_TOLERANCE_M`] of the
-//! threshold: a touch (or a collision), reported with the pair and where.
+//! advancement points being the nearest ends of stretches; every stretch is certified, with a
+//! lower bound on its pair's clearance. The advancement stops at the end of the segment, or where
+//! a clearance falls within [`TOUCH_TOLERANCE_M`] of the threshold: a touch (or a collision),
+//! reported with the pair and where.
 
 pub use crate::collide::MotionBounds;
 use crate::collide::{self, ClearanceByKind, CollisionWorld, Distances, QueryOptions};
@@ -218,14 +218,11 @@ impl<'a> SegmentChecker<'a> {
         self.advance(from, to, f64::INFINITY).0
     }
 
-    /// How far the segment is certified with room to spare: the largest path parameter `s` among
-    /// the advancement points at which every pair keeps at least `room` (m) beyond the threshold
-    /// (`[0, s]` is certified free, since the whole advancement up to any of its points is), up
-    /// to the first point that keeps neither `room` nor the start's clearance: the advancement
-    /// ends there, not free, rather than crawl on towards a touch whose place nobody uses.
-    /// `None` when no point past the start keeps room. A planner grows its trees to such
-    /// points, where a next motion is not born grazing; the check is whole (free) only when the
-    /// segment keeps room throughout.
+    /// [`check`](Self::check), also returning how far the segment is certified with room to
+    /// spare: the largest path parameter `s` among the advancement points at which every pair
+    /// keeps at least `room` (m) beyond the threshold (`[0, s]` is certified free, since the
+    /// whole advancement up to any of its points is). `None` when no point past the start does.
+    /// A planner grows its trees to such points, where a next motion is not born grazing.
     pub fn advance(&mut self, from: &[f64], to: &[f64], room: f64) -> (SegmentCheck, Option<f64>) {
         let mut roomy = None;
         let mut ends = [f64::NAN; 2];
@@ -386,10 +383,15 @@ impl<'a> SegmentChecker<'a> {
             }
             // The nearest end of a pair's stretch, where it has lost half its excess clearance.
             let next = self.known.iter().fold(1.0f64, |next, known| next.min(known.until)).max(s);
-            for ((known, rate), pair) in self.known.iter().zip(&self.rates).zip(pairs) {
+            for (((known, rate), pair), due) in self.known.iter().zip(&self.rates).zip(pairs).zip(self.due.iter_mut()) {
                 let bound = known.bound_at(next, *rate);
                 certified = certified.min(bound);
                 by_kind.lower(pair.b, bound);
+                // A stretch two thirds used is renewed with the others: a point of its own later
+                // would cost more than measuring it now (on primitive shapes, where queries are
+                // cheap, the points are what costs).
+                let until = known.until;
+                *due = until <= next || until - next < (next - known.at) / 2.0 || (room.is_finite() && bound < needed);
             }
             if queries >= MAX_STEPS {
                 return SegmentCheck {
@@ -400,14 +402,6 @@ impl<'a> SegmentChecker<'a> {
                     touch: None,
                     queries,
                 };
-            }
-            for ((due, known), rate) in self.due.iter_mut().zip(&self.known).zip(&self.rates) {
-                // A stretch two thirds used is renewed with the others: a point of its own later
-                // would cost more than measuring it now (on primitive shapes, where queries are
-                // cheap, the points are what costs).
-                let until = known.until;
-                *due =
-                    until <= next || until - next < (next - known.at) / 2.0 || (room.is_finite() && known.bound_at(next, *rate) < needed);
             }
             s = next;
         }

@@ -621,7 +621,8 @@ impl GoalPlanner for RrtConnect {
         self.straight_attempts = candidates.len();
         // The straight segments to the scenario's solutions (the goal set's first) are not
         // checked again.
-        match self.connect_after(checker, previous, &goal_set, stream, Some((from_given, tried))) {
+        let tried = (from_given > 0).then_some((from_given, tried));
+        match self.connect_after(checker, previous, &goal_set, stream, tried) {
             Ok(path) => {
                 // Which solution the reached configuration came from.
                 let origin = if path.target < candidates.len() {
