@@ -87,16 +87,18 @@ impl Ik<'_> {
     /// curvature; with `turn` > 0 also the branch's motion over that much of the self-motion's
     /// parameter (see [`Self::branch_rate`]); `None` near a singularity, where that is no bound.
     fn neighbourhood(&mut self, goal: &Goal, q: &[f64], turn: f64) -> Option<Vec<f64>> {
+        self.neighbourhood_within(goal, q, turn, Region::WHOLE)
+    }
+
+    /// [`Self::neighbourhood`] of a part of the tolerance around the pose `q` reaches: the poses
+    /// within `region` of it.
+    pub(super) fn neighbourhood_within(&mut self, goal: &Goal, q: &[f64], turn: f64, region: Region) -> Option<Vec<f64>> {
         // Columns: constrained rows (position first); the rotation rows' error is at most the
         // tolerance angle in whichever directions are constrained.
         let inverse = self.constrained_inverse(goal, q)?;
         let along = self.branch_rate(goal, &inverse);
         let reach: Vec<f64> = (0..q.len())
-            .map(|i| {
-                let position = inverse.view((i, 0), (1, 3)).norm();
-                let rotation = inverse.view((i, 3), (1, 3)).norm();
-                TOLERANCE_CURVATURE * (position * REACHED_POSITION_M + rotation * REACHED_ORIENTATION_RAD + along[i].abs() * turn)
-            })
+            .map(|i| TOLERANCE_CURVATURE * (region.spread(|k| inverse[(i, k)]) + along[i].abs() * turn))
             .collect();
         reach.iter().all(|r| r.is_finite() && *r <= LINEAR_REACH_RAD).then_some(reach)
     }
@@ -114,37 +116,43 @@ impl Ik<'_> {
             return Err("a solution's collision was not measured".into());
         };
         let name = &pair.name;
-        let Some(reach) = self.neighbourhood(goal, &solution.q, turn) else {
-            return Err(format!(
-                "a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far",
-                clearance * 1e3
-            ));
-        };
-        // The whole-body bound, or the pair's distance gradient over the tolerance (first order,
-        // doubled for the curvature like the reach): the smaller.
-        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
-        let first_order = self
-            .distance_gradient(goal, &solution.q, &pair)
-            .map_or(f64::INFINITY, |(h, along)| {
-                TOLERANCE_CURVATURE * (Self::tolerance_gain(&h) + along.abs() * turn)
-            });
-        let motion = whole.min(first_order);
-        if clearance + motion <= margin {
-            Ok(format!("{name} {:.1} mm", clearance * 1e3))
-        } else {
-            Err(format!(
+        match self.collision_bound(goal, &solution.q, &pair, turn, Region::WHOLE) {
+            Some(motion) if clearance + motion <= margin => Ok(format!("{name} {:.1} mm", clearance * 1e3)),
+            Some(motion) => Err(format!(
                 "a solution's {name} are at {:.1} mm, within the {:.1} mm the goal's tolerance can move them",
                 clearance * 1e3,
                 motion * 1e3
-            ))
+            )),
+            None => Err(format!(
+                "a solution near a singularity has {name} at {:.1} mm, and the goal's tolerance may move them far",
+                clearance * 1e3
+            )),
         }
+    }
+
+    /// How far `pair`'s distance at `q` may change over the poses within `region` of the one `q`
+    /// reaches (and `turn` of a self-motion): the whole-body bound or the pair's distance
+    /// gradient (first order, doubled for the curvature like the reach), the smaller; `None`
+    /// near a singularity.
+    pub(super) fn collision_bound(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair, turn: f64, region: Region) -> Option<f64> {
+        let reach = self.neighbourhood_within(goal, q, turn, region)?;
+        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
+        let first_order = self.distance_gradient(goal, q, pair).map_or(f64::INFINITY, |(h, along)| {
+            TOLERANCE_CURVATURE * (region.spread(|k| h[k]) + along.abs() * turn)
+        });
+        Some(whole.min(first_order))
     }
 
     /// The pair's distance gradient at `q` in task space: `h` with `d(q + dq) ~ d(q) + h . J dq`
     /// over the goal's constrained directions (position first), from the witness points'
     /// velocities along the normal, and the distance's rate along the self-motion (see
     /// [`Self::branch_rate`]); `None` where the Jacobian is singular.
-    fn distance_gradient(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair) -> Option<(nalgebra::Vector6<f64>, f64)> {
+    pub(super) fn distance_gradient(
+        &mut self,
+        goal: &Goal,
+        q: &[f64],
+        pair: &refine::ClosestPair,
+    ) -> Option<(nalgebra::Vector6<f64>, f64)> {
         let inverse = self.constrained_inverse(goal, q)?;
         let branch = self.branch_rate(goal, &inverse);
         self.model.forward(q, &mut self.ws);
@@ -170,12 +178,6 @@ impl Ik<'_> {
             along += branch[i] * rate;
         }
         Some((h, along))
-    }
-
-    /// The most the pair's distance can grow over the goal's tolerance to first order (the
-    /// gradient's position part times 1 mm plus its rotation part times 1 degree).
-    fn tolerance_gain(h: &nalgebra::Vector6<f64>) -> f64 {
-        h.fixed_rows::<3>(0).norm() * REACHED_POSITION_M + h.fixed_rows::<3>(3).norm() * REACHED_ORIENTATION_RAD
     }
 
     /// A collision-free configuration within the goal's tolerance near colliding exact solution
@@ -269,6 +271,36 @@ impl Ik<'_> {
     }
 }
 
+/// A part of a goal's tolerance about a pose, in the goal's constrained task-space rows
+/// (position first, see [`constrained_rows`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Region {
+    /// The poses within `position_m` of its position and `rotation_rad` of its rotation.
+    Ball { position_m: f64, rotation_rad: f64 },
+    /// The poses whose offset in each row is within its half-width (m, then rad).
+    Box([f64; 6]),
+}
+
+impl Region {
+    /// The whole tolerance.
+    pub(super) const WHOLE: Region = Region::Ball {
+        position_m: REACHED_POSITION_M,
+        rotation_rad: REACHED_ORIENTATION_RAD,
+    };
+
+    /// The most a linear function of the task-space offset with coefficients `row` (position
+    /// first) reaches over the region.
+    fn spread(&self, row: impl Fn(usize) -> f64) -> f64 {
+        match self {
+            Region::Ball { position_m, rotation_rad } => {
+                let norm = |first: usize| (first..first + 3).map(|k| row(k).powi(2)).sum::<f64>().sqrt();
+                norm(0) * position_m + norm(3) * rotation_rad
+            }
+            Region::Box(half) => half.iter().enumerate().map(|(k, w)| row(k).abs() * w).sum(),
+        }
+    }
+}
+
 /// Doubles the linearised tolerance neighbourhood of a solution: the pose error is not linear
 /// in the joints, and a certificate must hold for all of it.
 pub(super) const TOLERANCE_CURVATURE: f64 = 2.0;
@@ -279,12 +311,12 @@ const TOLERANCE_SEARCH_STEPS: usize = 4;
 const TOLERANCE_USED: f64 = 0.9;
 /// Joint motions (rad) beyond which the linearised neighbourhood is no bound (near a
 /// singularity the tolerance may reach a different branch).
-const LINEAR_REACH_RAD: f64 = 0.5;
+pub(super) const LINEAR_REACH_RAD: f64 = 0.5;
 
 /// The rows of the task error a goal constrains, first: all six for `pose`; for `z_symmetric`
 /// the position and the two turns across goal z (the last row zero); the position alone for
 /// `position`.
-fn constrained_rows(goal: &Goal) -> nalgebra::Matrix6<f64> {
+pub(super) fn constrained_rows(goal: &Goal) -> nalgebra::Matrix6<f64> {
     let mut rows = nalgebra::Matrix6::identity();
     match goal.tolerance {
         Tolerance::Pose => {}

@@ -6,6 +6,7 @@
 pub mod analytic;
 mod bilinear;
 mod branches;
+mod cells;
 mod certify;
 mod dls;
 mod error;
@@ -186,6 +187,8 @@ pub struct Ik<'a> {
     /// The joint held still by Newton steps and certificates while a self-motion is swept by
     /// it (see [`selfmotion`]).
     held: Option<usize>,
+    /// Parts of tolerances the goal being solved may still cut (see [`cells`]).
+    parts_left: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
@@ -231,6 +234,7 @@ impl<'a> Ik<'a> {
             all: methods.all.clone(),
             redundant: methods.redundant.clone(),
             held: None,
+            parts_left: cells::PARTS_PER_GOAL,
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -260,6 +264,7 @@ impl<'a> Ik<'a> {
     /// joint-space search, which proves that no configuration within the limits is within the
     /// tolerance, or finds one.
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
+        self.parts_left = cells::PARTS_PER_GOAL;
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
         result
@@ -451,12 +456,18 @@ impl<'a> Ik<'a> {
                     // it stands for the branch when found, and the goal is reached.
                     Err(why) => {
                         let q = solution.q.clone();
-                        match self.free_within_tolerance(goal, &q, margin) {
-                            Some(free) => {
+                        if let Some(free) = self.free_within_tolerance(goal, &q, margin) {
+                            *solution = free;
+                            break;
+                        }
+                        match self.cut_tolerance(goal, goal, &q, margin, 0.0) {
+                            cells::Cells::Settled(pair) => collisions.push(pair),
+                            cells::Cells::Free(free) => {
                                 *solution = free;
                                 break;
                             }
-                            None => open.push(why),
+                            cells::Cells::Open(cut) => open.push(format!("{why}; cut into parts, {cut}")),
+                            cells::Cells::Untried => open.push(why),
                         }
                     }
                 }

@@ -11,6 +11,7 @@
 //! interval that fails is halved while that may help; what still falls short stays `undecided`,
 //! with the first reason.
 
+use super::cells::Cells;
 use super::{summary, GoalSolutions, Ik, EXACT};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -170,8 +171,10 @@ impl Ik<'_> {
     }
 
     /// The sample at `value` judged over `half` of the parameter either side: its solutions
-    /// counted and certified, or reached; `None` when no exact method applies.
-    fn judge_sample(&mut self, goal: &Goal, parameter: Parameter, value: f64, half: f64, words: &Words) -> Option<Judged> {
+    /// counted and certified, or reached; `None` when no exact method applies. With `cut` (no
+    /// shorter interval will be tried), a colliding solution whose certificate fails has the
+    /// tolerance cut into parts ([`super::cells`]).
+    fn judge_sample(&mut self, goal: &Goal, parameter: Parameter, value: f64, half: f64, cut: bool, words: &Words) -> Option<Judged> {
         let margin = self.margin();
         let (sample, configurations, finite) = self.sample(goal, parameter, value)?;
         let mut judged = Judged {
@@ -203,6 +206,15 @@ impl Ik<'_> {
                 }
                 match self.collision_certificate(&sample, &solution, margin, half) {
                     Ok(pair) => judged.collisions.push(pair),
+                    Err(why) if cut => match self.cut_tolerance(&sample, goal, &solution.q.clone(), margin, half) {
+                        Cells::Settled(pair) => judged.collisions.push(pair),
+                        Cells::Free(solution) => {
+                            judged.reached = Some(solution);
+                            return Some(judged);
+                        }
+                        Cells::Open(cut) => judged.fail(format!("{why}; cut into parts, {cut}"), true),
+                        Cells::Untried => judged.fail(why, true),
+                    },
                     Err(why) => judged.fail(why, true),
                 }
             } else {
@@ -242,10 +254,13 @@ impl Ik<'_> {
         let mut each: Option<usize> = None;
         while let Some((a, b)) = intervals.pop() {
             let half = (b - a) / 2.0;
+            // Cutting the tolerance is costly: only where no shorter interval will follow, and
+            // while the goal may still be proven.
+            let cut = open.is_none() && (half <= shortest || judged.len() + 2 >= budget);
             let keys = [a, b].map(|value| (value.to_bits(), half.to_bits()));
             for (value, key) in [a, b].into_iter().zip(keys) {
                 if let Entry::Vacant(slot) = judged.entry(key) {
-                    let Some(sample) = self.judge_sample(goal, parameter, value, half, &words) else {
+                    let Some(sample) = self.judge_sample(goal, parameter, value, half, cut, &words) else {
                         return;
                     };
                     if let Some(solution) = sample.reached {

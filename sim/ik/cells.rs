@@ -1,0 +1,355 @@
+//! A colliding exact solution whose one certificate is too coarse for the whole tolerance is
+//! judged part by part: the tolerance (the position within 1 mm and the rotation within 1
+//! degree of the goal's, as offsets in a cube of side 2 in those units, in the goal's
+//! constrained rows: a `z_symmetric` goal's turn about its z is free) is cut into boxes, each
+//! solved exactly at its centre pose from its parent's configuration and certified over its own
+//! extent alone. A box is settled when its configuration stays colliding, or outside a joint's
+//! limits, throughout it; one that is not is halved across the offset that moves the pair most
+//! there (its distance gradient times the box's extent), down to a sixteenth of the tolerance
+//! in each. A free configuration within the limits at a centre well inside the tolerance
+//! reaches the goal. Same order of rigour as the one certificate (first order, doubled):
+//! docs/ik.md.
+
+use super::certify::{limit_gap, Region, LINEAR_REACH_RAD};
+use super::{wrap_angle, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use crate::model::JointKind;
+use crate::scenario::{Goal, Tolerance};
+use nalgebra::{UnitQuaternion, Vector3, Vector6};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::rc::Rc;
+
+/// Boxes solved and measured at most per solution.
+const CELL_BUDGET: usize = 4096;
+/// Boxes solved and measured at most per goal: a self-motion's samples may each need cutting,
+/// and a goal that is left open anyway should not cost seconds.
+pub(super) const PARTS_PER_GOAL: usize = 8192;
+/// Cells searched for a free configuration once one has failed for good.
+const AFTER_FAILURE: usize = 256;
+/// The smallest half-width of a box, in units of the tolerance.
+const SMALLEST_HALF: f64 = 1.0 / 16.0;
+/// How far into the tolerance (a part of it) a cell's centre may lie for its free
+/// configuration to reach the goal: the error must stay within it after rounding.
+const WITNESS: f64 = 0.9;
+
+/// What cutting the tolerance found.
+pub(super) enum Cells {
+    /// Every box within the tolerance collides or is outside the limits throughout: the pair
+    /// at the solution, with how many boxes it took.
+    Settled(String),
+    /// A free configuration within the limits and the tolerance.
+    Free(IkSolution),
+    /// Why neither.
+    Open(String),
+    /// Not cut: a `position` goal, or a solution near a singularity (no `dq` over the whole
+    /// tolerance), where the centres' solutions leave the branch.
+    Untried,
+}
+
+/// A box of pose offsets in units of the tolerance: position (mm), then rotation (degrees),
+/// in the goal's constrained rows (world axes for a pose goal; a `z_symmetric` goal's turns
+/// about its x and y, the last offset 0).
+struct Cell {
+    centre: [f64; 6],
+    half: [f64; 6],
+    /// The configuration its parent's centre reached (shared by both halves).
+    start: Rc<Vec<f64>>,
+    /// How far each joint may move over the parent (its neighbourhood): a centre's
+    /// configuration further from `start` is on another branch.
+    within: Rc<Vec<f64>>,
+}
+
+/// Metres or radians per unit of offset `k`.
+fn unit(k: usize) -> f64 {
+    if k < 3 {
+        REACHED_POSITION_M
+    } else {
+        REACHED_ORIENTATION_RAD
+    }
+}
+
+impl Cell {
+    /// The position part (`0`) or the rotation part (`3`) of the centre.
+    fn part(&self, first: usize) -> Vector3<f64> {
+        Vector3::new(self.centre[first], self.centre[first + 1], self.centre[first + 2])
+    }
+
+    /// Whether some pose of the box is within the tolerance (both parts within the unit ball).
+    fn touches_tolerance(&self) -> bool {
+        [0, 3].into_iter().all(|first| {
+            let nearest = Vector3::from_fn(|k, _| (self.centre[first + k].abs() - self.half[first + k]).max(0.0));
+            nearest.norm() <= 1.0
+        })
+    }
+
+    /// Whether the centre is far enough inside the tolerance to stand for the goal.
+    fn is_witness(&self) -> bool {
+        self.part(0).norm() <= WITNESS && self.part(3).norm() <= WITNESS
+    }
+
+    /// The poses of the box, about its centre.
+    fn region(&self) -> Region {
+        Region::Box(std::array::from_fn(|k| self.half[k] * unit(k)))
+    }
+
+    /// The centre as a goal.
+    fn goal(&self, goal: &Goal) -> Goal {
+        let turn = self.part(3) * REACHED_ORIENTATION_RAD;
+        let turn = match goal.tolerance {
+            Tolerance::ZSymmetric => goal.rotation * turn,
+            _ => turn,
+        };
+        Goal {
+            position: goal.position + self.part(0) * REACHED_POSITION_M,
+            rotation: UnitQuaternion::from_scaled_axis(turn) * goal.rotation,
+            ..goal.clone()
+        }
+    }
+
+    /// The offset to halve across: the one the pair's distance `gradient` (task space) changes
+    /// most over, else the widest; `None` when every offset is at its smallest.
+    fn widest(&self, gradient: Option<&Vector6<f64>>) -> Option<usize> {
+        let weight = |k: usize| gradient.map_or(self.half[k], |h| h[k].abs() * unit(k) * self.half[k]);
+        (0..6)
+            .filter(|&k| self.half[k] / 2.0 >= SMALLEST_HALF)
+            .max_by(|&a, &b| weight(a).total_cmp(&weight(b)).then(b.cmp(&a)))
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "({:.2}, {:.2}, {:.2}) mm and ({:.2}, {:.2}, {:.2}) deg off the goal",
+            self.centre[0], self.centre[1], self.centre[2], self.centre[3], self.centre[4], self.centre[5]
+        )
+    }
+}
+
+/// A box waiting, by how far its pair's distance is expected to be at its centre: the boxes
+/// most likely free first, so a free configuration is found early; ties in the order made.
+struct Queued {
+    expected: f64,
+    order: u64,
+    cell: Cell,
+}
+
+impl PartialEq for Queued {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Queued {}
+
+impl PartialOrd for Queued {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Queued {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.expected.total_cmp(&other.expected).then_with(|| other.order.cmp(&self.order))
+    }
+}
+
+/// The boxes waiting.
+#[derive(Default)]
+struct Queue {
+    heap: BinaryHeap<Queued>,
+    made: u64,
+}
+
+impl Queue {
+    /// The two halves of `cell` across offset `k`; its centre reached `reached` with the pair
+    /// at `clearance` and its task-space `gradient` there; `within` as in [`Cell::within`].
+    fn halve(&mut self, cell: &Cell, k: usize, reached: Vec<f64>, within: Vec<f64>, clearance: f64, gradient: Option<&Vector6<f64>>) {
+        let (start, within) = (Rc::new(reached), Rc::new(within));
+        let quarter = cell.half[k] / 2.0;
+        for side in [-1.0, 1.0] {
+            let mut half = Cell {
+                centre: cell.centre,
+                half: cell.half,
+                start: Rc::clone(&start),
+                within: Rc::clone(&within),
+            };
+            half.centre[k] += side * quarter;
+            half.half[k] = quarter;
+            let growth = gradient.map_or(0.0, |h| h[k] * side * quarter * unit(k));
+            self.made += 1;
+            self.heap.push(Queued {
+                expected: clearance + growth,
+                order: self.made,
+                cell: half,
+            });
+        }
+    }
+}
+
+/// The first box left unsettled for good, and the boxes to evaluate.
+struct Unsettled {
+    failure: Option<String>,
+    budget: usize,
+}
+
+impl Unsettled {
+    /// A box unsettled for good leaves the goal open; the others are still searched for a
+    /// free configuration, briefly.
+    fn give_up(&mut self, evaluated: usize, why: String) {
+        if self.failure.is_none() {
+            self.budget = self.budget.min(evaluated + AFTER_FAILURE);
+            self.failure = Some(why);
+        }
+    }
+}
+
+impl Ik<'_> {
+    /// Cuts the tolerance of `pose` or `z_symmetric` goal `goal` about its exact solution `q`
+    /// into boxes (module doc); `judged` is the goal a free configuration is judged against (a
+    /// sample of a `z_symmetric` goal's self-motion is a pose goal, the goal itself looser),
+    /// `turn` as in [`Self::collision_certificate`].
+    pub(super) fn cut_tolerance(&mut self, goal: &Goal, judged: &Goal, q: &[f64], margin: f64, turn: f64) -> Cells {
+        let free_turn = match goal.tolerance {
+            Tolerance::Pose => 1.0,
+            Tolerance::ZSymmetric => 0.0,
+            Tolerance::Position => return Cells::Untried,
+        };
+        let measured = self.checker.as_mut().and_then(|checker| {
+            let clearance = checker.clearance(q, true).exact_m;
+            checker.closest_pair().map(|pair| (pair, clearance))
+        });
+        let Some((pair, clearance)) = measured else {
+            return Cells::Open("a solution's collision was not measured".into());
+        };
+        let at_solution = format!("{} {:.1} mm", pair.name, clearance * 1e3);
+        let Some(within) = self.neighbourhood_within(goal, q, turn, Region::WHOLE) else {
+            return Cells::Untried;
+        };
+        let whole = Cell {
+            centre: [0.0; 6],
+            half: [1.0, 1.0, 1.0, 1.0, 1.0, free_turn],
+            start: Rc::new(Vec::new()),
+            within: Rc::new(Vec::new()),
+        };
+        let gradient = self.distance_gradient(goal, q, &pair).map(|(h, _)| h);
+        let mut queue = Queue::default();
+        if let Some(k) = whole.widest(gradient.as_ref()) {
+            queue.halve(&whole, k, q.to_vec(), within, clearance, gradient.as_ref());
+        }
+        let mut settled = 0usize;
+        let mut evaluated = 0usize;
+        if self.parts_left == 0 {
+            return Cells::Open(format!("the goal's {PARTS_PER_GOAL} parts to cut are spent"));
+        }
+        let mut open = Unsettled {
+            failure: None,
+            budget: CELL_BUDGET.min(self.parts_left),
+        };
+        while let Some(Queued { cell, .. }) = queue.heap.pop() {
+            if !cell.touches_tolerance() {
+                continue;
+            }
+            if evaluated == open.budget {
+                return Cells::Open(open.failure.unwrap_or_else(|| {
+                    format!("{settled} parts of the goal's tolerance are proven, but more than {evaluated} were needed")
+                }));
+            }
+            evaluated += 1;
+            self.parts_left -= 1;
+            let target = cell.goal(goal);
+            let mut reached = cell.start.to_vec();
+            let (_, size, _) = self.polish(&target, &mut reached);
+            if size > EXACT {
+                open.give_up(
+                    evaluated,
+                    format!("the pose {} has no verified solution on this branch", cell.describe()),
+                );
+                continue;
+            }
+            let moved = |(i, (a, b)): (usize, (&f64, &f64))| {
+                let step = if self.model.joints[i].kind == JointKind::Prismatic {
+                    a - b
+                } else {
+                    wrap_angle(a - b)
+                };
+                step.abs() > cell.within[i]
+            };
+            // A free configuration of another branch still reaches the goal; it proves nothing
+            // about this one.
+            let jumped = reached.iter().zip(cell.start.iter()).enumerate().any(moved);
+            let region = cell.region();
+            let reach = self.neighbourhood_within(&target, &reached, turn, region);
+            let joints = &self.model.joints;
+            if let Some(reach) = &reach {
+                if !jumped
+                    && joints
+                        .iter()
+                        .zip(&reached)
+                        .zip(reach)
+                        .any(|((joint, value), r)| limit_gap(joint, *value) > *r)
+                {
+                    settled += 1;
+                    continue;
+                }
+            }
+            let within_limits = joints.iter().zip(&reached).all(|(joint, value)| limit_gap(joint, *value) <= 0.0);
+            let Some(checker) = self.checker.as_mut() else {
+                return Cells::Open("a solution's collision was not measured".into());
+            };
+            let clearance = checker.clearance(&reached, true).exact_m;
+            let pair = checker.closest_pair();
+            if within_limits && clearance > margin && cell.is_witness() {
+                let mut shifted = reached.clone();
+                if self.shift_into_limits(&mut shifted, Some(q)) {
+                    let solution = self.judge(judged, shifted, None, margin);
+                    if solution.reached {
+                        return Cells::Free(solution);
+                    }
+                }
+            }
+            if jumped {
+                open.give_up(
+                    evaluated,
+                    format!("the pose {} has no verified solution on this branch", cell.describe()),
+                );
+                continue;
+            }
+            let motion = match (&reach, &pair) {
+                (Some(_), Some(pair)) => self.collision_bound(&target, &reached, pair, turn, region),
+                _ => None,
+            };
+            if motion.is_some_and(|motion| clearance + motion <= margin) {
+                settled += 1;
+                continue;
+            }
+            let gradient = pair
+                .as_ref()
+                .and_then(|pair| self.distance_gradient(&target, &reached, pair))
+                .map(|(h, _)| h);
+            let Some(k) = cell.widest(gradient.as_ref()) else {
+                let name = pair.map_or_else(|| "no pair".to_string(), |p| p.name);
+                open.give_up(
+                    evaluated,
+                    match motion {
+                        Some(motion) => format!(
+                            "at the pose {} {name} are at {:.1} mm, within the {:.1} mm a sixteenth of the tolerance can move them",
+                            cell.describe(),
+                            clearance * 1e3,
+                            motion * 1e3
+                        ),
+                        None => format!(
+                            "the pose {} is near a singularity, with {name} at {:.1} mm",
+                            cell.describe(),
+                            clearance * 1e3
+                        ),
+                    },
+                );
+                continue;
+            };
+            let within = reach.unwrap_or_else(|| vec![LINEAR_REACH_RAD; reached.len()]);
+            queue.halve(&cell, k, reached, within, clearance, gradient.as_ref());
+        }
+        if let Some(failure) = open.failure {
+            return Cells::Open(failure);
+        }
+        Cells::Settled(format!("{at_solution}, throughout {settled} parts of the tolerance"))
+    }
+}
