@@ -262,6 +262,54 @@ fn motion_bounds_hold_for_every_collider_point_on_random_segments() {
     assert!(tightest > 0.33, "tightest ratio {tightest}");
 }
 
+/// The last link moves with the tool whatever the joints do: its points' displacement between
+/// any two configurations stays within the tool's displacement and turn, which is what lets a
+/// certificate near a singularity (where no joint motion is bounded) decide a deep contact of
+/// the last link with the world.
+#[test]
+fn the_last_links_motion_is_bounded_by_the_tools() {
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let mut tightest: f64 = 0.0;
+    for design in [
+        "designs/paper-real-world.json",
+        "designs/ur5e.json",
+        "designs/free-redundant-7dof.json",
+        "tests/fixtures/urdf/example-robot-data/robots/ur_description/urdf/ur5_gripper.urdf",
+    ] {
+        let model = load_model(&repo().join(design), &LoadOptions::default()).expect("loads");
+        let bounds = MotionBounds::of(&model);
+        let last = model.links.len() - 1;
+        assert!(bounds.tool_rigid_motion(Body::Link(last - 1), Body::Floor, 0.0, 0.0).is_none());
+        assert!(bounds.tool_rigid_motion(Body::Link(last), Body::Link(1), 0.0, 0.0).is_none());
+        let (mut ws0, mut ws1) = (model.workspace(), model.workspace());
+        for _ in 0..300 {
+            let q0 = model.random_configuration(&mut rng);
+            // Small and large changes alike.
+            let scale = [1e-3, 0.1, 3.0][rng.random_range(0..3)];
+            let q1: Vec<f64> = q0.iter().map(|a| a + scale * rng.random_range(-1.0..1.0)).collect();
+            model.forward(&q0, &mut ws0);
+            model.forward(&q1, &mut ws1);
+            let (t0, t1) = (ws0.tool_in_world, ws1.tool_in_world);
+            let position = (t1.translation.vector - t0.translation.vector).norm();
+            let angle = t1.rotation.angle_to(&t0.rotation);
+            let bound = bounds
+                .tool_rigid_motion(Body::Link(last), Body::Obstacle(0), position, angle)
+                .expect("the last link");
+            for collider in &model.links[last].colliders {
+                for p in probe_points(collider) {
+                    let at = |ws: &proving_ground::model::KinematicsWorkspace| ws.link_in_world[last] * nalgebra::Point3::from(p);
+                    let moved = (at(&ws1) - at(&ws0)).norm();
+                    assert!(moved <= bound + 1e-12, "{design}: moved {moved} > bound {bound}");
+                    if bound > 0.0 {
+                        tightest = tightest.max(moved / bound);
+                    }
+                }
+            }
+        }
+    }
+    assert!(tightest > 0.5, "tightest ratio {tightest}");
+}
+
 /// The paper's robot placed on the course (the generated one), with its collision world.
 fn paper_robot_on_the_course() -> (Scenario, Model, collide::CollisionWorld) {
     let model = load_model(&repo().join("designs/paper-real-world.json"), &LoadOptions::default()).expect("loads");

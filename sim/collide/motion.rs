@@ -15,6 +15,9 @@ use nalgebra::{Point3, Vector3};
 pub struct MotionBounds {
     radius: Vec<Vec<f64>>,
     prismatic: Vec<bool>,
+    /// The last link's collider points' largest distance from the tool frame's origin: the link
+    /// moves rigidly with the tool.
+    tool_radius: f64,
 }
 
 impl MotionBounds {
@@ -74,9 +77,30 @@ impl MotionBounds {
                 row[k] = offset + extent[k];
             }
         }
+        let tool = model.last_from_tool.translation.vector;
+        let tool_radius = model.links.last().map_or(0.0, |link| {
+            link.colliders
+                .iter()
+                .map(|c| collider_axis_distance(c, &|p: Vector3<f64>| (p - tool).norm()))
+                .fold(0.0, f64::max)
+        });
         Self {
             radius,
             prismatic: model.joints.iter().map(|j| j.kind == JointKind::Prismatic).collect(),
+            tool_radius,
+        }
+    }
+
+    /// Largest displacement of any point of the last link against an obstacle or the floor
+    /// (`a`, `b` in either order) when the tool frame moves by at most `position` (m) and turns
+    /// by at most `angle` (rad), whatever the joints do: the last link is rigid with the tool.
+    /// `None` for any other pair.
+    pub fn tool_rigid_motion(&self, a: Body, b: Body, position: f64, angle: f64) -> Option<f64> {
+        let last = self.radius.len();
+        match (a, b) {
+            (Body::Link(_), Body::Link(_)) => None,
+            (Body::Link(link), _) | (_, Body::Link(link)) if link == last && last > 0 => Some(position + self.tool_radius * angle),
+            _ => None,
         }
     }
 

@@ -135,12 +135,20 @@ impl Ik<'_> {
     /// gradient (first order, doubled for the curvature like the reach), the smaller; `None`
     /// near a singularity.
     pub(super) fn collision_bound(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair, turn: f64, region: Region) -> Option<f64> {
-        let reach = self.neighbourhood_within(goal, q, turn, region)?;
+        // The last link against the world moves with the tool, singular or not (a turn about
+        // tool z, or a held joint's, turns it by at most `turn` more).
+        let (position, rotation) = region.extent();
+        let rigid = self
+            .bounds
+            .tool_rigid_motion(pair.bodies[0], pair.bodies[1], position, rotation + turn);
+        let Some(reach) = self.neighbourhood_within(goal, q, turn, region) else {
+            return rigid;
+        };
         let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
         let first_order = self.distance_gradient(goal, q, pair).map_or(f64::INFINITY, |(h, along)| {
             TOLERANCE_CURVATURE * (region.spread(|k| h[k]) + along.abs() * turn)
         });
-        Some(whole.min(first_order))
+        Some(whole.min(first_order).min(rigid.unwrap_or(f64::INFINITY)))
     }
 
     /// The pair's distance gradient at `q` in task space: `h` with `d(q + dq) ~ d(q) + h . J dq`
@@ -297,6 +305,18 @@ impl Region {
                 norm(0) * position_m + norm(3) * rotation_rad
             }
             Region::Box(half) => half.iter().enumerate().map(|(k, w)| row(k).abs() * w).sum(),
+        }
+    }
+
+    /// The farthest the region's poses are from its centre: in position (m) and in rotation
+    /// (rad).
+    fn extent(&self) -> (f64, f64) {
+        match self {
+            Region::Ball { position_m, rotation_rad } => (*position_m, *rotation_rad),
+            Region::Box(half) => {
+                let norm = |first: usize| half[first..first + 3].iter().map(|w| w * w).sum::<f64>().sqrt();
+                (norm(0), norm(3))
+            }
         }
     }
 }
