@@ -6,7 +6,7 @@
 //! structure at the wrist applies it at the base by solving the reversed chain.
 
 use crate::model::{JointKind, KinematicsWorkspace, Model};
-use nalgebra::{DMatrix, Isometry3, Matrix3, SMatrix, Schur, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, SMatrix, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// One joint's axis line: a point on it and its unit direction.
@@ -308,11 +308,12 @@ pub(crate) fn interpolate2<const N: usize>(values: &[[[f64; N]; 3]; 3]) -> [[f64
 /// (a pose on a workspace boundary) splits into a pair about `sqrt(eps)` off the real line.
 const NEAR_REAL: f64 = 1e-4;
 
-/// The near-real roots of `det(c + b x + a x^2)`: the eigenvalues of its `2 N x 2 N` companion
-/// matrix. `None` when `a` is singular or ill-conditioned (the caller retries with another
-/// tangent offset), or when the QR iteration has not converged within `80 N` steps:
-/// nalgebra's unbounded form can cycle forever on some finite matrices (found on a modular
-/// catalog arm).
+/// The near-real roots of `det(c + b x + a x^2)`, ascending: the eigenvalues of its `2 N x 2 N`
+/// companion matrix ([`super::eigen`]). `None` when `a` is singular or ill-conditioned (the
+/// caller retries with another tangent offset), or when the QR iteration has not converged
+/// within `80 N` steps per
+/// eigenvalue block (an unbounded iteration can cycle forever on some finite matrices: found on
+/// a modular catalog arm).
 pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>, a: &SMatrix<f64, N, N>) -> Option<Vec<f64>> {
     // Conditioning from the inverse: cheaper than an SVD.
     let inverse = a.try_inverse()?;
@@ -321,21 +322,27 @@ pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatri
         return None;
     }
     let (ac, ab) = (inverse * c, inverse * b);
-    // Dynamic: the static form needs type-level arithmetic bounds for any N.
-    let mut companion = DMatrix::zeros(2 * N, 2 * N);
-    companion.view_mut((0, N), (N, N)).fill_with_identity();
-    companion.view_mut((N, 0), (N, N)).copy_from(&(-ac));
-    companion.view_mut((N, N), (N, N)).copy_from(&(-ab));
+    // Row-major: the identity above right, then -A^-1 C and -A^-1 B.
+    let size = 2 * N;
+    let mut companion = vec![0.0; size * size];
+    for i in 0..N {
+        companion[i * size + N + i] = 1.0;
+        for j in 0..N {
+            companion[(N + i) * size + j] = -ac[(i, j)];
+            companion[(N + i) * size + N + j] = -ab[(i, j)];
+        }
+    }
     if !companion.iter().all(|x| x.is_finite()) {
         return None;
     }
-    let schur = Schur::try_new(companion, f64::EPSILON, 80 * N)?;
-    Some(
-        schur
-            .complex_eigenvalues()
-            .iter()
-            .filter(|z| z.re.is_finite() && z.im.abs() <= NEAR_REAL * (1.0 + z.re.abs()))
-            .map(|z| z.re)
-            .collect(),
-    )
+    let eigenvalues = super::eigen::Hessenberg::new(size, companion).eigenvalues(80 * N)?;
+    let mut roots: Vec<f64> = eigenvalues
+        .iter()
+        .filter(|(re, im)| re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs()))
+        .map(|&(re, _)| re)
+        .collect();
+    // Ascending: the solutions' order (and what reports list first) is the roots', not the
+    // eigenvalue iteration's.
+    roots.sort_by(f64::total_cmp);
+    Some(roots)
 }

@@ -9,6 +9,7 @@ mod branches;
 mod cells;
 mod certify;
 mod dls;
+mod eigen;
 mod error;
 pub mod general;
 mod lines;
