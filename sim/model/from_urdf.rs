@@ -13,6 +13,7 @@
 //! (gripper parts too) are attached to the chain link they hang from, at their joints' zero
 //! position.
 
+use super::inertia::BALANCE_LIMIT;
 use super::mesh::{load_mesh, package_paths_from_env, resolve_mesh_uri};
 use super::{arm, names};
 use super::{Collider, Diagnostic, Inertial, Joint, JointKind, Link, Model, ModelError, ModelSource, Shape};
@@ -642,7 +643,8 @@ impl<'a> Builder<'a> {
                 if inertial.mass > 0.0 {
                     // A single part may be odd (a point mass) while the merged body is fine; the
                     // merged body is checked below and is what simulators see.
-                    if let Err(problem) = inertial.check() {
+                    // A link of one part is checked as the merged body below.
+                    if let (Err(problem), true) = (inertial.check(), group.len() > 1) {
                         self.diagnostics.push(Diagnostic {
                             path: self.path.to_path_buf(),
                             element: format!("{element} <inertial>"),
@@ -687,7 +689,32 @@ impl<'a> Builder<'a> {
                 },
             )
         })?;
-        inertial.check().map_err(bad)?;
+        let inertial = match inertial.check() {
+            Ok(()) => inertial,
+            Err(problem) => {
+                let (fixed, shortfall) = inertial.balanced().ok_or_else(|| {
+                    let shortfall = inertial.triangle_shortfall();
+                    bad(if shortfall > 0.0 {
+                        format!(
+                            "{problem}, short by {:.1} % (up to {:.0} % is balanced with a warning)",
+                            shortfall * 100.0,
+                            BALANCE_LIMIT * 100.0
+                        )
+                    } else {
+                        problem.clone()
+                    })
+                })?;
+                self.diagnostics.push(Diagnostic {
+                    path: self.path.to_path_buf(),
+                    element: format!("link `{chain_name}` <inertial>"),
+                    message: format!(
+                        "{problem}, short by {:.2} %: its two smaller principal moments are each raised by half of that (the least change that meets it; MuJoCo's balanceinertia would make all three equal)",
+                        shortfall * 100.0
+                    ),
+                });
+                fixed
+            }
+        };
         Ok(Link {
             name: chain_name.into(),
             merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
