@@ -100,7 +100,7 @@ impl Inertial {
     /// These mass properties with the two smaller principal moments each raised by half the
     /// triangle inequality's shortfall (the least change that meets it, about the same principal
     /// axes), and that shortfall relative to the largest moment; `None` unless the inequality is
-    /// all [`Self::check`] finds wrong and it falls short by at most [`BALANCE_LIMIT`].
+    /// all [`Self::check`] finds wrong and it falls short by at most 25 % of the largest moment.
     pub fn balanced(&self) -> Option<(Inertial, f64)> {
         let shortfall = self.triangle_shortfall();
         if self.check().is_ok() || !(shortfall > 0.0 && shortfall <= BALANCE_LIMIT) {
