@@ -91,10 +91,13 @@ impl Inertial {
     }
 
     /// How far the principal moments fall short of the triangle inequality, relative to the
-    /// largest (`(I3 - I1 - I2) / I3`; negative when it holds).
+    /// largest (`(I3 - I1 - I2) / I3`; negative when it holds); NaN when something else is
+    /// wrong (see [`Self::check`]).
     pub fn triangle_shortfall(&self) -> f64 {
-        let [a, b, c] = self.principal_moments();
-        (c - a - b) / c
+        match self.principal_if_definite() {
+            Ok([a, b, c]) => (c - a - b) / c,
+            Err(_) => f64::NAN,
+        }
     }
 
     /// These mass properties with the two smaller principal moments each raised by half the
@@ -102,8 +105,9 @@ impl Inertial {
     /// axes), and that shortfall relative to the largest moment; `None` unless the inequality is
     /// all [`Self::check`] finds wrong and it falls short by at most 25 % of the largest moment.
     pub fn balanced(&self) -> Option<(Inertial, f64)> {
+        // NaN (something else wrong) fails the range test too.
         let shortfall = self.triangle_shortfall();
-        if self.check().is_ok() || !(shortfall > 0.0 && shortfall <= BALANCE_LIMIT) {
+        if !(shortfall > 0.0 && shortfall <= BALANCE_LIMIT) || self.check().is_ok() {
             return None;
         }
         let eigen = ((self.inertia + self.inertia.transpose()) / 2.0).symmetric_eigen();
@@ -124,6 +128,19 @@ impl Inertial {
     /// mass, a tensor that is not symmetric positive definite, or principal moments that break
     /// the triangle inequality (`I1 + I2 >= I3`).
     pub fn check(&self) -> Result<(), String> {
+        let [a, b, c] = self.principal_if_definite()?;
+        if a + b < c * (1.0 - TRIANGLE_SLACK) {
+            return Err(format!(
+                "principal moments {a:.3e} + {b:.3e} < {c:.3e} kg m^2 break the triangle inequality"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The principal moments, ascending, when the mass is positive, everything finite and the
+    /// tensor symmetric positive definite (the eigenvalues are only computed then: a NaN
+    /// tensor never reaches the iteration); else why not.
+    fn principal_if_definite(&self) -> Result<[f64; 3], String> {
         if !(self.mass.is_finite() && self.mass > 0.0) {
             return Err(format!("mass {} kg is not positive", self.mass));
         }
@@ -140,12 +157,7 @@ impl Inertial {
                 "inertia is not positive definite (principal moments {a:.3e}, {b:.3e}, {c:.3e} kg m^2)"
             ));
         }
-        if a + b < c * (1.0 - TRIANGLE_SLACK) {
-            return Err(format!(
-                "principal moments {a:.3e} + {b:.3e} < {c:.3e} kg m^2 break the triangle inequality"
-            ));
-        }
-        Ok(())
+        Ok([a, b, c])
     }
 }
 
@@ -176,6 +188,10 @@ mod tests {
         let gross = Inertial::diagonal(1.0, [0.01, 0.01, 0.5]);
         assert!(gross.balanced().is_none());
         assert!(Inertial::diagonal(1.0, [0.2, 0.3, 0.4]).balanced().is_none());
+        // Other faults are not balanced, and a NaN tensor never reaches the eigenvalues.
+        let nan = Inertial::diagonal(1.0, [f64::NAN, 0.01, 0.019]);
+        assert!(nan.triangle_shortfall().is_nan() && nan.balanced().is_none());
+        assert!(Inertial::diagonal(-1.0, [0.01, 0.01, 0.019]).balanced().is_none());
     }
 
     #[test]
