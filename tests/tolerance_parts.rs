@@ -8,10 +8,11 @@ mod common;
 
 use common::repo;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use proving_ground::collide::{self, Distances, QueryOptions};
+use proving_ground::collide::{self, CollisionWorld, Distances, QueryOptions};
 use proving_ground::ik::{goal_error, Ik, IkOptions, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use proving_ground::model::Model;
 use proving_ground::pipeline::{collision_world, load, LoadOptions};
-use proving_ground::scenario::{load as load_scenario, Goal, Tolerance};
+use proving_ground::scenario::{load as load_scenario, Goal, Scenario, Tolerance};
 use rand::{Rng, SeedableRng};
 use std::f64::consts::TAU;
 
@@ -21,7 +22,7 @@ fn in_ball(rng: &mut impl Rng, radius: f64) -> nalgebra::Vector3<f64> {
 }
 
 /// Whether some whole-turn equivalent of `q` is within the model's limits.
-fn within_limits(model: &proving_ground::model::Model, q: &[f64]) -> bool {
+fn within_limits(model: &Model, q: &[f64]) -> bool {
     model.joints.iter().zip(q).all(|(joint, value)| {
         joint.limits.is_none_or(|[lower, upper]| {
             let k = ((lower - value) / TAU).ceil();
@@ -30,18 +31,22 @@ fn within_limits(model: &proving_ground::model::Model, q: &[f64]) -> bool {
     })
 }
 
+/// A design placed on a scenario, with the collision world a run checks.
+fn placed(design: &str, scenario: &str) -> (Model, Scenario, CollisionWorld) {
+    let model = load(&repo().join(design), &LoadOptions::default()).expect("the design loads").model;
+    let scenario = load_scenario(&repo().join(scenario)).expect("the scenario loads");
+    let model = model.placed(&scenario.world_from_base);
+    let world = collision_world(&model, &scenario, &[]).expect("the world builds");
+    (model, scenario, world)
+}
+
 /// economic-elbow on cluttered task 30, goal 5: its eight exact solutions all collide, one of
 /// them by 1.6 mm where the goal's tolerance may move the pair by 1.8 mm, so only the parts
 /// decide it (the goal was `undecided` before them; the proof lists the parts' pair among
 /// "more").
 #[test]
 fn a_proof_by_parts_holds_for_poses_sampled_throughout_the_tolerance() {
-    let model = load(&repo().join("designs/economic-elbow.json"), &LoadOptions::default())
-        .expect("the design loads")
-        .model;
-    let scenario = load_scenario(&repo().join("scenarios/cluttered/task-30.json")).expect("the task loads");
-    let model = model.placed(&scenario.world_from_base);
-    let world = collision_world(&model, &scenario, &[]).expect("the world builds");
+    let (model, scenario, world) = placed("designs/economic-elbow.json", "scenarios/cluttered/task-30.json");
     let goal = &scenario.goals[5];
     let result = Ik::with_collisions(&model, &world, IkOptions::default()).solve(goal, 5, None);
     assert!(
@@ -88,12 +93,7 @@ fn a_proof_by_parts_holds_for_poses_sampled_throughout_the_tolerance() {
 /// configuration of one part, verified by FK and an independent distance query.
 #[test]
 fn a_free_configuration_found_by_parts_is_within_the_tolerance_and_free() {
-    let model = load(&repo().join("designs/economic-spherical-wrist.json"), &LoadOptions::default())
-        .expect("the design loads")
-        .model;
-    let scenario = load_scenario(&repo().join("scenarios/course.json")).expect("the course loads");
-    let model = model.placed(&scenario.world_from_base);
-    let world = collision_world(&model, &scenario, &[]).expect("the world builds");
+    let (model, scenario, world) = placed("designs/economic-spherical-wrist.json", "scenarios/course.json");
     let mut ws = model.workspace();
     let mut check = Distances::new();
     let mut reached = 0;

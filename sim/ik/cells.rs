@@ -11,8 +11,7 @@
 //! docs/ik.md.
 
 use super::certify::{limit_gap, Region, LINEAR_REACH_RAD};
-use super::{wrap_angle, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
-use crate::model::JointKind;
+use super::{joint_difference, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{UnitQuaternion, Vector3, Vector6};
 use std::cmp::Ordering;
@@ -264,17 +263,16 @@ impl Ik<'_> {
                 );
                 continue;
             }
-            let moved = |(i, (a, b)): (usize, (&f64, &f64))| {
-                let step = if self.model.joints[i].kind == JointKind::Prismatic {
-                    a - b
-                } else {
-                    wrap_angle(a - b)
-                };
-                step.abs() > cell.within[i]
-            };
             // A free configuration of another branch still reaches the goal; it proves nothing
             // about this one.
-            let jumped = reached.iter().zip(cell.start.iter()).enumerate().any(moved);
+            let jumped = (self
+                .model
+                .joints
+                .iter()
+                .zip(&reached)
+                .zip(cell.start.iter())
+                .zip(cell.within.iter()))
+            .any(|(((joint, a), b), within)| joint_difference(joint, *a, *b).abs() > *within);
             let region = cell.region();
             let reach = self.neighbourhood_within(&target, &reached, turn, region);
             let joints = &self.model.joints;
@@ -312,18 +310,17 @@ impl Ik<'_> {
                 );
                 continue;
             }
+            // The gradient serves the bound and the choice of the offset to halve alike.
+            let gradient = pair.as_ref().and_then(|pair| self.distance_gradient(&target, &reached, pair));
             let motion = match (&reach, &pair) {
-                (Some(_), Some(pair)) => self.collision_bound(&target, &reached, pair, turn, region),
+                (Some(reach), Some(pair)) => self.pair_motion(pair, turn, region, Some(reach), gradient.as_ref()),
                 _ => None,
             };
             if motion.is_some_and(|motion| clearance + motion <= margin) {
                 settled += 1;
                 continue;
             }
-            let gradient = pair
-                .as_ref()
-                .and_then(|pair| self.distance_gradient(&target, &reached, pair))
-                .map(|(h, _)| h);
+            let gradient = gradient.map(|(h, _)| h);
             let Some(k) = cell.widest(gradient.as_ref()) else {
                 let name = pair.map_or_else(|| "no pair".to_string(), |p| p.name);
                 open.give_up(

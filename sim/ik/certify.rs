@@ -135,17 +135,35 @@ impl Ik<'_> {
     /// gradient (first order, doubled for the curvature like the reach), the smaller; `None`
     /// near a singularity.
     pub(super) fn collision_bound(&mut self, goal: &Goal, q: &[f64], pair: &refine::ClosestPair, turn: f64, region: Region) -> Option<f64> {
+        let reach = self.neighbourhood_within(goal, q, turn, region);
+        let gradient = match reach {
+            Some(_) => self.distance_gradient(goal, q, pair),
+            None => None,
+        };
+        self.pair_motion(pair, turn, region, reach.as_deref(), gradient.as_ref())
+    }
+
+    /// [`Self::collision_bound`] from the neighbourhood (`reach`, `None` near a singularity) and
+    /// the pair's distance gradient ([`Self::distance_gradient`]) already at hand.
+    pub(super) fn pair_motion(
+        &self,
+        pair: &refine::ClosestPair,
+        turn: f64,
+        region: Region,
+        reach: Option<&[f64]>,
+        gradient: Option<&(nalgebra::Vector6<f64>, f64)>,
+    ) -> Option<f64> {
         // The last link against the world moves with the tool, singular or not (a turn about
         // tool z, or a held joint's, turns it by at most `turn` more).
         let (position, rotation) = region.extent();
         let rigid = self
             .bounds
             .tool_rigid_motion(pair.bodies[0], pair.bodies[1], position, rotation + turn);
-        let Some(reach) = self.neighbourhood_within(goal, q, turn, region) else {
+        let Some(reach) = reach else {
             return rigid;
         };
-        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], &reach);
-        let first_order = self.distance_gradient(goal, q, pair).map_or(f64::INFINITY, |(h, along)| {
+        let whole = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], reach);
+        let first_order = gradient.map_or(f64::INFINITY, |(h, along)| {
             TOLERANCE_CURVATURE * (region.spread(|k| h[k]) + along.abs() * turn)
         });
         Some(whole.min(first_order).min(rigid.unwrap_or(f64::INFINITY)))

@@ -32,7 +32,7 @@ impl Hessenberg {
     /// eigenvalues stay.
     fn reduce(&mut self) {
         let n = self.n;
-        let mut v = vec![0.0; n];
+        let (mut v, mut w) = (vec![0.0; n], vec![0.0; n]);
         for k in 0..n.saturating_sub(2) {
             let norm = (k + 1..n).map(|i| self.at(i, k).powi(2)).sum::<f64>().sqrt();
             if norm == 0.0 {
@@ -52,7 +52,7 @@ impl Hessenberg {
             }
             // A <- (I - 2 v v^T) A over rows k + 1.., then A <- A (I - 2 v v^T); row by row, so
             // every inner loop runs along a row.
-            let mut w = vec![0.0; n];
+            w[k..].fill(0.0);
             for (i, &vi) in v.iter().enumerate().skip(k + 1) {
                 let row = &self.a[i * n + k..i * n + n];
                 for (wj, aij) in w[k..].iter_mut().zip(row) {

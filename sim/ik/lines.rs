@@ -311,9 +311,8 @@ const NEAR_REAL: f64 = 1e-4;
 /// The near-real roots of `det(c + b x + a x^2)`, ascending: the eigenvalues of its `2 N x 2 N`
 /// companion matrix ([`super::eigen`]). `None` when `a` is singular or ill-conditioned (the
 /// caller retries with another tangent offset), or when the QR iteration has not converged
-/// within `80 N` steps per
-/// eigenvalue block (an unbounded iteration can cycle forever on some finite matrices: found on
-/// a modular catalog arm).
+/// within `80 N` steps per eigenvalue block (an unbounded iteration can cycle forever on some
+/// finite matrices: found on a modular catalog arm).
 pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>, a: &SMatrix<f64, N, N>) -> Option<Vec<f64>> {
     // Conditioning from the inverse: cheaper than an SVD.
     let inverse = a.try_inverse()?;

@@ -945,14 +945,20 @@ impl<'a> Ik<'a> {
     /// Whether two configurations are the same solution: every joint within the tolerance,
     /// revolute angles compared modulo 2 pi.
     pub fn same_configuration(&self, a: &[f64], b: &[f64]) -> bool {
-        self.model.joints.iter().zip(a.iter().zip(b)).all(|(joint, (x, y))| {
-            let difference = if joint.kind == crate::model::JointKind::Prismatic {
-                x - y
-            } else {
-                wrap_angle(x - y)
-            };
-            difference.abs() <= self.opts.distinct_tolerance
-        })
+        self.model
+            .joints
+            .iter()
+            .zip(a.iter().zip(b))
+            .all(|(joint, (x, y))| joint_difference(joint, *x, *y).abs() <= self.opts.distinct_tolerance)
+    }
+}
+
+/// `a - b` for a joint: revolute angles the shortest way round (modulo 2 pi).
+fn joint_difference(joint: &crate::model::Joint, a: f64, b: f64) -> f64 {
+    if joint.kind == crate::model::JointKind::Prismatic {
+        a - b
+    } else {
+        wrap_angle(a - b)
     }
 }
 

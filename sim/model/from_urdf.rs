@@ -642,8 +642,8 @@ impl<'a> Builder<'a> {
                 let inertial = self.inertial(&link.inertial, &element)?;
                 if inertial.mass > 0.0 {
                     // A single part may be odd (a point mass) while the merged body is fine; the
-                    // merged body is checked below and is what simulators see.
-                    // A link of one part is checked as the merged body below.
+                    // merged body is checked below and is what simulators see (a link of one
+                    // part only there).
                     if let (Err(problem), true) = (inertial.check(), group.len() > 1) {
                         self.diagnostics.push(Diagnostic {
                             path: self.path.to_path_buf(),
