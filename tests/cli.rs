@@ -393,7 +393,7 @@ fn rejects_unknown_input_type_and_missing_file() {
     for (input, says) in [
         (
             "Cargo.toml",
-            "Cargo.toml: unknown extension `.toml`; expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file",
+            "Cargo.toml: unknown extension `.toml`; expected a design (.json), a Timor assembly (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file",
         ),
         ("designs", "designs: is a directory; expected a design"),
         ("-", "-: a robot is not read from standard input: save it to a file"),

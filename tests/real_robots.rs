@@ -16,7 +16,7 @@ fn tip_and_choices(source: &ModelSource) -> (String, Vec<String>) {
     match source {
         ModelSource::Urdf { tip_link, choices, .. } => (tip_link.clone(), choices.clone()),
         ModelSource::Mjcf { tip_body, choices, .. } => (tip_body.clone(), choices.clone()),
-        ModelSource::Design { .. } => panic!("not a file"),
+        ModelSource::Design { .. } | ModelSource::Timor { .. } => panic!("not a URDF or MJCF file"),
     }
 }
 

@@ -13,6 +13,7 @@ mod inertia;
 mod kinematics;
 mod mesh;
 mod names;
+mod timor;
 mod trig;
 mod urdf_xml;
 
@@ -20,6 +21,7 @@ pub use from_design::from_design;
 pub use from_mjcf::{from_mjcf, from_mjcf_to, TOOL_SITE};
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
+pub use timor::{from_timor, load_module_set, pose_rows, timor_kind, ModuleSetSummary, TimorKind, SHIPPED_SETS};
 
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;
@@ -89,6 +91,20 @@ pub enum ModelSource {
         tip_body: String,
         /// Defaults the reader chose, each a sentence saying what and why (the tool frame, the
         /// joints left out of the arm as gripper joints).
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        choices: Vec<String>,
+    },
+    /// A Timor assembly of modules from a Timor module set.
+    Timor {
+        /// The assembly file read.
+        path: PathBuf,
+        /// The module set (`modules.json`) its modules come from.
+        module_set: PathBuf,
+        /// Module IDs from the base on (`moduleOrder`).
+        modules: Vec<String>,
+        /// The free connector that is the tool frame (`module.connector`).
+        tool: String,
+        /// Defaults the reader chose, each a sentence.
         #[serde(skip_serializing_if = "Vec::is_empty")]
         choices: Vec<String>,
     },
@@ -349,7 +365,10 @@ impl ModelSource {
     /// What the reader chose (see the `choices` fields).
     pub fn choices(&self) -> &[String] {
         match self {
-            ModelSource::Design { choices, .. } | ModelSource::Urdf { choices, .. } | ModelSource::Mjcf { choices, .. } => choices,
+            ModelSource::Design { choices, .. }
+            | ModelSource::Urdf { choices, .. }
+            | ModelSource::Mjcf { choices, .. }
+            | ModelSource::Timor { choices, .. } => choices,
         }
     }
 
@@ -357,7 +376,7 @@ impl ModelSource {
     pub fn path(&self) -> Option<&std::path::Path> {
         match self {
             ModelSource::Design { .. } => None,
-            ModelSource::Urdf { path, .. } | ModelSource::Mjcf { path, .. } => Some(path),
+            ModelSource::Urdf { path, .. } | ModelSource::Mjcf { path, .. } | ModelSource::Timor { path, .. } => Some(path),
         }
     }
 }

@@ -26,11 +26,13 @@ pub enum InputKind {
     Urdf,
     /// MJCF (`.xml`, `.mjcf`), loaded through MuJoCo.
     Mjcf,
+    /// A Timor assembly (JSON with `moduleSet` and `moduleOrder`).
+    Timor,
 }
 
 /// The robot files read, for messages.
 const ROBOT_FILES: &str =
-    "expected a design (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file, or a catalog id (modular6/D-Ls-Il-D-Is-Ll, preset/UR5e)";
+    "expected a design (.json), a Timor assembly (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file, or a catalog id (modular6/D-Ls-Il-D-Is-Ll, preset/UR5e)";
 
 /// The design a catalog id names, when `path` is no file and its text is one.
 fn catalog_design(path: &Path) -> Result<Option<design::Design>, Error> {
@@ -70,7 +72,7 @@ pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
     }
     let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("json") => Ok(InputKind::Design),
+        Some("json") => json_kind(path),
         Some("urdf") => Ok(InputKind::Urdf),
         Some("xml" | "mjcf") => match root_element(path).as_deref() {
             Some("robot") => Ok(InputKind::Urdf),
@@ -85,6 +87,33 @@ pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
         ),
         Some(other) => unknown(format!("unknown extension `.{other}`; {ROBOT_FILES}")),
         None => unknown(format!("no extension to tell the input type; {ROBOT_FILES}")),
+    }
+}
+
+/// A JSON robot file's kind: a design, or a Timor assembly by its keys. A Timor module set is
+/// no robot: the error lists its modules and says how to make one.
+fn json_kind(path: &Path) -> Result<InputKind, Error> {
+    // Unreadable files are the design reader's to report, with its message.
+    let Ok(text) = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES) else {
+        return Ok(InputKind::Design);
+    };
+    match model::timor_kind(&text) {
+        Some(model::TimorKind::Assembly) => Ok(InputKind::Timor),
+        Some(model::TimorKind::ModuleSet) => {
+            let summary = model::load_module_set(path)?;
+            let ids: Vec<&str> = summary.modules.iter().map(|(id, _)| id.as_str()).collect();
+            Err(Error::UnknownInput {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "a Timor module set ({} modules: {}), not one robot: give an assembly of its modules, a JSON file {{\"moduleSet\": \"{}\", \"moduleOrder\": [\"{}\", ...]}} from the base module on (docs/inputs.md, Timor module sets and assemblies)",
+                    ids.len(),
+                    ids.join(", "),
+                    path.display(),
+                    summary.bases.first().map_or("BASE", String::as_str)
+                ),
+            })
+        }
+        None => Ok(InputKind::Design),
     }
 }
 
@@ -140,6 +169,25 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
             };
             Ok(Loaded {
                 model: model::from_urdf(path, &urdf)?,
+                design: None,
+            })
+        }
+        InputKind::Timor => {
+            // The chain of an assembly runs from its base connector to its free connector.
+            if let Some(option) = [(opts.base_link.is_some(), "--base"), (opts.tip_link.is_some(), "--tip")]
+                .iter()
+                .find_map(|(given, name)| given.then_some(*name))
+            {
+                return Err(model::ModelError::InvalidValue {
+                    path: path.to_path_buf(),
+                    element: option.into(),
+                    message: "is for URDF and MJCF input; a Timor assembly runs from its base connector to its free (or `eef`) connector"
+                        .into(),
+                }
+                .into());
+            }
+            Ok(Loaded {
+                model: model::from_timor(path)?,
                 design: None,
             })
         }

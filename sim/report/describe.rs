@@ -13,6 +13,7 @@ pub fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
         crate::model::ModelSource::Design { mode, .. } => format!("{mode} design"),
         crate::model::ModelSource::Urdf { base_link, tip_link, .. } => format!("URDF, chain {base_link} -> {tip_link}"),
         crate::model::ModelSource::Mjcf { base_body, tip_body, .. } => format!("MJCF, chain {base_body} -> {tip_body}"),
+        crate::model::ModelSource::Timor { modules, tool, .. } => format!("Timor assembly {}, tool {tool}", modules.join(" ")),
     };
     let _ = writeln!(out, "{} ({source}, {} joints)", model.name, model.dof());
     let choices = model.source.choices();

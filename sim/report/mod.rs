@@ -404,6 +404,7 @@ fn design_summary(validation: &Validation) -> DesignSummary {
                 crate::model::ModelSource::Design { mode, .. } => mode.clone(),
                 crate::model::ModelSource::Urdf { .. } => "urdf".into(),
                 crate::model::ModelSource::Mjcf { .. } => "mjcf".into(),
+                crate::model::ModelSource::Timor { .. } => "timor".into(),
             },
             dof: model.dof(),
             parameters: None,
