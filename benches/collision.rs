@@ -46,6 +46,7 @@ fn spheres() -> Scenario {
         goals: vec![],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     }
 }
 

@@ -42,6 +42,7 @@ fn ik(c: &mut Criterion) {
                     position: tool.translation.vector,
                     rotation: tool.rotation,
                     tolerance: Tolerance::Pose,
+                    task: None,
                 }
             })
             .collect();

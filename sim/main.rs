@@ -27,6 +27,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Some(Command::Generate(args)) => cli::generate::command(args).map_err(|e| Failure::from(Error::from(e))),
+        Some(Command::Convert(args)) => cli::convert::command(args).map_err(|e| Failure::from(Error::from(e))),
         Some(Command::Snapshot(args)) => cli::snapshot::command(args),
         Some(Command::Sweep(args)) => cli::sweep::sweep_command(args),
         Some(Command::Merge(args)) => cli::sweep::merge_command(args),

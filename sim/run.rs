@@ -208,6 +208,9 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
         for diagnostic in &model.diagnostics {
             progress.warning(&diagnostic.to_string());
         }
+        for note in &scenario.notes {
+            progress.warning(&format!("warning: scenario {}: {note}", scenario.name));
+        }
     }
     for choice in model.source.choices() {
         progress.info(&format!("{}: {choice}", input.display()));

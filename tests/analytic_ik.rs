@@ -49,6 +49,7 @@ fn pose_goal(pose: &Isometry3<f64>) -> Goal {
         position: pose.translation.vector,
         rotation: pose.rotation,
         tolerance: Tolerance::Pose,
+        task: None,
     }
 }
 
@@ -276,6 +277,7 @@ fn a_goal_whose_every_solution_collides_is_proven_unreachable_in_the_report() {
         goals,
         home: None,
         provenance: None,
+        notes: Vec::new(),
     };
     let ball = Obstacle {
         name: "ball".into(),

@@ -95,6 +95,7 @@ fn scenario(obstacles: Vec<Obstacle>, floor: Option<f64>) -> Scenario {
         goals: vec![],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     }
 }
 

@@ -302,6 +302,7 @@ fn a_pose_with_sixteen_real_solutions_gives_sixteen() {
         position: pose.translation.vector,
         rotation: pose.rotation,
         tolerance: Tolerance::Pose,
+        task: None,
     };
     let solved = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
     assert!(solved.complete);
@@ -366,6 +367,7 @@ fn a_z_symmetric_goal_of_a_six_joint_arm_is_decided_over_the_free_turn() {
         position: Vector3::new(0.05, -0.45, 0.25),
         rotation: UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI),
         tolerance: Tolerance::ZSymmetric,
+        task: None,
     };
     let solved = Ik::new(&model, IkOptions::default()).solve(&goal, 0, None);
     assert!(!solved.reached());

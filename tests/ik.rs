@@ -22,6 +22,7 @@ fn reach_rate(design: &str, goals: usize, tolerance: Tolerance, seed: u64) -> f6
             position: tool.translation.vector,
             rotation: tool.rotation,
             tolerance,
+            task: None,
         };
         let result = ik.solve(&goal, index, None);
         if result.reached() {
@@ -110,9 +111,11 @@ fn collision_aware_ik_never_calls_a_colliding_solution_reached() {
                 position: tool.translation.vector,
                 rotation: tool.rotation,
                 tolerance: Tolerance::Pose,
+                task: None,
             }],
             home: None,
             provenance: None,
+            notes: Vec::new(),
         };
         let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("world builds");
         let mut ik = Ik::with_collisions(&model, &world, IkOptions::default());
@@ -175,9 +178,11 @@ fn a_clearance_margin_makes_ik_call_a_solution_closer_than_it_not_reached() {
                 position: tool.translation.vector,
                 rotation: tool.rotation,
                 tolerance: Tolerance::Pose,
+                task: None,
             }],
             home: None,
             provenance: None,
+            notes: Vec::new(),
         };
         let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("world builds");
         let plain = Ik::with_collisions(&model, &world, IkOptions::default()).solve(&scenario.goals[0], index, None);
@@ -265,6 +270,7 @@ fn on_non_ur_6r_designs_the_default_finds_most_solutions_of_a_500_start_oracle()
                 position: tool.translation.vector,
                 rotation: tool.rotation,
                 tolerance: Tolerance::Pose,
+                task: None,
             };
             let result = default.solve(&goal, index, None);
             starts += result.starts;
@@ -310,6 +316,7 @@ fn given_starts_are_tried_per_goal() {
             position: tool.translation.vector,
             rotation: tool.rotation,
             tolerance: Tolerance::Pose,
+            task: None,
         };
         let near: Vec<f64> = q0.iter().map(|x| x + 0.02).collect();
         let opts = IkOptions {

@@ -31,6 +31,7 @@ fn witnessed_goal(model: &Model, tolerance: Tolerance, rng: &mut impl Rng) -> (V
         position: tool.translation.vector + common::unit(rng) * rng.random_range(0.0..0.999e-3),
         rotation: turn * tool.rotation * spin,
         tolerance,
+        task: None,
     };
     (q, goal)
 }

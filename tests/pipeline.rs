@@ -105,6 +105,7 @@ fn through_an_obstacle(shape: Shape) {
         position: Vector3::new(0.0, 0.6, 0.3),
         rotation: UnitQuaternion::identity(),
         tolerance: Tolerance::Position,
+        task: None,
     };
     let scenario = Scenario {
         name: "swing-past-a-ball".into(),
@@ -114,6 +115,7 @@ fn through_an_obstacle(shape: Shape) {
         goals: vec![goal],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     };
     // The goal's other way round is beyond the joint limit: no budget finds a path, and a small
     // one keeps the exact checks of the mesh variant (slower than the ball's) short.
@@ -207,9 +209,11 @@ fn a_joint_over_its_rated_torque_fails_the_design_and_one_within_does_not() {
             position: tool.translation.vector,
             rotation: tool.rotation,
             tolerance: Tolerance::Position,
+            task: None,
         }],
         home: Some(q),
         provenance: None,
+        notes: Vec::new(),
     };
     let opts = ValidateOptions {
         engines: "mujoco".parse::<Engines>().expect("an engine"),
@@ -288,9 +292,11 @@ fn a_mesh_notch_stays_open_in_both_engines() {
             position: Vector3::new(0.0, 0.6, 0.3),
             rotation: UnitQuaternion::identity(),
             tolerance: Tolerance::Position,
+            task: None,
         }],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     };
     let validation = validate(loaded, scenario, &ValidateOptions::default()).expect("runs");
     let report = report::build(&validation);
@@ -368,6 +374,7 @@ fn a_link_mesh_in_contact_is_named_after_its_link_in_both_engines() {
         goals: Vec::new(),
         home: None,
         provenance: None,
+        notes: Vec::new(),
     };
     let world = proving_ground::pipeline::collision_world(&model, &scenario, &[]).expect("world");
     // Exact geometry: the first sampled angle where link1 meets the ball.

@@ -68,6 +68,7 @@ fn with_obstacles(obstacles: Vec<Obstacle>) -> Scenario {
         goals: vec![],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     }
 }
 
@@ -432,6 +433,7 @@ fn position_goal(name: &str, x: f64, y: f64) -> Goal {
         position: Vector3::new(x, y, 0.0),
         rotation: UnitQuaternion::identity(),
         tolerance: Tolerance::Position,
+        task: None,
     }
 }
 

@@ -78,6 +78,7 @@ fn empty_scenario() -> Scenario {
         goals: Vec::new(),
         home: None,
         provenance: None,
+        notes: Vec::new(),
     }
 }
 

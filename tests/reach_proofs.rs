@@ -27,6 +27,7 @@ fn nearby_goal(model: &Model, tolerance: Tolerance, rng: &mut impl Rng) -> Goal 
         position: tool.translation.vector + common::unit(rng) * 0.99e-3,
         rotation: turn * tool.rotation * spin,
         tolerance,
+        task: None,
     }
 }
 

@@ -1,6 +1,7 @@
 //! The command line: one module per subcommand, each parsing its arguments into the library's
 //! options, calling the library and printing what it returns.
 
+pub(crate) mod convert;
 pub(crate) mod generate;
 mod help;
 pub(crate) mod optimize;
@@ -34,6 +35,9 @@ pub(crate) enum Command {
     /// Write a generated scenario (the paper's cluttered tasks, its workspace task, or the course
     /// for its real-world robot); an existing file is only replaced with --force.
     Generate(generate::GenerateArgs),
+    /// Write a scenario or a Timor / CoBRA task in either format (`--to scenario|timor`); what
+    /// the scenario format cannot hold is named in a warning.
+    Convert(convert::ConvertArgs),
     /// Run a suite (designs x scenarios x options, a JSON file) and compare every report with its
     /// snapshot in the suite's folder: exit 1 with a diff on any difference, missing snapshot
     /// (written as .snap.new) or orphan; --accept records them.

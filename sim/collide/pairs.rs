@@ -224,6 +224,7 @@ mod tests {
             goals: vec![],
             home: None,
             provenance: None,
+            notes: Vec::new(),
         }
     }
 

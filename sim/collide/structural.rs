@@ -82,6 +82,7 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
         goals: vec![],
         home: None,
         provenance: None,
+        notes: Vec::new(),
     };
     let world = world(model, &empty, &CollideOptions::default())?;
     let mut configurations: Option<Vec<Vec<f64>>> = None;

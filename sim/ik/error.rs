@@ -70,6 +70,7 @@ mod tests {
             position: Vector3::new(0.5, 0.0, 0.3),
             rotation: UnitQuaternion::from_euler_angles(0.3, 0.2, 0.1),
             tolerance,
+            task: None,
         }
     }
 

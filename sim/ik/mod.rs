@@ -27,7 +27,7 @@ pub mod wrist;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
-pub use reach::{beyond_reach, last_joints_beyond_reach, reach_bound, unreachable_proof};
+pub use reach::{beyond_reach, last_joints_beyond_reach, reach_bound, task_beyond_reach, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
 use crate::collide::CollisionWorld;
@@ -268,6 +268,7 @@ impl<'a> Ik<'a> {
         self.parts_left = cells::PARTS_PER_GOAL;
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
+        judge_task_tolerance(self.model, goal, &mut result);
         result
     }
 
@@ -999,6 +1000,38 @@ pub fn wrap_angle(angle: f64) -> f64 {
         wrapped - two_pi
     } else {
         wrapped
+    }
+}
+
+/// Why a proof within the harness's tolerance does not decide `goal`, if it does not: the goal's
+/// own (task) tolerance accepts poses further away.
+pub fn task_tolerance_gap(goal: &Goal) -> Option<String> {
+    let task = goal.task.as_ref()?;
+    task.proof_gap(REACHED_POSITION_M, REACHED_ORIENTATION_RAD, goal.tolerance != Tolerance::Position)
+}
+
+/// Holds IK's answer for `goal` to the goal's own tolerance, where it has one: a solution outside
+/// it reaches nothing, and a proof within the harness's tolerance that does not cover it gives
+/// way to one that does (the goal further beyond reach than the task accepts) or leaves the goal
+/// undecided.
+fn judge_task_tolerance(model: &Model, goal: &Goal, result: &mut GoalSolutions) {
+    let Some(task) = &goal.task else { return };
+    let judged = goal.tolerance != Tolerance::Position;
+    for solution in &mut result.solutions {
+        if solution.pose_reached && !task.accepts(solution.error.position_m, solution.error.orientation_rad, judged) {
+            solution.pose_reached = false;
+            solution.reached = false;
+        }
+    }
+    // Reached ones first, as everywhere else.
+    result.solutions.sort_by_key(|s| !s.reached);
+    if result.proof.is_some() {
+        if let Some(gap) = task_tolerance_gap(goal) {
+            result.proof = task_beyond_reach(model, goal);
+            if result.proof.is_none() {
+                result.undecided = Some(gap);
+            }
+        }
     }
 }
 

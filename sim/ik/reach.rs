@@ -80,6 +80,22 @@ pub fn beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
     tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_beyond_reach(model, goal))
 }
 
+/// The beyond-reach proof of the tool point for a goal whose own (task) tolerance is wider than
+/// the harness's: the goal lies further beyond reach than that tolerance accepts.
+pub fn task_beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
+    let task = goal.task.as_ref()?;
+    let first = model.joints.first()?;
+    let origin = (model.world_from_base * first.parent_from_joint).translation.vector;
+    let reach = reach_bound(model);
+    let away = (goal.position - origin).norm();
+    (away - reach >= task.outer_m).then(|| {
+        format!(
+            "the goal is {away:.3} m from joint 1's origin; no tool position is further than {reach:.3} m, {:.1} mm short, beyond what the task's tolerance ({task}) accepts",
+            (away - reach) * 1e3
+        )
+    })
+}
+
 /// The beyond-reach proof of the tool point.
 fn tool_beyond_reach(model: &Model, goal: &Goal, origin: &Vector3<f64>) -> Option<String> {
     let reach = reach_bound(model);

@@ -458,6 +458,7 @@ mod tests {
             position: pose.translation.vector,
             rotation: pose.rotation,
             tolerance,
+            task: None,
         }
     }
 

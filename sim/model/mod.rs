@@ -13,7 +13,7 @@ mod inertia;
 mod kinematics;
 mod mesh;
 mod names;
-mod timor;
+pub(crate) mod timor;
 mod trig;
 mod urdf_xml;
 

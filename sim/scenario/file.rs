@@ -1,6 +1,6 @@
 //! Scenario files: the JSON schema and its validation (`load`, `parse`). Writing is in `write.rs`.
 
-use super::{Floor, Goal, Obstacle, Provenance, Scenario, ScenarioError, Tolerance};
+use super::{Floor, Goal, Obstacle, Provenance, Scenario, ScenarioError, TaskTolerance, Tolerance, TolerancePart};
 use crate::limits;
 use crate::model::{load_mesh, Shape};
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
@@ -101,6 +101,56 @@ pub(super) struct GoalFile {
     pub(super) rotation: Option<[[f64; 3]; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) tolerance: Option<Tolerance>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) task_tolerance: Option<TaskToleranceFile>,
+}
+
+/// A goal's own tolerance ([`TaskTolerance`]); a missing bound is unbounded.
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TaskToleranceFile {
+    pub(super) parts: Vec<TolerancePart>,
+    pub(super) inner_m: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) inner_rad: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) outer_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) outer_rad: Option<f64>,
+}
+
+impl TaskToleranceFile {
+    pub(super) fn of(task: &TaskTolerance) -> Self {
+        let finite = |v: f64| v.is_finite().then_some(v);
+        TaskToleranceFile {
+            parts: task.parts.clone(),
+            inner_m: task.inner_m,
+            inner_rad: finite(task.inner_rad),
+            outer_m: finite(task.outer_m),
+            outer_rad: finite(task.outer_rad),
+        }
+    }
+
+    /// The tolerance, or why the numbers are not one: each bound non-negative, the inner ball
+    /// within the outer.
+    fn checked(&self) -> Result<TaskTolerance, String> {
+        let task = TaskTolerance {
+            parts: self.parts.clone(),
+            inner_m: self.inner_m,
+            inner_rad: self.inner_rad.unwrap_or(f64::INFINITY),
+            outer_m: self.outer_m.unwrap_or(f64::INFINITY),
+            outer_rad: self.outer_rad.unwrap_or(f64::INFINITY),
+        };
+        let ordered = |inner: f64, outer: f64| inner >= 0.0 && inner <= outer && !inner.is_nan() && !outer.is_nan();
+        if ordered(task.inner_m, task.outer_m) && ordered(task.inner_rad, task.outer_rad) && task.inner_m.is_finite() {
+            Ok(task)
+        } else {
+            Err(format!(
+                "inner_m {}, outer_m {:?}, inner_rad {:?}, outer_rad {:?}: expected 0 <= inner <= outer (a missing outer bound is unbounded)",
+                self.inner_m, self.outer_m, self.inner_rad, self.outer_rad
+            ))
+        }
+    }
 }
 
 /// Reads and validates a scenario file.
@@ -124,6 +174,9 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
 /// # Errors
 /// As [`load`].
 pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
+    if super::timor::is_timor_task(text) {
+        return Ok(super::timor::parse_timor_task(text, path)?.scenario);
+    }
     let file: ScenarioFile = serde_json::from_str(text).map_err(|e| ScenarioError::Parse {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -212,6 +265,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
             position,
             rotation,
             tolerance: goal.tolerance.unwrap_or(default_tolerance),
+            task: match &goal.task_tolerance {
+                None => None,
+                Some(task) => Some(task.checked().map_err(|m| check.invalid(&format!("{field}.task_tolerance"), m))?),
+            },
         });
     }
 
@@ -223,6 +280,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
         goals,
         home: file.home,
         provenance: file.provenance,
+        notes: Vec::new(),
     })
 }
 

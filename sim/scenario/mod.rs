@@ -4,9 +4,11 @@
 
 mod file;
 pub mod generate;
+mod timor;
 mod write;
 
 pub use file::{load, parse, ORIENTATION_TOLERANCE};
+pub use timor::{is_timor_task, load_timor_task, parse_timor_task, save_timor_task, to_timor_task, TaskImport};
 pub use write::{save, to_json};
 
 use crate::model::Shape;
@@ -31,6 +33,10 @@ pub struct Scenario {
     pub home: Option<Vec<f64>>,
     /// How the file was made, so a generated file can be regenerated.
     pub provenance: Option<Provenance>,
+    /// What reading the file left unchecked, a sentence each (a Timor task's `follow` goals);
+    /// said as warnings with the report.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// The floor plane.
@@ -85,6 +91,100 @@ pub struct Goal {
     pub rotation: UnitQuaternion<f64>,
     /// How the orientation is judged.
     pub tolerance: Tolerance,
+    /// The goal's own tolerance, where its source (a Timor task) gives one other than the
+    /// harness's 1 mm and 1 degree; `None` for the harness's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub task: Option<TaskTolerance>,
+}
+
+/// A goal's own tolerance, as balls around the goal the harness can reason with: IK proves and
+/// reaches within 1 mm and 1 degree, which decides the task's goal only where the task's region
+/// lies inside that (a proof of unreachability carries over) and the configuration found lies
+/// inside the task's region (a reached goal carries over).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskTolerance {
+    /// The tolerance as the task writes it: Timor's projections with their intervals.
+    pub parts: Vec<TolerancePart>,
+    /// Largest position error (m) every pose with that error or less is within the task's
+    /// tolerance (the radius of the ball inside its position region).
+    pub inner_m: f64,
+    /// Largest orientation error (rad) likewise; infinite when the task leaves orientation free.
+    pub inner_rad: f64,
+    /// Smallest position error (m) beyond which no pose is within the task's tolerance (the
+    /// radius of the ball around its position region); infinite when unbounded.
+    pub outer_m: f64,
+    /// Smallest orientation error (rad) likewise; infinite when orientation is free.
+    pub outer_rad: f64,
+}
+
+/// One bounded coordinate of a Timor tolerance (`r_sph` in `[0, 0.01]`, about the nominal frame).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TolerancePart {
+    /// Timor's projection name (`x`, `r_sph`, `Theta_R`, `N_z`, ...).
+    pub projection: String,
+    /// Lower and upper bound (m or rad).
+    pub interval: [f64; 2],
+    /// The frame whose axes it is measured along (`nominal` or `world`).
+    pub frame: String,
+}
+
+impl std::fmt::Display for TaskTolerance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts: Vec<String> = self
+            .parts
+            .iter()
+            .map(|p| {
+                let frame = if p.frame == "nominal" {
+                    String::new()
+                } else {
+                    format!(" in {}", p.frame)
+                };
+                format!("{} [{}, {}]{frame}", p.projection, p.interval[0], p.interval[1])
+            })
+            .collect();
+        f.write_str(&parts.join(", "))
+    }
+}
+
+impl TaskTolerance {
+    /// Why a proof of unreachability within the harness's tolerance does not decide the task's
+    /// goal, if it does not: the task accepts poses further away.
+    pub fn proof_gap(&self, harness_m: f64, harness_rad: f64, orientation_judged: bool) -> Option<String> {
+        let wider = self.outer_m > harness_m || (orientation_judged && self.outer_rad > harness_rad);
+        wider.then(|| {
+            format!(
+                "unreachable within {:.0} mm and {:.0} deg, but the task's tolerance ({}) accepts poses up to {} and {} away, which the harness does not check",
+                harness_m * 1e3,
+                harness_rad.to_degrees(),
+                self,
+                distance(self.outer_m),
+                angle(self.outer_rad),
+            )
+        })
+    }
+
+    /// Whether a configuration this far from the goal is within the task's tolerance.
+    pub fn accepts(&self, position_m: f64, orientation_rad: f64, orientation_judged: bool) -> bool {
+        position_m <= self.inner_m && (!orientation_judged || orientation_rad <= self.inner_rad)
+    }
+}
+
+fn distance(m: f64) -> String {
+    if m.is_finite() {
+        format!("{:.1} mm", m * 1e3)
+    } else {
+        "any distance".into()
+    }
+}
+
+fn angle(rad: f64) -> String {
+    if rad.is_finite() {
+        format!("{:.2} deg", rad.to_degrees())
+    } else {
+        "any angle".into()
+    }
 }
 
 /// Who made a scenario and how to make it again.

@@ -1,7 +1,9 @@
 //! Scenario -> JSON text, the inverse of `file::parse`, written from the serde types that read
 //! it: keys in the schema's order (provenance parameters sorted), the layout of [`crate::json`].
 
-use super::file::{default_goal_name, default_obstacle_name, FloorFile, GoalFile, ObstacleFile, PoseFile, Scale, ScenarioFile};
+use super::file::{
+    default_goal_name, default_obstacle_name, FloorFile, GoalFile, ObstacleFile, PoseFile, Scale, ScenarioFile, TaskToleranceFile,
+};
 use super::{Scenario, ScenarioError, Tolerance};
 use crate::model::Shape;
 use nalgebra::{Isometry3, UnitQuaternion};
@@ -81,6 +83,7 @@ pub fn to_json(scenario: &Scenario) -> String {
             quaternion: Some(crate::frames::wxyz(&goal.rotation)),
             rotation: None,
             tolerance: (goal.tolerance != tolerance).then_some(goal.tolerance),
+            task_tolerance: goal.task.as_ref().map(TaskToleranceFile::of),
         })
         .collect();
     let file = ScenarioFile {
@@ -104,6 +107,12 @@ pub fn to_json(scenario: &Scenario) -> String {
 /// # Errors
 /// [`ScenarioError::Write`] when the file exists (and `overwrite` is false) or cannot be written.
 pub fn save(scenario: &Scenario, path: &Path, overwrite: bool) -> Result<(), ScenarioError> {
+    write_file(path, to_json(scenario).as_bytes(), overwrite)
+}
+
+/// Writes a scenario's text to `path`, creating missing parent folders, replacing a file only
+/// when `overwrite` is true and never one this run read.
+pub(super) fn write_file(path: &Path, bytes: &[u8], overwrite: bool) -> Result<(), ScenarioError> {
     let write_error = |source: std::io::Error| ScenarioError::Write {
         path: path.to_path_buf(),
         source,
@@ -111,7 +120,7 @@ pub fn save(scenario: &Scenario, path: &Path, overwrite: bool) -> Result<(), Sce
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(write_error)?;
     }
-    crate::files::write_atomic(path, to_json(scenario).as_bytes(), overwrite).map_err(|error| match error {
+    crate::files::write_atomic(path, bytes, overwrite).map_err(|error| match error {
         crate::files::WriteError::Exists => write_error(std::io::Error::new(
             std::io::ErrorKind::AlreadyExists,
             "the file exists; pass --force to replace it",

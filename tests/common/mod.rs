@@ -194,6 +194,7 @@ pub fn pose_goal(
         position: pose.translation.vector,
         rotation: pose.rotation,
         tolerance,
+        task: None,
     }
 }
 

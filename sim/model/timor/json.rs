@@ -12,7 +12,7 @@ use serde::Deserialize;
 const NON_FINITE: [(&str, f64); 3] = [("-Infinity", f64::NEG_INFINITY), ("Infinity", f64::INFINITY), ("NaN", f64::NAN)];
 
 /// `text` with every `Infinity`, `-Infinity` and `NaN` outside strings put in quotes.
-pub(super) fn quote_non_finite(text: &str) -> String {
+pub(crate) fn quote_non_finite(text: &str) -> String {
     let bytes = text.as_bytes();
     let mut out = String::with_capacity(text.len() + 16);
     let mut in_string = false;
@@ -55,7 +55,7 @@ pub(super) fn quote_non_finite(text: &str) -> String {
 
 /// A number as Timor writes it: a JSON number or a quoted non-finite word.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Num(pub f64);
+pub(crate) struct Num(pub f64);
 
 impl<'de> Deserialize<'de> for Num {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -88,7 +88,7 @@ impl<'de> Deserialize<'de> for Num {
 
 /// An identifier Timor compares as a string (`str(...)`), written as a string or an integer.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub(super) struct Id(pub String);
+pub(crate) struct Id(pub String);
 
 impl<'de> Deserialize<'de> for Id {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -121,7 +121,7 @@ impl std::fmt::Display for Id {
 /// One element or a list of them: Timor accepts both wherever a list is expected.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(untagged)]
-pub(super) enum OneOrMany<T> {
+pub(crate) enum OneOrMany<T> {
     /// A single element, written without brackets.
     One(T),
     /// A list.
@@ -135,7 +135,7 @@ impl<T> Default for OneOrMany<T> {
 }
 
 impl<T> OneOrMany<T> {
-    pub(super) fn into_vec(self) -> Vec<T> {
+    pub(crate) fn into_vec(self) -> Vec<T> {
         match self {
             OneOrMany::One(x) => vec![x],
             OneOrMany::Many(v) => v,
@@ -144,14 +144,14 @@ impl<T> OneOrMany<T> {
 }
 
 /// A homogeneous transformation as Timor writes it: four rows of four numbers.
-pub(super) type Matrix4Rows = [[Num; 4]; 4];
+pub(crate) type Matrix4Rows = [[Num; 4]; 4];
 
 /// Largest deviation from a rigid transformation that is taken for rounding (a rotation's
 /// `R^T R - I`, the last row's `0 0 0 1`); Timor's files carry about 1e-16.
 const RIGID_TOLERANCE: f64 = 1e-6;
 
 /// The rigid transformation a 4x4 matrix holds; else what is wrong with it.
-pub(super) fn isometry(rows: &Matrix4Rows) -> Result<Isometry3<f64>, String> {
+pub(crate) fn isometry(rows: &Matrix4Rows) -> Result<Isometry3<f64>, String> {
     let m = |r: usize, c: usize| rows[r][c].0;
     if rows.iter().flatten().any(|x| !x.0.is_finite()) {
         return Err("a 4x4 pose has a number that is not finite".into());
@@ -181,7 +181,7 @@ pub(super) fn isometry(rows: &Matrix4Rows) -> Result<Isometry3<f64>, String> {
 }
 
 /// `pose` as the four rows Timor writes.
-pub(super) fn rows(pose: &Isometry3<f64>) -> [[f64; 4]; 4] {
+pub(crate) fn rows(pose: &Isometry3<f64>) -> [[f64; 4]; 4] {
     let h = pose.to_homogeneous();
     std::array::from_fn(|r| std::array::from_fn(|c| h[(r, c)]))
 }

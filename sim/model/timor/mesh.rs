@@ -10,18 +10,20 @@ use nalgebra::Isometry3;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The colliders of a mesh geometry with these parameters (`file`, optional `scale`).
-pub(super) fn colliders(
+/// The colliders of a mesh geometry with these parameters (`file`, optional `scale`); `dir` is
+/// the folder the file is relative to, `anchor` says which for messages.
+pub(crate) fn colliders(
     parameters: &BTreeMap<String, serde_json::Value>,
     element: &str,
     dir: &Path,
     label: &str,
     body_from_shape: Isometry3<f64>,
+    anchor: &str,
 ) -> Result<Vec<Collider>, Problem> {
     let uri = parameters.get("file").and_then(serde_json::Value::as_str).ok_or_else(|| {
         (
             format!("{element} parameters"),
-            "a mesh needs `file` (a path relative to modules.json)".to_string(),
+            format!("a mesh needs `file` (a path relative to {anchor})"),
         )
     })?;
     let scale = match parameters.get("scale") {
@@ -46,10 +48,7 @@ pub(super) fn colliders(
     if !file.is_file() {
         return Err((
             format!("{element} parameters file"),
-            format!(
-                "mesh `{uri}` not found at {} (mesh files are relative to the folder of modules.json)",
-                file.display()
-            ),
+            format!("mesh `{uri}` not found at {} (mesh files are relative to {anchor})", file.display()),
         ));
     }
     let is_wrl = file

@@ -7,8 +7,8 @@
 //! a Timor solution (`taskID`, `trajectory`, `cost`, ...) are named in a warning and not read.
 
 mod assembly;
-mod json;
-mod mesh;
+pub(crate) mod json;
+pub(crate) mod mesh;
 mod set;
 
 use super::{Diagnostic, Model, ModelError};

@@ -492,7 +492,14 @@ fn geometry_colliders(geometry: &GeometryFile, element: &str, dir: &Path, label:
             radius: parameter(geometry, &["r"], element)?,
         }),
         "empty" => Ok(vec![]),
-        "mesh" => super::mesh::colliders(&geometry.parameters, element, dir, label, body_from_shape),
+        "mesh" => super::mesh::colliders(
+            &geometry.parameters,
+            element,
+            dir,
+            label,
+            body_from_shape,
+            "the folder of modules.json",
+        ),
         other => Err((
             format!("{element} type"),
             format!("`{other}`; expected box, cylinder, sphere, mesh or empty"),

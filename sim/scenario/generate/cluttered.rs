@@ -114,6 +114,7 @@ fn generate(task: usize, seed: u64) -> (Scenario, ClutteredWitness) {
         goals,
         home: None,
         provenance: Some(provenance("cluttered", seed, &[("task", task.into())])),
+        notes: Vec::new(),
     };
     (scenario, witness)
 }
@@ -160,6 +161,7 @@ fn goals_of(modules: &[SlotOption], rng: &mut ChaCha8Rng) -> Option<(ClutteredWi
             position: position.map(|v| v + 0.0),
             rotation: unit(*tool.rotation.quaternion()),
             tolerance: Tolerance::Pose,
+            task: None,
         });
         configurations.push(q);
         if goals.len() == CLUTTERED_GOALS {

@@ -265,6 +265,7 @@ pub fn course(seed: u64) -> Scenario {
                 position: tool.translation.vector.map(|v| v + 0.0),
                 rotation: unit(*(tool.rotation * spin).quaternion()),
                 tolerance: Tolerance::ZSymmetric,
+                task: None,
             }
         })
         .collect();
@@ -276,6 +277,7 @@ pub fn course(seed: u64) -> Scenario {
         goals,
         home: Some(COURSE_HOME.to_vec()),
         provenance: Some(provenance("course", seed, &[("robot", "designs/paper-real-world.json".into())])),
+        notes: Vec::new(),
     }
 }
 

@@ -66,6 +66,7 @@ pub fn workspace(count: usize, scale: f64, tolerance: Tolerance, seed: u64) -> R
                 position,
                 rotation: uniform_rotation(&mut rng),
                 tolerance,
+                task: None,
             }
         })
         .collect();
@@ -86,5 +87,6 @@ pub fn workspace(count: usize, scale: f64, tolerance: Tolerance, seed: u64) -> R
                 ("tolerance", tolerance_name.into()),
             ],
         )),
+        notes: Vec::new(),
     })
 }
