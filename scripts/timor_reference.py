@@ -27,6 +27,36 @@ ASSEMBLIES = [
 ]
 
 
+# Module sets and the most modules of their serial assemblies listed as design spaces.
+SPACES = [("geometric_primitive_modules", 5), ("IMPROV", 5)]
+
+
+def design_space(name, most):
+    """Every module order Timor's from_serial_modules assembles into a robot: at least one joint,
+    a tool connector (the one free connector, or the one of type eef among several), and where the
+    set has eef connectors, an eef tool."""
+    db = ModulesDB.from_name(name)
+    ids = sorted(m.id for m in db)
+    has_eef = any(c.type == "eef" for m in db for c in m.available_connectors.values())
+    bases = [m.id for m in db if sum(c.type == "base" for c in m.available_connectors.values()) == 1]
+    found = []
+    stack = [[b] for b in bases]
+    while stack:
+        order = stack.pop()
+        try:
+            assembly = ModuleAssembly.from_serial_modules(db, order)
+        except Exception:
+            continue
+        free = list(assembly.free_connectors.values())
+        eef = [c for c in free if c.type == "eef"]
+        if assembly.nJoints >= 1:
+            if (len(free) == 1 and (not has_eef or free[0].type == "eef")) or (len(free) > 1 and len(eef) == 1):
+                found.append(",".join(order))
+        if len(order) < most:
+            stack.extend(order + [m] for m in ids)
+    return {"module_set": name, "most_modules": most, "orders": sorted(found)}
+
+
 def _set_file(name):
     from timor.utilities.file_locations import get_module_db_files
     return Path(get_module_db_files(name))
@@ -77,7 +107,9 @@ def main():
             "joints": robot.joints,
             "configurations": configurations,
         })
-    json.dump({"source": "timor-python 1.1.1 (pinocchio, hpp-fcl), scripts/timor_reference.py", "cases": cases}, sys.stdout, indent=1)
+    spaces = [design_space(name, n) for name, n in SPACES]
+    json.dump({"source": "timor-python 1.1.1 (pinocchio, hpp-fcl), scripts/timor_reference.py", "cases": cases,
+               "design_spaces": spaces}, sys.stdout, indent=1)
     sys.stdout.write("\n")
 
 

@@ -20,6 +20,14 @@ const TIMOR_AGREEMENT: f64 = 1e-9;
 #[derive(Deserialize)]
 struct Reference {
     cases: Vec<Case>,
+    design_spaces: Vec<DesignSpace>,
+}
+
+#[derive(Deserialize)]
+struct DesignSpace {
+    module_set: String,
+    most_modules: usize,
+    orders: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -279,4 +287,69 @@ fn the_shipped_assemblies_validate_kinematically() {
         assert!(output.status.success(), "{name}: {}", String::from_utf8_lossy(&output.stderr));
         assert!(stdout.contains("Timor assembly"), "{stdout}");
     }
+}
+
+#[test]
+fn a_module_set_as_a_design_space_lists_what_timor_assembles() {
+    for space in reference().design_spaces {
+        let set = proving_ground::model::TimorSet::load(&space.module_set).expect("shipped set");
+        let mut ours: Vec<String> = set
+            .assemblies(space.most_modules)
+            .expect("within the cap")
+            .iter()
+            .map(|o| o.join(","))
+            .collect();
+        ours.sort();
+        assert_eq!(ours.len(), space.orders.len(), "{}", space.module_set);
+        assert_eq!(ours, space.orders, "{}", space.module_set);
+    }
+}
+
+#[test]
+fn a_sweep_over_a_module_set_writes_its_best_assemblies_as_files_that_validate() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (out, best) = (dir.path().join("sweep"), dir.path().join("best"));
+    let output = assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary is built")
+        .current_dir(repo())
+        .args([
+            "sweep",
+            "timor:geometric_primitive_modules@4",
+            "--scenarios",
+            "scenarios/cluttered/task-00.json",
+            "--quiet",
+            "--top",
+            "3",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .arg("--best-designs")
+        .arg(&best)
+        .output()
+        .expect("runs");
+    assert!(
+        output.status.code().is_some_and(|c| c <= 1),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&best)
+        .expect("best designs")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 3);
+    for file in files {
+        let model = from_timor(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(model.dof() >= 1);
+    }
+    // One assembly by its id, wherever a robot is taken.
+    let output = assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary is built")
+        .current_dir(repo())
+        .args(["timor:IMPROV/1,21,4,22,5,23,12", "--kinematics-only"])
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stderr = refused(&["timor:IMPROV/1,21,99", "--kinematics-only"]);
+    assert!(stderr.contains("moduleOrder[2]: no module `99`"), "{stderr}");
 }

@@ -21,7 +21,10 @@ pub use from_design::from_design;
 pub use from_mjcf::{from_mjcf, from_mjcf_to, TOOL_SITE};
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
-pub use timor::{from_timor, load_module_set, pose_rows, timor_kind, ModuleSetSummary, TimorKind, SHIPPED_SETS};
+pub use timor::{
+    from_timor, load_module_set, parse_timor_id, pose_rows, timor_kind, ModuleSetSummary, TimorKind, TimorSet, MAX_ASSEMBLIES,
+    SHIPPED_SETS, TIMOR_ID_PREFIX,
+};
 
 pub use inertia::Inertial;
 pub use kinematics::KinematicsWorkspace;

@@ -32,7 +32,20 @@ pub enum InputKind {
 
 /// The robot files read, for messages.
 const ROBOT_FILES: &str =
-    "expected a design (.json), a Timor assembly (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file, or a catalog id (modular6/D-Ls-Il-D-Is-Ll, preset/UR5e)";
+    "expected a design (.json), a Timor assembly (.json), a URDF (.urdf) or an MJCF (.xml, .mjcf) file, or a catalog id (modular6/D-Ls-Il-D-Is-Ll, preset/UR5e, timor:IMPROV/1,21,4,22,5,23,12)";
+
+/// The Timor module set and module order a Timor assembly id names (`timor:SET/M1,M2,...`), when
+/// `path` is no file and its text is one.
+fn timor_id(path: &Path) -> Result<Option<(String, Vec<String>)>, Error> {
+    if path.exists() {
+        return Ok(None);
+    }
+    let Some(text) = path.to_str() else { return Ok(None) };
+    model::parse_timor_id(text).map_err(|reason| Error::UnknownInput {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
 
 /// The design a catalog id names, when `path` is no file and its text is one.
 fn catalog_design(path: &Path) -> Result<Option<design::Design>, Error> {
@@ -69,6 +82,9 @@ pub fn input_kind(path: &Path) -> Result<InputKind, Error> {
     }
     if catalog_design(path)?.is_some() {
         return Ok(InputKind::Design);
+    }
+    if timor_id(path)?.is_some() {
+        return Ok(InputKind::Timor);
     }
     let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match extension.as_deref() {
@@ -186,10 +202,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, Error> {
                 }
                 .into());
             }
-            Ok(Loaded {
-                model: model::from_timor(path)?,
-                design: None,
-            })
+            let model = match timor_id(path)? {
+                Some((set, order)) => model::TimorSet::load(&set)?.assemble(&order, path)?,
+                None => model::from_timor(path)?,
+            };
+            Ok(Loaded { model, design: None })
         }
         InputKind::Mjcf => {
             // The base of an MJCF chain is where its first joint hangs; a URDF-style base link

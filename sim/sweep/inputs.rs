@@ -101,6 +101,8 @@ pub enum DesignSource {
     Modular(Vec<SlotOption>),
     /// An industrial preset, built when its pairs run.
     Preset(Preset),
+    /// A serial assembly of a Timor module set (its module order), built when its pairs run.
+    Timor(Arc<crate::model::TimorSet>, Vec<String>),
 }
 
 impl DesignEntry {
@@ -110,6 +112,13 @@ impl DesignEntry {
             DesignSource::File(loaded) => (**loaded).clone(),
             DesignSource::Modular(slots) => from_design(Design::modular(&self.id, slots)),
             DesignSource::Preset(preset) => from_design(Design::preset(&self.id, *preset)),
+            DesignSource::Timor(set, order) => Loaded {
+                // Every listed order was assembled once when the sweep resolved it.
+                model: set
+                    .assemble(order, Path::new(&self.id))
+                    .unwrap_or_else(|e| unreachable!("{}: assembled when listed: {e}", self.id)),
+                design: None,
+            },
         }
     }
 }
@@ -120,6 +129,9 @@ fn from_design(design: Design) -> Loaded {
         design: Some(design),
     }
 }
+
+/// Most modules of an assembly `timor:SET` lists (`timor:SET@N` for another count).
+pub const DEFAULT_TIMOR_MODULES: usize = 8;
 
 /// Design files a sweep reads from a folder.
 const DESIGN_EXTENSIONS: [&str; 4] = ["json", "urdf", "xml", "mjcf"];
@@ -140,6 +152,43 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
         }
     };
     for argument in arguments {
+        // A Timor module set as a design space: `timor:SET` (up to 8 modules) or `timor:SET@N`.
+        if let Some(rest) = argument.strip_prefix(crate::model::TIMOR_ID_PREFIX).filter(|r| !r.contains(',')) {
+            let designs_error = |message: String| SweepError::Designs {
+                argument: argument.clone(),
+                message,
+            };
+            let (name, modules) = match rest.rsplit_once('@') {
+                Some((name, n)) => (
+                    name,
+                    n.parse::<usize>()
+                        .ok()
+                        .filter(|n| (2..=16).contains(n))
+                        .ok_or_else(|| designs_error(format!("`@{n}`: expected the most modules an assembly has, 2 to 16")))?,
+                ),
+                None => (rest, DEFAULT_TIMOR_MODULES),
+            };
+            let set = Arc::new(crate::model::TimorSet::load(name).map_err(|e| SweepError::Load(Box::new(e.into())))?);
+            let orders = set.assemblies(modules).map_err(designs_error)?;
+            if orders.is_empty() {
+                return Err(designs_error(format!(
+                    "module set {} has no serial assembly of up to {modules} modules that is a robot",
+                    set.path().display()
+                )));
+            }
+            for order in orders {
+                let id = set.id(&order);
+                push(
+                    DesignEntry {
+                        id,
+                        source: DesignSource::Timor(set.clone(), order),
+                        sha256: None,
+                    },
+                    &mut entries,
+                );
+            }
+            continue;
+        }
         if let Some(name) = argument.strip_prefix("catalog:") {
             let catalog = Catalog::named(name).ok_or_else(|| SweepError::Designs {
                 argument: argument.clone(),
@@ -149,6 +198,26 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
                 push(entry, &mut entries);
             }
             continue;
+        }
+        // One Timor assembly by its id (a file of that name wins).
+        if !Path::new(argument).exists() {
+            if let Some((name, order)) = crate::model::parse_timor_id(argument).map_err(|message| SweepError::Designs {
+                argument: argument.clone(),
+                message,
+            })? {
+                let set = Arc::new(crate::model::TimorSet::load(&name).map_err(|e| SweepError::Load(Box::new(e.into())))?);
+                set.assemble(&order, Path::new(argument))
+                    .map_err(|e| SweepError::Load(Box::new(e.into())))?;
+                push(
+                    DesignEntry {
+                        id: set.id(&order),
+                        source: DesignSource::Timor(set, order),
+                        sha256: None,
+                    },
+                    &mut entries,
+                );
+                continue;
+            }
         }
         // One catalog robot by its id, as sweeps and the GA print them (a file of that name wins).
         if !Path::new(argument).exists() {

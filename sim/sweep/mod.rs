@@ -230,11 +230,22 @@ pub fn best_designs(designs: &[DesignEntry], ranking: &[String], top: usize) -> 
     let mut skipped = Vec::new();
     let digits = top.min(ranking.len()).max(1).to_string().len().max(2);
     for (rank, id) in ranking.iter().take(top).enumerate() {
-        let Some(design) = designs.iter().find(|d| &d.id == id).and_then(|d| d.load().design) else {
+        let description = format!("rank {} of a validate-design sweep: {id}", rank + 1);
+        let entry = designs.iter().find(|d| &d.id == id);
+        if let Some(DesignEntry {
+            source: inputs::DesignSource::Timor(set, order),
+            ..
+        }) = entry
+        {
+            // A Timor assembly as an assembly file, named after its modules.
+            let name = format!("{:0digits$}-{}.json", rank + 1, order.join("-").replace(['/', '\\'], "_"));
+            files.push((name, set.assembly_json(order, &description).into_bytes()));
+            continue;
+        }
+        let Some(design) = entry.and_then(|d| d.load().design) else {
             skipped.push(id.clone());
             continue;
         };
-        let description = format!("rank {} of a validate-design sweep: {id}", rank + 1);
         // A file's stem (the rank keeps equal stems apart), a catalog id with `_` for `/`.
         let path = Path::new(id);
         let base = match (path.extension(), path.file_stem()) {

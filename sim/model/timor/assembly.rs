@@ -510,6 +510,11 @@ fn tool_connector(free: &[(usize, Isometry3<f64>, String, bool)]) -> Result<&(us
     }
 }
 
+/// The mass (kg) and radius (m) of the token body a massless moving link gets: negligible beside
+/// any module (Timor's lightest carry 0.1 kg), enough for the engines' positive-mass checks.
+const TOKEN_MASS_KG: f64 = 1e-3;
+const TOKEN_RADIUS_M: f64 = 0.01;
+
 /// A moving link's mass properties: physical, or balanced with a warning as for URDFs.
 fn moving_inertial(
     masses: &[Inertial],
@@ -524,7 +529,19 @@ fn moving_inertial(
         joint: joint.into(),
         problem,
     };
-    let inertial = Inertial::combine(masses).ok_or_else(|| bad("every body it holds has mass 0".into()))?;
+    // Timor's modules give the bodies between two joints of one module (a pan-tilt's middle
+    // body, its output flange) mass 0, which its rigid-body model allows and the engines do
+    // not: such a link gets a token mass, said in a warning.
+    let Some(inertial) = Inertial::combine(masses) else {
+        diagnostics.push(Diagnostic {
+            path: path.to_path_buf(),
+            element: format!("link `{link}` inertia"),
+            message: format!(
+                "every body it holds has mass 0 (as Timor allows); the engines and the static load get {TOKEN_MASS_KG} kg, a sphere of {TOKEN_RADIUS_M} m radius, in its place"
+            ),
+        });
+        return Ok(Inertial::solid_sphere(TOKEN_MASS_KG, TOKEN_RADIUS_M));
+    };
     match inertial.check() {
         Ok(()) => Ok(inertial),
         Err(problem) => {

@@ -36,9 +36,11 @@ pub(crate) fn quote_non_finite(text: &str) -> String {
             i += 1;
             continue;
         }
-        let word = NON_FINITE.iter().map(|(w, _)| *w).find(|w| text[i..].starts_with(w));
+        // Bytes, not `str` slices: `i` may sit inside a multi-byte character (a BOM); a match is
+        // ASCII, so the slices below fall on character boundaries.
+        let word = NON_FINITE.iter().map(|(w, _)| *w).find(|w| bytes[i..].starts_with(w.as_bytes()));
         match word {
-            Some(word) if !text[..i].ends_with(|c: char| c.is_ascii_alphanumeric()) => {
+            Some(word) if i == 0 || !bytes[i - 1].is_ascii_alphanumeric() => {
                 out.push_str(&text[copied..i]);
                 out.push('"');
                 out.push_str(word);
@@ -204,6 +206,9 @@ mod tests {
         let b: Num = serde_json::from_value(values["b"].clone()).expect("a number");
         assert_eq!((a.0, b.0), (f64::INFINITY, f64::NEG_INFINITY));
         assert!(serde_json::from_str::<Num>("\"Inf\"").is_err());
+        // Multi-byte characters (a BOM, names) around the words.
+        assert_eq!(quote_non_finite("\u{feff}{\"é\": Infinity}"), "\u{feff}{\"é\": \"Infinity\"}");
+        assert_eq!(quote_non_finite("ü NaN"), "ü \"NaN\"");
     }
 
     #[test]

@@ -10,6 +10,9 @@ mod assembly;
 pub(crate) mod json;
 pub(crate) mod mesh;
 mod set;
+mod space;
+
+pub use space::{parse_timor_id, TimorSet, MAX_ASSEMBLIES, TIMOR_ID_PREFIX};
 
 use super::{Diagnostic, Model, ModelError};
 use json::{Id, Matrix4Rows, OneOrMany};
@@ -50,6 +53,10 @@ struct AssemblyFile {
     /// Not Timor's: the robot's name (default: the file name).
     #[serde(default)]
     name: Option<String>,
+    /// Not Timor's: what the file is (a sweep's rank), not read.
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
     module_set: String,
     module_order: Vec<Id>,
     #[serde(default)]
@@ -125,7 +132,11 @@ fn read_set(path: &Path) -> Result<set::ModuleSet, ModelError> {
 /// The module set an assembly names: a file or folder relative to the assembly, else a shipped
 /// set of that name.
 fn find_set(name: &str, assembly: &Path) -> Result<PathBuf, ModelError> {
-    let dir = assembly.parent().unwrap_or(Path::new("."));
+    find_set_in(name, assembly.parent().unwrap_or(Path::new(".")), assembly)
+}
+
+/// [`find_set`] relative to `dir`; `label` names the asker in messages.
+fn find_set_in(name: &str, dir: &Path, label: &Path) -> Result<PathBuf, ModelError> {
     let shipped = Path::new(SHIPPED_SETS).join(name);
     let mut searched = Vec::new();
     for root in [dir.join(name), shipped] {
@@ -148,7 +159,7 @@ fn find_set(name: &str, assembly: &Path) -> Result<PathBuf, ModelError> {
         })
         .unwrap_or_default();
     Err(ModelError::InvalidValue {
-        path: assembly.to_path_buf(),
+        path: label.to_path_buf(),
         element: "moduleSet".into(),
         message: format!(
             "`{name}` is no module set file, no folder holding modules.json and no shipped set (shipped: {}); searched {}",

@@ -1,0 +1,169 @@
+//! A Timor module set as a design space: its serial assemblies by module order, named by ids
+//! (`timor:SET/M1,M2,...`) that are robots wherever a robot is taken, and enumerated for sweeps.
+
+use super::assembly::{self, Assembly};
+use super::set::ModuleSet;
+use crate::model::{Model, ModelError};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The prefix of a Timor assembly id.
+pub const TIMOR_ID_PREFIX: &str = "timor:";
+
+/// Most assemblies one enumeration lists: beyond, a smaller module count is asked for.
+pub const MAX_ASSEMBLIES: usize = 100_000;
+
+/// A module set read once, shared by every assembly of a sweep.
+#[derive(Debug, Clone)]
+pub struct TimorSet {
+    /// The set as named (a shipped set's name, or the path given).
+    pub name: String,
+    set: Arc<ModuleSet>,
+}
+
+impl TimorSet {
+    /// Reads the module set `name` names: a `modules.json`, a folder holding one, or a shipped
+    /// set (relative paths from the current folder).
+    ///
+    /// # Errors
+    /// [`ModelError`] naming the set and what is wrong in it.
+    pub fn load(name: &str) -> Result<TimorSet, ModelError> {
+        let label = PathBuf::from(format!("{TIMOR_ID_PREFIX}{name}"));
+        let path = super::find_set_in(name, Path::new("."), &label)?;
+        Ok(TimorSet {
+            name: name.to_string(),
+            set: Arc::new(super::read_set(&path)?),
+        })
+    }
+
+    /// The `modules.json` read.
+    pub fn path(&self) -> &Path {
+        &self.set.path
+    }
+
+    /// The id of the assembly `order`.
+    pub fn id(&self, order: &[String]) -> String {
+        format!("{TIMOR_ID_PREFIX}{}/{}", self.name, order.join(","))
+    }
+
+    /// The model of the serial assembly `order` (Timor's `from_serial_modules`); `label` names
+    /// it in messages.
+    ///
+    /// # Errors
+    /// As [`super::from_timor`] for a file with this module order.
+    pub fn assemble(&self, order: &[String], label: &Path) -> Result<Model, ModelError> {
+        let problem = |p| super::problem(label, p);
+        let instances = assembly::instances(&self.set, order).map_err(problem)?;
+        let built = Assembly::serial(instances).map_err(problem)?;
+        let name = order.join("-");
+        let mut model = assembly::model(&built, label, name, nalgebra::Isometry3::identity(), Vec::new())?;
+        if let crate::model::ModelSource::Timor { module_set, .. } = &mut model.source {
+            *module_set = self.set.path.clone();
+        }
+        Ok(model)
+    }
+
+    /// Every serial assembly of at most `max_modules` modules that is a robot: a base module
+    /// first, each module mating the one before it in exactly one way, at least one moving joint,
+    /// a tool connector; where the set has connectors of type `eef`, the tool is one of them (the
+    /// robot ends in an end effector). Depth first, modules in file order: the same set gives
+    /// the same list.
+    ///
+    /// # Errors
+    /// A message when more than [`MAX_ASSEMBLIES`] would be listed.
+    pub fn assemblies(&self, max_modules: usize) -> Result<Vec<Vec<String>>, String> {
+        let needs_eef = self.set.modules.iter().flat_map(|m| &m.connectors).any(|c| c.kind == "eef");
+        let ids: Vec<String> = self.set.modules.iter().map(|m| m.id.clone()).collect();
+        let mut found = Vec::new();
+        let mut stack: Vec<Vec<String>> = self
+            .set
+            .modules
+            .iter()
+            .filter(|m| m.connectors.iter().filter(|c| c.kind == "base").count() == 1)
+            .map(|m| vec![m.id.clone()])
+            .collect();
+        stack.reverse();
+        let label = PathBuf::from(&self.name);
+        while let Some(order) = stack.pop() {
+            let Ok(instances) = assembly::instances(&self.set, &order) else {
+                continue;
+            };
+            let Ok(built) = Assembly::serial(instances) else { continue };
+            if let Ok(model) = assembly::model(&built, &label, String::new(), nalgebra::Isometry3::identity(), Vec::new()) {
+                let tool_is_eef = match &model.source {
+                    crate::model::ModelSource::Timor { tool, .. } => built
+                        .instances
+                        .iter()
+                        .flat_map(|i| {
+                            i.module
+                                .connectors
+                                .iter()
+                                .map(move |c| format!("{}.{}", i.name, c.id) == *tool && c.kind == "eef")
+                        })
+                        .any(|is| is),
+                    _ => false,
+                };
+                if !needs_eef || tool_is_eef {
+                    found.push(order.clone());
+                    if found.len() > MAX_ASSEMBLIES {
+                        return Err(format!(
+                            "more than {MAX_ASSEMBLIES} assemblies of up to {max_modules} modules; ask for fewer modules"
+                        ));
+                    }
+                }
+            }
+            if order.len() < max_modules {
+                for id in ids.iter().rev() {
+                    let mut longer = order.clone();
+                    longer.push(id.clone());
+                    stack.push(longer);
+                }
+            }
+        }
+        Ok(found)
+    }
+}
+
+/// A Timor assembly id's module set and module order (`timor:SET/M1,M2,...`); `None` when `text`
+/// is no such id.
+///
+/// # Errors
+/// A message when it starts like one but names no modules.
+pub fn parse_timor_id(text: &str) -> Result<Option<(String, Vec<String>)>, String> {
+    let Some(rest) = text.strip_prefix(TIMOR_ID_PREFIX) else {
+        return Ok(None);
+    };
+    let Some((set, order)) = rest.rsplit_once('/') else {
+        return Err(format!(
+            "a Timor assembly id is {TIMOR_ID_PREFIX}SET/M1,M2,... (SET a modules.json, a folder or a shipped set; the module IDs from the base on); `{text}` names no modules"
+        ));
+    };
+    let order: Vec<String> = order.split(',').map(str::trim).map(str::to_string).collect();
+    if set.is_empty() || order.iter().any(String::is_empty) {
+        return Err(format!("`{text}`: expected {TIMOR_ID_PREFIX}SET/M1,M2,... with no empty part"));
+    }
+    Ok(Some((set.to_string(), order)))
+}
+
+impl TimorSet {
+    /// An assembly file for `order`, as Timor writes one (plus our `name` and `description`):
+    /// the set by its shipped name, else by its absolute path, so the file reads anywhere.
+    pub fn assembly_json(&self, order: &[String], description: &str) -> String {
+        let shipped = Path::new(super::SHIPPED_SETS).join(&self.name);
+        let set = if !self.name.contains('/') && shipped.exists() && !Path::new(&self.name).exists() {
+            self.name.clone()
+        } else {
+            std::path::absolute(self.path())
+                .unwrap_or_else(|_| self.path().to_path_buf())
+                .to_string_lossy()
+                .into_owned()
+        };
+        let file = serde_json::json!({
+            "name": order.join("-"),
+            "description": description,
+            "moduleSet": set,
+            "moduleOrder": order,
+        });
+        crate::json::to_text(&file).unwrap_or_default()
+    }
+}
