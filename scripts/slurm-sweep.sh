@@ -11,7 +11,8 @@
 #SBATCH --job-name=pg-sweep
 #SBATCH --cpus-per-task=4
 #SBATCH --time=02:00:00
-#SBATCH --output=sweep-shards/slurm-%A_%a.out
+# Slurm opens the log before the script runs: it goes in the submit folder, which exists.
+#SBATCH --output=pg-sweep-%A_%a.out
 set -euo pipefail
 
 BIN=${BIN:-target/release/validate-design}

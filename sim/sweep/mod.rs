@@ -143,7 +143,10 @@ impl SweepMode {
     }
 }
 
-/// One shard of a sweep: pair `i` (canonical order) belongs to shard `i mod N + 1`.
+/// One shard of a sweep. The pairs (canonical order) are ranked by a fixed hash of their index
+/// and dealt round-robin: each shard is a uniform sample of the sweep, whatever the structure of
+/// the design list (the catalog's `i mod 40` would give shard 1 of 40 only robots whose slot 6 is
+/// `D`), and shards differ in size by at most one pair.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
     k: usize,
@@ -170,13 +173,26 @@ impl Shard {
         (self.k, self.n)
     }
 
-    fn holds(self, pair: usize) -> bool {
-        pair % self.n + 1 == self.k
+    /// The pairs of a sweep of `total` this shard holds, ascending.
+    fn pairs(self, total: usize) -> Vec<usize> {
+        let mut ranked: Vec<usize> = (0..total).collect();
+        ranked.sort_by_key(|&i| (splitmix64(i as u64), i));
+        let mut held: Vec<usize> = ranked.into_iter().skip(self.k - 1).step_by(self.n).collect();
+        held.sort_unstable();
+        held
     }
 
     fn text(self) -> String {
         format!("{}/{}", self.k, self.n)
     }
+}
+
+/// SplitMix64's output function (Steele, Lea, Flood 2014): a fixed, well-mixed hash of `x`.
+fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// A sweep's settings.
@@ -315,10 +331,11 @@ pub fn run(
     let (foreign, damaged) = (resumed.foreign, resumed.damaged);
     let mut done = resumed.records;
     let total = designs.len() * scenarios.len();
-    let pairs: Vec<(usize, usize)> = (0..total)
-        .filter(|&i| opts.shard.is_none_or(|s| s.holds(i)))
-        .map(|i| (i / scenarios.len(), i % scenarios.len()))
-        .collect();
+    let indices: Vec<usize> = match opts.shard {
+        Some(shard) => shard.pairs(total),
+        None => (0..total).collect(),
+    };
+    let pairs: Vec<(usize, usize)> = indices.into_iter().map(|i| (i / scenarios.len(), i % scenarios.len())).collect();
     let finished: std::collections::HashSet<(String, String)> = done.iter().map(|r| (r.design.clone(), r.scenario.clone())).collect();
     // A line of another sweep in the folder is found before any work, not after it.
     let expected: std::collections::HashSet<(&str, &str)> = pairs
@@ -620,4 +637,32 @@ pub fn merge(
         damaged: 0,
         ranking,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_are_fair_samples_that_cover_the_sweep_once() {
+        // The catalog's 15 625 robots on one task: slot 6 is the index's last base-5 digit.
+        let total = 15_625;
+        let n = 40;
+        let mut seen = vec![0u8; total];
+        for k in 1..=n {
+            let shard = Shard::parse(&format!("{k}/{n}")).expect("valid");
+            let held = shard.pairs(total);
+            assert!(held.len() == total / n || held.len() == total / n + 1, "shard {k}: {}", held.len());
+            let mut slot6 = [0usize; 5];
+            for &i in &held {
+                seen[i] += 1;
+                slot6[i % 5] += 1;
+            }
+            // A uniform sample: each option near a fifth (binomial spread about +-4 sigma).
+            for count in slot6 {
+                assert!((count as f64 - held.len() as f64 / 5.0).abs() < 60.0, "shard {k}: slot 6 {slot6:?}");
+            }
+        }
+        assert!(seen.iter().all(|&c| c == 1), "every pair in exactly one shard");
+    }
 }
