@@ -82,6 +82,7 @@ pub mod scenario;
 pub mod srdf;
 pub mod suite;
 pub mod sweep;
+pub mod workflow;
 pub mod xml;
 
 pub use run::{validate, Options, Run};

@@ -34,6 +34,7 @@ fn main() -> ExitCode {
         Some(Command::Table1(args)) => cli::sweep::table1_command(args),
         Some(Command::Ga(args)) => cli::sweep::ga_command(args),
         Some(Command::Optimize(args)) => cli::optimize::optimize_command(args),
+        Some(Command::Workflow(args)) => cli::workflow::command(args),
         None => cli::validate::command(&cli.validate).map_err(Failure::from),
     };
     match result {

@@ -225,7 +225,9 @@ fn the_readme_synopsis_lists_every_option_of_every_subcommand() {
     let start = readme.find("## The `validate-design` command").expect("the synopsis's heading");
     let open = start + readme[start..].find("```text\n").expect("a text block") + "```text\n".len();
     let close = open + readme[open..].find("```").expect("the block ends");
-    let subcommands = ["generate", "convert", "snapshot", "sweep", "merge", "table1", "ga", "optimize"];
+    let subcommands = [
+        "generate", "convert", "snapshot", "sweep", "merge", "table1", "ga", "optimize", "workflow",
+    ];
     // Options per subcommand (None: the validation itself), a line `validate-design X` starting X.
     let mut synopsis: std::collections::BTreeMap<Option<&str>, std::collections::BTreeSet<String>> = Default::default();
     let mut current = None;

@@ -22,6 +22,7 @@ Examples:
   validate-design generate workspace --tolerance z_symmetric --scale 1.2 --out /tmp/workspace.json
   validate-design designs/timor/improv-6r.json --scenario task.json   # a Timor assembly on a Timor / CoBRA task
   validate-design convert scenarios/cluttered/task-00.json --to timor --out task-00.timor.json
+  validate-design workflow scenarios/cluttered/task-00.json --out workflow-00   # candidates to summary.html
   validate-design snapshot --suite proving-ground.json             # your own golden suite
   validate-design snapshot --suite proving-ground.json --accept    # record its new snapshots
   validate-design sweep catalog:modular6 --scenarios scenarios/cluttered/task-00.json --out bf-00   # brute force

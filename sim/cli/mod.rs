@@ -8,6 +8,7 @@ pub(crate) mod optimize;
 pub(crate) mod snapshot;
 pub(crate) mod sweep;
 pub(crate) mod validate;
+pub(crate) mod workflow;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use proving_ground::scenario::Tolerance;
@@ -59,6 +60,10 @@ pub(crate) enum Command {
     /// objective (200 steps, rates 0.1 for joints and 0.01 for d and a), write the tuned design,
     /// validate both and print their verdicts side by side.
     Optimize(optimize::OptimizeArgs),
+    /// The paper's workflow on tasks in one command: candidates (the GA by default, the catalog
+    /// brute force, or designs), the reach-only filter, fine-tuning of the best, their full
+    /// validation with HTML reports and pictures, and one HTML summary (`summary.html`).
+    Workflow(workflow::WorkflowArgs),
 }
 
 /// A finite length of at least 0 m.
@@ -109,6 +114,9 @@ pub(crate) enum Failure {
     /// A snapshot suite.
     #[error(transparent)]
     Suite(#[from] proving_ground::suite::SuiteError),
+    /// A workflow.
+    #[error(transparent)]
+    Workflow(#[from] proving_ground::workflow::WorkflowError),
 }
 
 /// Progress on stderr (drawn only on a terminal): a spinner for a stage that cannot be counted,

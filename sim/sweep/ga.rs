@@ -76,6 +76,9 @@ pub struct GaResult {
     pub history: Vec<Generation>,
     /// Distinct designs evaluated.
     pub evaluations: usize,
+    /// Every design evaluated, fittest first (not in the saved file).
+    #[serde(skip)]
+    pub evaluated: Vec<String>,
 }
 
 fn genome_slots(genome: &Genome) -> Vec<SlotOption> {
@@ -246,7 +249,10 @@ pub fn run(scenario: &ScenarioEntry, mode: &SweepMode, opts: &GaOptions, progres
         history.push(summary(generation, &population, &evaluated));
     }
     let best = evaluated[&population[0]].clone();
+    let mut ranked: Vec<(&Genome, &Record)> = evaluated.iter().collect();
+    ranked.sort_by(|a, b| fitness(a.1).total_cmp(&fitness(b.1)).then(a.0.cmp(b.0)));
     Ok(GaResult {
+        evaluated: ranked.into_iter().map(|(_, record)| record.design.clone()).collect(),
         options: opts.clone(),
         scenario: scenario.id.clone(),
         best,
