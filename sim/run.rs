@@ -103,6 +103,9 @@ pub enum Written {
     Urdf,
     /// The MJCF export (with the scene when asked).
     Mjcf,
+    /// A mesh the URDF export names, written as STL beside it (no URDF reader loads its own
+    /// file).
+    Mesh,
 }
 
 /// What a run found, as far as it went.
@@ -331,7 +334,13 @@ fn checked_home(model: &crate::model::Model, home: &[f64]) -> Result<Vec<f64>, E
 pub fn stage_exports(set: &mut pipeline::OutputSet, run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBuf)>, Error> {
     let mut written = Vec::new();
     for (what, path, text) in export_files(run, exports)? {
-        set.add(&path, text.as_bytes())?;
+        match (what, path.parent(), path.file_name()) {
+            // The mesh folder beside the URDF is made as the set is written.
+            (Written::Mesh, Some(dir), Some(name)) => {
+                set.add_into(dir, &[(name.to_string_lossy().into_owned(), text)])?;
+            }
+            _ => set.add(&path, &text)?,
+        }
         written.push((what, path));
     }
     Ok(written)
@@ -342,16 +351,23 @@ pub fn stage_exports(set: &mut pipeline::OutputSet, run: &Run, exports: &Exports
 ///
 /// # Errors
 /// A failed export ([`Error`] of the exporter).
-pub fn export_files(run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBuf, String)>, Error> {
+pub fn export_files(run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBuf, Vec<u8>)>, Error> {
     let mut files = Vec::new();
     if let Some(path) = &exports.urdf {
         // Meshes named relative to the file: it loads from any folder, and moves with them.
         let folder = std::path::absolute(path).ok().and_then(|p| p.parent().map(Path::to_path_buf));
+        let stem = path
+            .file_stem()
+            .map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned());
         let urdf = UrdfExportOptions {
+            mesh_folder: folder.as_ref().map(|f| f.join(format!("{stem}-meshes"))),
             mesh_base: folder,
             ..Default::default()
         };
-        files.push((Written::Urdf, path.clone(), to_urdf(&run.model, &urdf)?));
+        files.push((Written::Urdf, path.clone(), to_urdf(&run.model, &urdf)?.into_bytes()));
+        for (mesh, bytes) in crate::export::written_meshes(&run.model, &urdf) {
+            files.push((Written::Mesh, mesh, bytes));
+        }
     }
     if let Some(path) = &exports.mjcf {
         let text = if exports.scene {
@@ -370,7 +386,7 @@ pub fn export_files(run: &Run, exports: &Exports) -> Result<Vec<(Written, PathBu
         } else {
             to_mjcf(&run.model, &MjcfOptions::default())?
         };
-        files.push((Written::Mjcf, path.clone(), text));
+        files.push((Written::Mjcf, path.clone(), text.into_bytes()));
     }
     Ok(files)
 }

@@ -1,14 +1,14 @@
 //! Timor module sets and assemblies, against Timor itself: tool poses and collision geometry
 //! placements computed by timor-python 1.1.1 (pinocchio, hpp-fcl) with
-//! `scripts/timor_reference.py`, stored in `tests/fixtures/timor/reference.json`; and the
-//! exports of an assembly loaded by MuJoCo.
+//! `scripts/timor_reference.py`, stored in `tests/fixtures/timor/reference.json`; the exports
+//! of an assembly loaded by MuJoCo (its VRML pieces written as STL for the URDF).
 
 mod common;
 
 use common::repo;
 use nalgebra::{Isometry3, Matrix4};
 use proving_ground::engine::{compare_kinematics, MujocoKinematics, ToolElement};
-use proving_ground::export::{to_mjcf, to_urdf, MjcfOptions, UrdfExportOptions};
+use proving_ground::export::{to_mjcf, to_urdf, written_meshes, MjcfOptions, UrdfExportOptions};
 use proving_ground::frames::pose_difference;
 use proving_ground::model::{from_timor, Model, Shape};
 use serde::Deserialize;
@@ -161,24 +161,33 @@ fn exports_of_an_assembly_load_in_mujoco_with_the_same_kinematics() {
             agreement.max_position_error_m < TIMOR_AGREEMENT && agreement.max_angle_error_rad < TIMOR_AGREEMENT,
             "{id}: MJCF in MuJoCo: {agreement:?}"
         );
-        if model
+        // VRML pieces (IMPROV) are written as STL beside the URDF, which names them.
+        let stem = case.module_order.join("-");
+        let urdf = dir.path().join(format!("{stem}.urdf"));
+        let opts = UrdfExportOptions {
+            mujoco_block: true,
+            mesh_base: Some(dir.path().to_path_buf()),
+            mesh_folder: Some(dir.path().join(format!("{stem}-meshes"))),
+        };
+        let text = to_urdf(&model, &opts).unwrap_or_else(|e| panic!("{id}: {e}"));
+        std::fs::write(&urdf, text).expect("write URDF");
+        let meshes = written_meshes(&model, &opts);
+        let pieces = model
             .links
             .iter()
             .flat_map(|l| &l.colliders)
-            .any(|c| matches!(c.shape, Shape::Mesh(_)))
-        {
-            continue;
+            .filter(|c| matches!(c.shape, Shape::Mesh(_)))
+            .count();
+        assert_eq!(meshes.len(), pieces, "{id}: every VRML piece written");
+        for (path, bytes) in meshes {
+            std::fs::create_dir_all(path.parent().expect("folder")).expect("mesh folder");
+            std::fs::write(path, bytes).expect("write mesh");
         }
-        let urdf = dir.path().join(format!("{}.urdf", case.module_order.join("-")));
-        let text = to_urdf(
-            &model,
-            &UrdfExportOptions {
-                mujoco_block: true,
-                ..Default::default()
-            },
-        )
-        .unwrap_or_else(|e| panic!("{id}: {e}"));
-        std::fs::write(&urdf, text).expect("write URDF");
+        // Without a folder to write them in, VRML pieces are refused with the reason.
+        if pieces > 0 {
+            let refused = to_urdf(&model, &UrdfExportOptions::default()).expect_err("VRML without a mesh folder");
+            assert!(refused.to_string().contains("VRML"), "{refused}");
+        }
         let mujoco = MujocoKinematics::from_file(&urdf, &names).unwrap_or_else(|e| panic!("{id}: {e}"));
         let agreement = compare_kinematics(&model, &mujoco, ToolElement::Body("tool"), 50, 3).unwrap_or_else(|e| panic!("{id}: {e}"));
         assert!(
@@ -287,6 +296,26 @@ fn the_shipped_assemblies_validate_kinematically() {
         assert!(output.status.success(), "{name}: {}", String::from_utf8_lossy(&output.stderr));
         assert!(stdout.contains("Timor assembly"), "{stdout}");
     }
+    // `--export-urdf` writes IMPROV's VRML pieces as STL beside the URDF; it reads back whole.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let urdf = dir.path().join("improv.urdf");
+    let output = assert_cmd::Command::cargo_bin("validate-design")
+        .expect("binary is built")
+        .current_dir(repo())
+        .args(["designs/timor/improv-6r.json", "--kinematics-only", "--export-urdf"])
+        .arg(&urdf)
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let original = from_timor(&repo().join("designs/timor/improv-6r.json")).expect("assembly");
+    let back = proving_ground::model::from_urdf(&urdf, &Default::default()).expect("the exported URDF reads");
+    let colliders = |m: &Model| m.links.iter().map(|l| l.colliders.len()).sum::<usize>();
+    assert_eq!(colliders(&back), colliders(&original));
+    // L1, L2 and L3: 2 + 3 + 4 convex pieces.
+    assert_eq!(dir.path().join("improv-meshes").read_dir().expect("mesh folder").count(), 9);
+    let q = [0.3, -0.4, 0.5, 0.2, -0.1, 0.6];
+    let (dt, da) = pose_difference(&back.tool_pose(&q), &original.tool_pose(&q));
+    assert!(dt < 1e-12 && da < 1e-12, "{dt} m, {da} rad");
 }
 
 #[test]

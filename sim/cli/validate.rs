@@ -193,6 +193,7 @@ pub(crate) fn command(args: &ValidateArgs) -> Result<ExitCode, Error> {
             let what = match what {
                 Written::Urdf => "URDF",
                 Written::Mjcf => "MJCF",
+                Written::Mesh => "mesh",
             };
             println!("wrote {what} {}", path.display());
         }

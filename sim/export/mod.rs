@@ -9,7 +9,7 @@ mod urdf;
 
 pub use mjcf::{to_mjcf, MjcfOptions};
 pub use scene::scene_mjcf;
-pub use urdf::{to_urdf, UrdfExportOptions};
+pub use urdf::{to_urdf, written_meshes, UrdfExportOptions};
 
 use crate::model::Model;
 use std::collections::HashSet;

@@ -41,6 +41,63 @@ pub struct UrdfExportOptions {
     /// the file loads from any working folder and moves with its meshes; `None` names them by
     /// absolute path (text kept in memory, compared with other exports).
     pub mesh_base: Option<std::path::PathBuf>,
+    /// Where meshes that no URDF reader loads (Timor's VRML convex pieces) are written as binary
+    /// STL, `<link>-<k>.stl` after the collider ([`written_meshes`] gives the files); `None`
+    /// refuses such meshes.
+    pub mesh_folder: Option<std::path::PathBuf>,
+}
+
+/// Whether a URDF can name `mesh`'s own file: STL, OBJ and DAE are what URDF readers load.
+fn loadable(mesh: &crate::model::TriMesh) -> bool {
+    mesh.file
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["stl", "obj", "dae"].iter().any(|ok| e.eq_ignore_ascii_case(ok)))
+}
+
+/// The file a written mesh gets in `folder`.
+fn written_name(folder: &std::path::Path, link: &Link, k: usize) -> std::path::PathBuf {
+    folder.join(format!("{}-{k}.stl", link.name.replace(['/', '\\'], "_")))
+}
+
+/// The STL files [`to_urdf`] names for meshes no URDF reader loads, with their bytes (binary
+/// STL of the model's vertices, scale applied); empty without [`UrdfExportOptions::mesh_folder`].
+pub fn written_meshes(model: &Model, opts: &UrdfExportOptions) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+    let Some(folder) = &opts.mesh_folder else { return Vec::new() };
+    let mut files = Vec::new();
+    for link in &model.links {
+        for (k, collider) in link.colliders.iter().enumerate() {
+            if let Shape::Mesh(mesh) = &collider.shape {
+                if !loadable(mesh) {
+                    files.push((written_name(folder, link, k), binary_stl(mesh)));
+                }
+            }
+        }
+    }
+    files
+}
+
+/// `mesh` as binary STL: 80-byte header, triangle count, per triangle its normal, corners and
+/// a zero attribute count.
+fn binary_stl(mesh: &crate::model::TriMesh) -> Vec<u8> {
+    let mut out = Vec::with_capacity(84 + 50 * mesh.triangles.len());
+    let mut header = [b' '; 80];
+    let title = b"proving-ground: a convex piece of a robot's collision mesh";
+    header[..title.len()].copy_from_slice(title);
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&u32::try_from(mesh.triangles.len()).unwrap_or(u32::MAX).to_le_bytes());
+    for triangle in &mesh.triangles {
+        let corner = |i: u32| nalgebra::Vector3::from(mesh.vertices[i as usize]);
+        let (a, b, c) = (corner(triangle[0]), corner(triangle[1]), corner(triangle[2]));
+        let normal = (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(nalgebra::Vector3::zeros);
+        for v in [normal, a, b, c] {
+            for x in v.iter() {
+                out.extend_from_slice(&(*x as f32).to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&0u16.to_le_bytes());
+    }
+    out
 }
 
 /// Writes a model as URDF text.
@@ -167,15 +224,25 @@ fn shape(
             if mesh.file.as_os_str().is_empty() {
                 return Err(mesh_error("the model records no file for it"));
             }
+            let (file, scale) = if loadable(mesh) {
+                (mesh.file.clone(), mesh.scale)
+            } else {
+                let folder = opts.mesh_folder.as_deref().ok_or_else(|| {
+                    mesh_error("it is a VRML convex piece, which URDF readers do not load: exported to a file (--export-urdf), it is written as STL beside the URDF")
+                })?;
+                // Written with the scale applied.
+                (written_name(folder, link, k), [1.0; 3])
+            };
             // Fails only for an empty path (ruled out above) or an unknown current folder.
-            let absolute = std::path::absolute(&mesh.file).map_err(|_| mesh_error("it cannot be made absolute"))?;
-            let named = opts
-                .mesh_base
-                .as_deref()
-                .and_then(|base| relative_path(&absolute, base))
-                .unwrap_or(absolute);
+            let absolute = std::path::absolute(&file).map_err(|_| mesh_error("it cannot be made absolute"))?;
+            // A mesh written with the URDF does not exist yet: named by the paths as they are.
+            let relative = |base: &std::path::Path| match loadable(mesh) {
+                true => relative_path(&absolute, base),
+                false => pathdiff::diff_paths(&absolute, std::path::absolute(base).ok()?),
+            };
+            let named = opts.mesh_base.as_deref().and_then(relative).unwrap_or(absolute);
             let filename = named.to_str().ok_or_else(|| mesh_error("the path is not valid UTF-8"))?;
-            ("mesh", vec![("filename", filename.to_string()), ("scale", numbers(mesh.scale))])
+            ("mesh", vec![("filename", filename.to_string()), ("scale", numbers(scale))])
         }
     })
 }
