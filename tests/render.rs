@@ -12,7 +12,7 @@ use resvg::usvg;
 use std::path::{Path, PathBuf};
 
 /// Where Debian installs Chromium (`.ci/run` installs it).
-const CHROMIUM: &str = "/usr/bin/chromium";
+use common::{chromium, CHROMIUM};
 
 fn validate_design() -> Command {
     let mut cmd = Command::cargo_bin("validate-design").expect("binary is built");
@@ -226,36 +226,6 @@ fn picture_folder_that_is_a_file_or_an_input_is_refused() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("refusing to write"), "{stderr}");
-}
-
-/// Runs headless Chromium on `page` with WebGL on SwiftShader; returns (stdout, stderr).
-fn chromium(page: &Path, extra: &[&str]) -> (String, String) {
-    let profile = tempfile::tempdir().expect("temp dir");
-    let output = std::process::Command::new(CHROMIUM)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--enable-logging=stderr",
-            "--v=0",
-            "--virtual-time-budget=10000",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .args(extra)
-        .arg(page)
-        .output()
-        .expect("chromium runs");
-    (
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
 }
 
 #[test]

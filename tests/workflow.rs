@@ -7,7 +7,7 @@ mod common;
 use common::repo;
 use std::path::Path;
 
-const CHROMIUM: &str = "/usr/bin/chromium";
+use common::CHROMIUM;
 const TASK: &str = "scenarios/cluttered/task-00.json";
 
 fn validate_design() -> assert_cmd::Command {
@@ -92,27 +92,7 @@ fn a_cluttered_task_goes_from_candidates_to_a_summary_page() {
         println!("skipped the browser check: {CHROMIUM} is not installed (apt-get install chromium; .ci/run installs it)");
         return;
     }
-    let profile = tempfile::tempdir().expect("temp dir");
-    let output = std::process::Command::new(CHROMIUM)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--virtual-time-budget=5000",
-            "--dump-dom",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(&page)
-        .output()
-        .expect("chromium runs");
-    let dom = String::from_utf8_lossy(&output.stdout);
+    let (dom, stderr) = common::chromium(&page, &["--dump-dom"]);
     let title = dom.split("<title>").nth(1).and_then(|t| t.split("</title>").next()).unwrap_or("");
-    assert_eq!(
-        title,
-        "ok 2 of 2 pictures",
-        "chromium stderr:\n{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    assert_eq!(title, "ok 2 of 2 pictures", "chromium stderr:\n{stderr}");
 }

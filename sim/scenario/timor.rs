@@ -12,11 +12,15 @@
 
 use super::{Goal, Obstacle, Scenario, ScenarioError, TaskTolerance, Tolerance, TolerancePart};
 use crate::model::timor::json::{isometry, quote_non_finite, rows, Id, Matrix4Rows, Num, OneOrMany};
+use crate::model::timor::set::{geometry_colliders, GeometryFile};
 use crate::model::Shape;
 use nalgebra::{Isometry3, Translation3, Vector3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// What a task's mesh files are relative to, for messages.
+const PACKAGE: &str = "the task's package folder (its folder less the folders of its ID)";
 
 /// Whether JSON text is a Timor task: an object with `header` and `obstacles`.
 pub fn is_timor_task(text: &str) -> bool {
@@ -66,16 +70,6 @@ struct ObstacleFile {
     #[serde(default)]
     name: Option<String>,
     collision: OneOrMany<GeometryFile>,
-}
-
-#[derive(Debug, Deserialize)]
-struct GeometryFile {
-    #[serde(rename = "type")]
-    kind: String,
-    #[serde(default)]
-    parameters: BTreeMap<String, serde_json::Value>,
-    #[serde(default)]
-    pose: Option<Matrix4Rows>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -162,71 +156,18 @@ pub fn parse_timor_task(text: &str, path: &Path) -> Result<TaskImport, ScenarioE
             .unwrap_or_else(|| format!("obstacle {}", obstacle.id));
         let geometries = obstacle.collision_list();
         for (g, geometry) in geometries.iter().enumerate() {
-            let field = format!("obstacles[{k}].collision[{g}]");
-            let pose = match &geometry.pose {
-                Some(rows) => isometry(rows).map_err(|m| invalid(format!("{field}.pose"), m))?,
-                None => Isometry3::identity(),
-            };
             let name = if geometries.len() > 1 {
                 format!("{base_name}/{g}")
             } else {
                 base_name.clone()
             };
-            let number = |names: &[&str]| -> Result<f64, ScenarioError> {
-                let value = names
-                    .iter()
-                    .find_map(|n| geometry.parameters.get(*n))
-                    .and_then(serde_json::Value::as_f64);
-                value.filter(|v| v.is_finite() && *v > 0.0).ok_or_else(|| {
-                    invalid(
-                        format!("{field}.parameters.{}", names[0]),
-                        format!("expected a positive length in metres for a {}", geometry.kind),
-                    )
-                })
-            };
-            let shapes: Vec<(Isometry3<f64>, Shape)> = match geometry.kind.as_str() {
-                "box" => vec![(
-                    pose,
-                    Shape::Box {
-                        half_extents: [number(&["x"])? / 2.0, number(&["y"])? / 2.0, number(&["z"])? / 2.0],
-                    },
-                )],
-                "cylinder" => vec![(
-                    pose,
-                    Shape::Cylinder {
-                        radius: number(&["r", "radius"])?,
-                        length: number(&["z", "length"])?,
-                    },
-                )],
-                "sphere" => vec![(pose, Shape::Sphere { radius: number(&["r"])? })],
-                "empty" => vec![],
-                "mesh" => crate::model::timor::mesh::colliders(
-                    &geometry.parameters,
-                    &field,
-                    package,
-                    &name,
-                    pose,
-                    "the task's package folder (its folder less the folders of its ID)",
-                )
-                .map_err(|(element, message)| invalid(element, message))?
-                .into_iter()
-                .map(|c| (c.link_from_shape, c.shape))
-                .collect(),
-                other => {
-                    return Err(invalid(
-                        format!("{field}.type"),
-                        format!("`{other}`; expected box, cylinder, sphere, mesh or empty"),
-                    ))
-                }
-            };
-            let count = shapes.len();
-            for (p, (world_from_shape, shape)) in shapes.into_iter().enumerate() {
-                obstacles.push(Obstacle {
-                    name: if count > 1 { format!("{name}/{p}") } else { name.clone() },
-                    world_from_shape,
-                    shape,
-                });
-            }
+            let colliders = geometry_colliders(geometry, &format!("obstacles[{k}].collision[{g}]"), package, &name, PACKAGE)
+                .map_err(|(field, message)| invalid(field, message))?;
+            obstacles.extend(colliders.into_iter().map(|c| Obstacle {
+                name: c.label,
+                world_from_shape: c.link_from_shape,
+                shape: c.shape,
+            }));
         }
     }
 

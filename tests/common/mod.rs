@@ -208,3 +208,36 @@ pub fn unit(rng: &mut impl rand::Rng) -> nalgebra::Vector3<f64> {
         }
     }
 }
+
+/// Where Debian's Chromium is (`.ci/run` installs it); browser tests skip, saying so, without it.
+pub const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// Runs headless Chromium on `page` with WebGL on SwiftShader; returns (stdout, stderr).
+pub fn chromium(page: &Path, extra: &[&str]) -> (String, String) {
+    let profile = tempfile::tempdir().expect("temp dir");
+    let output = std::process::Command::new(CHROMIUM)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=10000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .args(extra)
+        .arg(page)
+        .output()
+        .expect("chromium runs");
+    (
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}

@@ -9,7 +9,7 @@
 mod assembly;
 pub(crate) mod json;
 pub(crate) mod mesh;
-mod set;
+pub(crate) mod set;
 mod space;
 
 pub use space::{parse_timor_id, TimorSet, MAX_ASSEMBLIES, TIMOR_ID_PREFIX};

@@ -73,9 +73,10 @@ struct ConnectorFile {
     size: Option<OneOrMany<Num>>,
 }
 
+/// One collision geometry as Timor writes it, in modules and in tasks alike.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct GeometryFile {
+pub(crate) struct GeometryFile {
     #[serde(rename = "type")]
     kind: String,
     #[serde(default)]
@@ -318,7 +319,13 @@ fn check_module(module: ModuleFile, dir: &Path) -> Result<Module, Problem> {
         for (g, geometry) in body.collision.map(OneOrMany::into_vec).unwrap_or_default().into_iter().enumerate() {
             let element = format!("{element}, collision[{g}]");
             // Timor's geometry names, less the module: `<body>.c<k>`.
-            colliders.extend(geometry_colliders(&geometry, &element, dir, &format!("{body_id}.c{g}"))?);
+            colliders.extend(geometry_colliders(
+                &geometry,
+                &element,
+                dir,
+                &format!("{body_id}.c{g}"),
+                "the folder of modules.json",
+            )?);
         }
         bodies.push(Body {
             id: body_id,
@@ -464,7 +471,15 @@ fn parameter(geometry: &GeometryFile, names: &[&str], element: &str) -> Result<f
     })
 }
 
-fn geometry_colliders(geometry: &GeometryFile, element: &str, dir: &Path, label: &str) -> Result<Vec<Collider>, Problem> {
+/// The colliders of one geometry, in the frame its pose is given in (a body's, or the world for
+/// a task's obstacle); mesh files are relative to `dir`, which `anchor` names for messages.
+pub(crate) fn geometry_colliders(
+    geometry: &GeometryFile,
+    element: &str,
+    dir: &Path,
+    label: &str,
+    anchor: &str,
+) -> Result<Vec<Collider>, Problem> {
     let body_from_shape = pose(geometry.pose.as_ref(), &format!("{element} pose"))?;
     let one = |shape: Shape| {
         Ok(vec![Collider {
@@ -492,14 +507,7 @@ fn geometry_colliders(geometry: &GeometryFile, element: &str, dir: &Path, label:
             radius: parameter(geometry, &["r"], element)?,
         }),
         "empty" => Ok(vec![]),
-        "mesh" => super::mesh::colliders(
-            &geometry.parameters,
-            element,
-            dir,
-            label,
-            body_from_shape,
-            "the folder of modules.json",
-        ),
+        "mesh" => super::mesh::colliders(&geometry.parameters, element, dir, label, body_from_shape, anchor),
         other => Err((
             format!("{element} type"),
             format!("`{other}`; expected box, cylinder, sphere, mesh or empty"),
