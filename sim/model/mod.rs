@@ -22,8 +22,8 @@ pub use from_mjcf::{from_mjcf, from_mjcf_to, TOOL_SITE};
 pub use from_urdf::{from_urdf, from_urdf_str, UrdfOptions, PACKAGE_PATH_ENV};
 pub use geometry::{Collider, Shape};
 pub use timor::{
-    from_timor, load_module_set, parse_timor_id, pose_rows, timor_kind, ModuleSetSummary, TimorKind, TimorSet, MAX_ASSEMBLIES,
-    SHIPPED_SETS, TIMOR_ID_PREFIX,
+    from_timor, from_timor_text, load_module_set, parse_timor_id, pose_rows, timor_kind, ModuleSetSummary, TimorKind, TimorSet,
+    MAX_ASSEMBLIES, SHIPPED_SETS, TIMOR_ID_PREFIX,
 };
 
 pub use inertia::Inertial;

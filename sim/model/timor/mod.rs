@@ -124,9 +124,24 @@ pub struct ModuleSetSummary {
 }
 
 fn read_set(path: &Path) -> Result<set::ModuleSet, ModelError> {
-    let text = read(path)?;
-    let file: set::SetFile = serde_json::from_str(&json::quote_non_finite(&text)).map_err(|e| parse_error(path, &e))?;
+    parse_set(&read(path)?, path)
+}
+
+fn parse_set(text: &str, path: &Path) -> Result<set::ModuleSet, ModelError> {
+    let file: set::SetFile = serde_json::from_str(&json::quote_non_finite(text)).map_err(|e| parse_error(path, &e))?;
     set::check(file, path).map_err(|p| problem(path, p))
+}
+
+/// Reads a module set and an assembly of it from text, `path` naming both in messages (mesh
+/// files are relative to its folder; the assembly's `moduleSet` is not looked up): what the
+/// fuzzer drives.
+///
+/// # Errors
+/// As [`from_timor`].
+pub fn from_timor_text(set_text: &str, assembly_text: &str, path: &Path) -> Result<Model, ModelError> {
+    let set = parse_set(set_text, path)?;
+    let file: AssemblyFile = serde_json::from_str(&json::quote_non_finite(assembly_text)).map_err(|e| parse_error(path, &e))?;
+    build(file, &set, path)
 }
 
 /// The module set an assembly names: a file or folder relative to the assembly, else a shipped
@@ -180,8 +195,13 @@ pub fn from_timor(path: &Path) -> Result<Model, ModelError> {
     let file: AssemblyFile = serde_json::from_str(&json::quote_non_finite(&text)).map_err(|e| parse_error(path, &e))?;
     let set_path = find_set(&file.module_set, path)?;
     let set = read_set(&set_path)?;
+    build(file, &set, path)
+}
+
+/// The model of the assembly `file` of `set`; `path` names the assembly in messages.
+fn build(file: AssemblyFile, set: &set::ModuleSet, path: &Path) -> Result<Model, ModelError> {
     let order: Vec<String> = file.module_order.iter().map(|id| id.0.clone()).collect();
-    let instances = assembly::instances(&set, &order).map_err(|p| problem(path, p))?;
+    let instances = assembly::instances(set, &order).map_err(|p| problem(path, p))?;
     let base = match &file.base_connection {
         None => None,
         Some(list) => match list.as_slice() {
@@ -257,7 +277,7 @@ pub fn from_timor(path: &Path) -> Result<Model, ModelError> {
     });
     let mut model = assembly::model(&built, path, name, world_from_pose, diagnostics)?;
     if let super::ModelSource::Timor { module_set, .. } = &mut model.source {
-        *module_set = set_path;
+        *module_set = set.path.clone();
     }
     Ok(model)
 }
