@@ -342,10 +342,14 @@ impl Frames<'_> {
             let frame = self.frames.get(&current).ok_or_else(|| {
                 (
                     field.to_string(),
-                    format!(
-                        "frame `{current}` is not in `frames` (frames: {})",
-                        self.frames.keys().cloned().collect::<Vec<_>>().join(", ")
-                    ),
+                    if self.frames.is_empty() {
+                        format!("frame `{current}`: the task has no `frames`; expected `world` or a frame it names")
+                    } else {
+                        format!(
+                            "frame `{current}` is not in `frames` (frames: {})",
+                            self.frames.keys().cloned().collect::<Vec<_>>().join(", ")
+                        )
+                    },
                 )
             })?;
             pose = isometry(&frame.transformation).map_err(|m| (format!("frames.{current}.transformation"), m))? * pose;

@@ -159,7 +159,10 @@ fn find_set_in(name: &str, dir: &Path, label: &Path) -> Result<PathBuf, ModelErr
             if candidate.is_file() {
                 return Ok(candidate);
             }
-            searched.push(candidate.display().to_string());
+            let shown = candidate.display().to_string();
+            if !searched.contains(&shown) {
+                searched.push(shown);
+            }
         }
     }
     let shipped: Vec<String> = std::fs::read_dir(SHIPPED_SETS)
@@ -221,7 +224,10 @@ fn build(file: AssemblyFile, set: &set::ModuleSet, path: &Path) -> Result<Model,
                             path,
                             (
                                 "baseConnection[0]".into(),
-                                format!("{one:?}; expected [module index, connector ID, 0]"),
+                                format!(
+                                    "{}; expected [module index, connector ID, 0]",
+                                    serde_json::Value::Array(one.clone())
+                                ),
                             ),
                         ))
                     }
