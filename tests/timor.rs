@@ -322,16 +322,24 @@ fn the_shipped_assemblies_validate_kinematically() {
 fn a_module_set_as_a_design_space_lists_what_timor_assembles() {
     for space in reference().design_spaces {
         let set = proving_ground::model::TimorSet::load(&space.module_set).expect("shipped set");
-        let mut ours: Vec<String> = set
-            .assemblies(space.most_modules)
-            .expect("within the cap")
-            .iter()
-            .map(|o| o.join(","))
-            .collect();
+        let (orders, reached) = set.assemblies(space.most_modules, false).expect("within the cap");
+        assert_eq!(reached, space.most_modules);
+        let mut ours: Vec<String> = orders.iter().map(|o| o.join(",")).collect();
         ours.sort();
         assert_eq!(ours.len(), space.orders.len(), "{}", space.module_set);
         assert_eq!(ours, space.orders, "{}", space.module_set);
     }
+    // Without @N, as many modules as keep the list within the cap; with too many, the error
+    // says how many fit.
+    let set = proving_ground::model::TimorSet::load("geometric_primitive_modules").expect("shipped set");
+    let (orders, reached) = set.assemblies(8, true).expect("fits");
+    assert!(
+        reached < 8 && orders.len() <= proving_ground::model::MAX_ASSEMBLIES && orders.len() > 3000,
+        "{reached}: {}",
+        orders.len()
+    );
+    let error = set.assemblies(8, false).expect_err("over the cap");
+    assert!(error.contains(&format!("timor:geometric_primitive_modules@{reached}")), "{error}");
 }
 
 #[test]

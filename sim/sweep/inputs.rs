@@ -130,7 +130,8 @@ fn from_design(design: Design) -> Loaded {
     }
 }
 
-/// Most modules of an assembly `timor:SET` lists (`timor:SET@N` for another count).
+/// Most modules of an assembly `timor:SET` lists, fewer where more would list over
+/// [`crate::model::MAX_ASSEMBLIES`] (`timor:SET@N` for another count).
 pub const DEFAULT_TIMOR_MODULES: usize = 8;
 
 /// Design files a sweep reads from a folder.
@@ -158,18 +159,19 @@ pub fn resolve_designs(arguments: &[String], load: &LoadOptions) -> Result<Vec<D
                 argument: argument.clone(),
                 message,
             };
-            let (name, modules) = match rest.rsplit_once('@') {
+            let (name, modules, fit) = match rest.rsplit_once('@') {
                 Some((name, n)) => (
                     name,
                     n.parse::<usize>()
                         .ok()
                         .filter(|n| (2..=16).contains(n))
                         .ok_or_else(|| designs_error(format!("`@{n}`: expected the most modules an assembly has, 2 to 16")))?,
+                    false,
                 ),
-                None => (rest, DEFAULT_TIMOR_MODULES),
+                None => (rest, DEFAULT_TIMOR_MODULES, true),
             };
             let set = Arc::new(crate::model::TimorSet::load(name).map_err(|e| SweepError::Load(Box::new(e.into())))?);
-            let orders = set.assemblies(modules).map_err(designs_error)?;
+            let (orders, modules) = set.assemblies(modules, fit).map_err(designs_error)?;
             if orders.is_empty() {
                 return Err(designs_error(format!(
                     "module set {} has no serial assembly of up to {modules} modules that is a robot",

@@ -66,61 +66,109 @@ impl TimorSet {
     /// Every serial assembly of at most `max_modules` modules that is a robot: a base module
     /// first, each module mating the one before it in exactly one way, at least one moving joint,
     /// a tool connector; where the set has connectors of type `eef`, the tool is one of them (the
-    /// robot ends in an end effector). Depth first, modules in file order: the same set gives
-    /// the same list.
+    /// robot ends in an end effector). Shorter assemblies first, then modules in file order: the
+    /// same set gives the same list. With `fit`, the list stops at the most modules that keep it
+    /// within [`MAX_ASSEMBLIES`]; the second value is the module count reached.
     ///
     /// # Errors
-    /// A message when more than [`MAX_ASSEMBLIES`] would be listed.
-    pub fn assemblies(&self, max_modules: usize) -> Result<Vec<Vec<String>>, String> {
-        let needs_eef = self.set.modules.iter().flat_map(|m| &m.connectors).any(|c| c.kind == "eef");
+    /// Without `fit`, a message when more than [`MAX_ASSEMBLIES`] would be listed, naming the
+    /// most modules that stay within it.
+    pub fn assemblies(&self, max_modules: usize, fit: bool) -> Result<(Vec<Vec<String>>, usize), String> {
         let ids: Vec<String> = self.set.modules.iter().map(|m| m.id.clone()).collect();
-        let mut found = Vec::new();
-        let mut stack: Vec<Vec<String>> = self
-            .set
-            .modules
-            .iter()
-            .filter(|m| m.connectors.iter().filter(|c| c.kind == "base").count() == 1)
-            .map(|m| vec![m.id.clone()])
-            .collect();
-        stack.reverse();
-        let label = PathBuf::from(&self.name);
-        while let Some(order) = stack.pop() {
-            let Ok(instances) = assembly::instances(&self.set, &order) else {
-                continue;
+        let names = |order: &[u16]| -> Vec<String> { order.iter().map(|&m| ids[usize::from(m)].clone()).collect() };
+        let count = u16::try_from(ids.len()).unwrap_or(u16::MAX);
+        let mut found: Vec<Vec<String>> = Vec::new();
+        // The prefixes that assemble, as module indices: each level's candidates are made from
+        // the last level's on the fly, so only what assembles is kept.
+        let mut assembling: Vec<Vec<u16>> = Vec::new();
+        for modules in 1..=max_modules {
+            let candidates: Vec<Vec<u16>> = if modules == 1 {
+                (0..count)
+                    .filter(|&m| {
+                        self.set.modules[usize::from(m)]
+                            .connectors
+                            .iter()
+                            .filter(|c| c.kind == "base")
+                            .count()
+                            == 1
+                    })
+                    .map(|m| vec![m])
+                    .collect()
+            } else {
+                Vec::new()
             };
-            let Ok(built) = Assembly::serial(instances) else { continue };
-            if let Ok(model) = assembly::model(&built, &label, String::new(), nalgebra::Isometry3::identity(), Vec::new()) {
-                let tool_is_eef = match &model.source {
-                    crate::model::ModelSource::Timor { tool, .. } => built
-                        .instances
-                        .iter()
-                        .flat_map(|i| {
-                            i.module
-                                .connectors
-                                .iter()
-                                .map(move |c| format!("{}.{}", i.name, c.id) == *tool && c.kind == "eef")
-                        })
-                        .any(|is| is),
-                    _ => false,
-                };
-                if !needs_eef || tool_is_eef {
-                    found.push(order.clone());
-                    if found.len() > MAX_ASSEMBLIES {
-                        return Err(format!(
-                            "more than {MAX_ASSEMBLIES} assemblies of up to {max_modules} modules; ask for fewer modules"
-                        ));
+            let extended = assembling.iter().flat_map(|prefix| {
+                (0..count).map(move |m| {
+                    let mut next = prefix.clone();
+                    next.push(m);
+                    next
+                })
+            });
+            let mut robots = Vec::new();
+            let mut next_assembling = Vec::new();
+            let mut over = false;
+            for order in candidates.into_iter().chain(extended) {
+                // A prefix that does not assemble has no assembling extension either.
+                let Some(robot) = self.judge(&names(&order)) else { continue };
+                if robot {
+                    robots.push(names(&order));
+                    if found.len() + robots.len() > MAX_ASSEMBLIES {
+                        over = true;
+                        break;
                     }
                 }
-            }
-            if order.len() < max_modules {
-                for id in ids.iter().rev() {
-                    let mut longer = order.clone();
-                    longer.push(id.clone());
-                    stack.push(longer);
+                if modules < max_modules {
+                    next_assembling.push(order);
                 }
             }
+            if over {
+                if fit {
+                    return Ok((found, modules - 1));
+                }
+                return Err(format!(
+                    "more than {MAX_ASSEMBLIES} assemblies of up to {max_modules} modules; up to {} modules there are {} (timor:{}@{}), or leave out @N for the most that fit",
+                    modules - 1,
+                    found.len(),
+                    self.name,
+                    modules - 1
+                ));
+            }
+            found.extend(robots);
+            assembling = next_assembling;
         }
-        Ok(found)
+        Ok((found, max_modules))
+    }
+
+    /// Whether the serial assembly `order` assembles (`None` when not) and is a robot.
+    fn judge(&self, order: &[String]) -> Option<bool> {
+        let needs_eef = self.set.modules.iter().flat_map(|m| &m.connectors).any(|c| c.kind == "eef");
+        let instances = assembly::instances(&self.set, order).ok()?;
+        let built = Assembly::serial(instances).ok()?;
+        // Where the robot must end in an end effector, only an assembly whose last module has an
+        // `eef` connector can be one: the model (meshes and all) is built only for those.
+        let last = built.instances.last()?;
+        if needs_eef && !last.module.connectors.iter().any(|c| c.kind == "eef") {
+            return Some(false);
+        }
+        let Ok(model) = assembly::model(
+            &built,
+            Path::new(&self.name),
+            String::new(),
+            nalgebra::Isometry3::identity(),
+            Vec::new(),
+        ) else {
+            return Some(false);
+        };
+        let crate::model::ModelSource::Timor { tool, .. } = &model.source else {
+            return Some(false);
+        };
+        let tool_is_eef = built.instances.iter().any(|i| {
+            i.module
+                .connectors
+                .iter()
+                .any(|c| format!("{}.{}", i.name, c.id) == *tool && c.kind == "eef")
+        });
+        Some(!needs_eef || tool_is_eef)
     }
 }
 
