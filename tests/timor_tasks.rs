@@ -31,19 +31,14 @@ fn assert_same(a: &Scenario, b: &Scenario) {
 
 #[test]
 fn timors_sample_task_reads_with_its_base_goals_and_tolerances() {
-    let import = scenario::load_timor_task(&sample("PTP_1.json")).expect("PTP_1 reads");
-    let s = &import.scenario;
+    let s = &scenario::load_timor_task(&sample("PTP_1.json")).expect("PTP_1 reads");
     assert_eq!(s.name, "PTP_1");
     assert_eq!(s.world_from_base.translation.vector, nalgebra::Vector3::new(1.0, 2.0, 3.0));
     assert_eq!(s.goals.len(), 2);
     assert_eq!(s.goals[1].position, nalgebra::Vector3::new(2.0, 2.0, 3.0));
     let task = s.goals[0].task.as_ref().expect("the goal's own tolerance");
     assert_eq!([task.inner_m, task.outer_m, task.inner_rad, task.outer_rad], [0.01, 0.01, 0.1, 0.1]);
-    assert!(
-        import.warnings.iter().any(|w| w.contains("base placement free")),
-        "{:?}",
-        import.warnings
-    );
+    assert!(s.notes.iter().any(|w| w.contains("base placement free")), "{:?}", s.notes);
     // The same through `scenario::load`, which tells the formats apart by their keys.
     assert_same(s, &scenario::load(&sample("PTP_1.json")).expect("loads"));
 }
@@ -71,9 +66,9 @@ fn what_a_scenario_cannot_hold_is_named() {
         1,
     );
     let import = parse_timor_task(&more, Path::new("more.json")).expect("reads");
-    assert_eq!(import.scenario.goals.len(), 2);
+    assert_eq!(import.goals.len(), 2);
     for what in ["`pause` goal is not checked", "`follow` goal is not checked"] {
-        assert!(import.warnings.iter().any(|w| w.contains(what)), "{what}: {:?}", import.warnings);
+        assert!(import.notes.iter().any(|w| w.contains(what)), "{what}: {:?}", import.notes);
     }
     let broken = text.replacen("\"obstacles\": [],", "\"obstacles\": [], \"extra\": 1,", 1);
     let error = parse_timor_task(&broken, Path::new("broken.json"))
@@ -96,8 +91,8 @@ fn tasks_and_scenarios_round_trip_through_both_formats() {
     assert_same(&task, &back);
     assert_eq!(task.goals[0].task, back.goals[0].task);
     let as_task = parse_timor_task(&to_timor_task(&back, None), Path::new("again.json")).expect("task again");
-    assert_same(&task, &as_task.scenario);
-    assert_eq!(task.goals[1].task, as_task.scenario.goals[1].task);
+    assert_same(&task, &as_task);
+    assert_eq!(task.goals[1].task, as_task.goals[1].task);
     // A scenario of ours (spheres, goals in course order) through the task format and back.
     let cluttered = scenario::load(&repo().join("scenarios/cluttered/task-00.json")).expect("cluttered");
     let written = dir.path().join("task-00.timor.json");

@@ -175,7 +175,7 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
 /// As [`load`].
 pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
     if super::timor::is_timor_task(text) {
-        return Ok(super::timor::parse_timor_task(text, path)?.scenario);
+        return super::timor::parse_timor_task(text, path);
     }
     let file: ScenarioFile = serde_json::from_str(text).map_err(|e| ScenarioError::Parse {
         path: path.to_path_buf(),

@@ -8,7 +8,7 @@ mod timor;
 mod write;
 
 pub use file::{load, parse, ORIENTATION_TOLERANCE};
-pub use timor::{is_timor_task, load_timor_task, parse_timor_task, save_timor_task, to_timor_task, TaskImport};
+pub use timor::{is_timor_task, load_timor_task, parse_timor_task, save_timor_task, to_timor_task};
 pub use write::{save, to_json};
 
 use crate::model::Shape;
@@ -130,22 +130,25 @@ pub struct TolerancePart {
     pub frame: String,
 }
 
+impl std::fmt::Display for TolerancePart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} [{}, {}]", self.projection, self.interval[0], self.interval[1])?;
+        if self.frame != "nominal" {
+            write!(f, " in {}", self.frame)?;
+        }
+        Ok(())
+    }
+}
+
 impl std::fmt::Display for TaskTolerance {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let parts: Vec<String> = self
-            .parts
-            .iter()
-            .map(|p| {
-                let frame = if p.frame == "nominal" {
-                    String::new()
-                } else {
-                    format!(" in {}", p.frame)
-                };
-                format!("{} [{}, {}]{frame}", p.projection, p.interval[0], p.interval[1])
-            })
-            .collect();
-        f.write_str(&parts.join(", "))
+        f.write_str(&parts_text(&self.parts))
     }
+}
+
+/// Tolerance parts as a task writes them, comma-separated (`r_sph [0, 0.01], Theta_R [0, 0.1]`).
+pub(crate) fn parts_text(parts: &[TolerancePart]) -> String {
+    parts.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
 }
 
 impl TaskTolerance {

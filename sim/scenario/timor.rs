@@ -98,21 +98,12 @@ struct ToleratedPose {
     tolerance_frame: Vec<String>,
 }
 
-/// A task read into a scenario, and what it holds that the scenario does not check.
-#[derive(Debug, Clone)]
-pub struct TaskImport {
-    /// The scenario.
-    pub scenario: Scenario,
-    /// One sentence per element not checked.
-    pub warnings: Vec<String>,
-}
-
-/// Reads a Timor task file.
+/// Reads a Timor task file; what it holds that the scenario does not check is in its `notes`.
 ///
 /// # Errors
 /// [`ScenarioError`] naming the file and the key: malformed JSON (with the line), unknown keys,
 /// poses that are not rigid, unknown geometry types, missing mesh files, no pose goal left.
-pub fn load_timor_task(path: &Path) -> Result<TaskImport, ScenarioError> {
+pub fn load_timor_task(path: &Path) -> Result<Scenario, ScenarioError> {
     let text = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES).map_err(|source| ScenarioError::Read {
         path: path.to_path_buf(),
         source,
@@ -124,7 +115,7 @@ pub fn load_timor_task(path: &Path) -> Result<TaskImport, ScenarioError> {
 ///
 /// # Errors
 /// As [`load_timor_task`].
-pub fn parse_timor_task(text: &str, path: &Path) -> Result<TaskImport, ScenarioError> {
+pub fn parse_timor_task(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
     let invalid = |field: String, message: String| ScenarioError::Invalid {
         path: path.to_path_buf(),
         field,
@@ -301,18 +292,15 @@ pub fn parse_timor_task(text: &str, path: &Path) -> Result<TaskImport, ScenarioE
         .filter(|n| !n.is_empty())
         .unwrap_or(id.clone())
         .replace('/', "_");
-    Ok(TaskImport {
-        scenario: Scenario {
-            name,
-            world_from_base,
-            floor: None,
-            obstacles,
-            goals: goals.into_iter().map(|(_, g)| g).collect(),
-            home: None,
-            provenance: None,
-            notes: warnings.clone(),
-        },
-        warnings,
+    Ok(Scenario {
+        name,
+        world_from_base,
+        floor: None,
+        obstacles,
+        goals: goals.into_iter().map(|(_, g)| g).collect(),
+        home: None,
+        provenance: None,
+        notes: warnings,
     })
 }
 
@@ -366,18 +354,7 @@ impl Frames<'_> {
 }
 
 fn tolerance_text(pose: &ToleratedPose) -> String {
-    parts(pose)
-        .map(|parts| {
-            TaskTolerance {
-                parts,
-                inner_m: 0.0,
-                inner_rad: 0.0,
-                outer_m: 0.0,
-                outer_rad: 0.0,
-            }
-            .to_string()
-        })
-        .unwrap_or_default()
+    parts(pose).map(|parts| super::parts_text(&parts)).unwrap_or_default()
 }
 
 fn parts(pose: &ToleratedPose) -> Result<Vec<TolerancePart>, String> {

@@ -119,9 +119,10 @@ fn folder_name(id: &str) -> String {
 /// The stages' errors (an unreadable task or candidate, a failed write), each naming its file.
 pub fn run(tasks: &[String], opts: &WorkflowOptions, progress: &dyn Progress) -> Result<Vec<TaskOutcome>, Error> {
     let scenarios = inputs::resolve_scenarios(tasks)?;
-    let listed = match &opts.candidates {
-        Candidates::Designs(arguments) => Some(inputs::resolve_designs(arguments, &Default::default())?),
-        Candidates::Ga(_) => None,
+    // Given designs are read once, before any task; the GA runs on each task.
+    let pool = match &opts.candidates {
+        Candidates::Designs(arguments) => Pool::Designs(inputs::resolve_designs(arguments, &Default::default())?),
+        Candidates::Ga(ga_options) => Pool::Ga(ga_options),
     };
     let summary_path = opts.out.join("summary.html");
     if summary_path.exists() && !opts.force {
@@ -129,10 +130,18 @@ pub fn run(tasks: &[String], opts: &WorkflowOptions, progress: &dyn Progress) ->
     }
     let mut outcomes = Vec::with_capacity(scenarios.len());
     for scenario in &scenarios {
-        outcomes.push(task(scenario, listed.as_deref(), opts, progress)?);
+        outcomes.push(task(scenario, &pool, opts, progress)?);
     }
     crate::pipeline::write_files_into(&opts.out, &[("summary.html".to_string(), summary_html(&outcomes).into_bytes())])?;
     Ok(outcomes)
+}
+
+/// Where a task's candidates come from, once the given designs are read.
+enum Pool<'a> {
+    /// The designs given, the same for every task.
+    Designs(Vec<DesignEntry>),
+    /// The GA's, run on each task.
+    Ga(&'a ga::GaOptions),
 }
 
 fn reach_mode(seed: u64) -> SweepMode {
@@ -145,17 +154,12 @@ fn reach_mode(seed: u64) -> SweepMode {
     }
 }
 
-fn task(
-    scenario: &ScenarioEntry,
-    listed: Option<&[DesignEntry]>,
-    opts: &WorkflowOptions,
-    progress: &dyn Progress,
-) -> Result<TaskOutcome, Error> {
+fn task(scenario: &ScenarioEntry, pool: &Pool, opts: &WorkflowOptions, progress: &dyn Progress) -> Result<TaskOutcome, Error> {
     let started = std::time::Instant::now();
     let dir = opts.out.join(folder_name(&scenario.scenario.name));
-    let (designs, source) = match (listed, &opts.candidates) {
-        (Some(designs), _) => (designs.to_vec(), "the designs given".to_string()),
-        (None, Candidates::Ga(ga_options)) => {
+    let (designs, source) = match pool {
+        Pool::Designs(designs) => (designs.clone(), "the designs given".to_string()),
+        Pool::Ga(ga_options) => {
             let result = ga::run(scenario, &ga::mode(opts.seed), ga_options, progress)?;
             let designs: Vec<DesignEntry> = result
                 .evaluated
@@ -171,7 +175,6 @@ fn task(
             );
             (designs, source)
         }
-        (None, Candidates::Designs(_)) => unreachable!("designs are resolved before the tasks"),
     };
     progress.stage(&format!("reach-only filter on {}", scenario.id), Some(designs.len() as u64));
     let sweep_opts = SweepOptions {
@@ -217,10 +220,10 @@ fn finalist(
     let stem = format!("{rank:02}-{}", folder_name(&loaded.model.name));
     let design_path = dir.join(format!("{stem}.json"));
     let scenario_value = &scenario.scenario;
-    let validate = ValidateOptions { ..opts.validate.clone() };
+    let validate = &opts.validate;
     let (refined, final_loaded, design_file) = match loaded.design.clone() {
         Some(design) => {
-            let (text, said) = refine(&design, &loaded, &design_path, scenario_value, opts, &validate)?;
+            let (text, said) = refine(&design, &loaded, &design_path, scenario_value, opts, validate)?;
             let chosen = crate::design::parse(&text, &design_path)?;
             let final_loaded = Loaded {
                 model: crate::model::from_design(&chosen),
@@ -275,7 +278,7 @@ fn refine(
         let description = format!("{} as it was: the workflow found nothing to tune in it", design.name);
         (crate::design::to_json(design, &description), format!("the original design: {why}"))
     };
-    if optimize::nothing_to_tune(design).is_none() {
+    let Some(why) = optimize::nothing_to_tune(design) else {
         let optimize_opts = OptimizeOptions {
             seed: opts.seed,
             ..Default::default()
@@ -287,8 +290,7 @@ fn refine(
         let (before, after) = optimize::before_and_after(path, loaded.clone(), path, &t.design, &t.configurations, scenario, validate)?;
         let choice = optimize::choose(design, t.text.clone(), "the tuned design", "tuning", &before, &after);
         return Ok((choice.text, choice.said));
-    }
-    let why = optimize::nothing_to_tune(design).unwrap_or_default();
+    };
     if optimize::module_swaps(design).is_empty() {
         return Ok(unchanged(why));
     }

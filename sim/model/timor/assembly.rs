@@ -12,7 +12,7 @@
 use super::set::{Connector, Module, ModuleSet, Problem};
 use crate::model::{Collider, Diagnostic, Inertial, Joint, Link, Model, ModelError, ModelSource};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A module placed in the assembly (`moduleOrder[k]`); copies of one module get `-1`, `-2`, ...
 /// as Timor names them.
@@ -295,10 +295,11 @@ struct LinkParts {
     child_joint: bool,
 }
 
-/// The serial model of an assembly. `path` is the assembly file (for messages), `world_from_pose`
-/// its `basePose`.
+/// The serial model of an assembly of the set read from `module_set`. `path` is the assembly file
+/// (for messages), `world_from_pose` its `basePose`.
 pub(crate) fn model(
     assembly: &Assembly,
+    module_set: &Path,
     path: &Path,
     name: String,
     world_from_pose: Isometry3<f64>,
@@ -478,7 +479,7 @@ pub(crate) fn model(
         name,
         source: ModelSource::Timor {
             path: path.to_path_buf(),
-            module_set: PathBuf::new(),
+            module_set: module_set.to_path_buf(),
             modules: assembly.instances.iter().map(|i| i.module.id.clone()).collect(),
             tool: tool.2.clone(),
             choices: vec![],

@@ -281,11 +281,7 @@ fn build(file: AssemblyFile, set: &set::ModuleSet, path: &Path) -> Result<Model,
         path.file_stem()
             .map_or("timor-assembly".into(), |s| s.to_string_lossy().into_owned())
     });
-    let mut model = assembly::model(&built, path, name, world_from_pose, diagnostics)?;
-    if let super::ModelSource::Timor { module_set, .. } = &mut model.source {
-        *module_set = set.path.clone();
-    }
-    Ok(model)
+    assembly::model(&built, &set.path, path, name, world_from_pose, diagnostics)
 }
 
 /// The 4x4 rows Timor writes for a pose (for writing assemblies and tasks back).

@@ -56,11 +56,7 @@ impl TimorSet {
         let instances = assembly::instances(&self.set, order).map_err(problem)?;
         let built = Assembly::serial(instances).map_err(problem)?;
         let name = order.join("-");
-        let mut model = assembly::model(&built, label, name, nalgebra::Isometry3::identity(), Vec::new())?;
-        if let crate::model::ModelSource::Timor { module_set, .. } = &mut model.source {
-            *module_set = self.set.path.clone();
-        }
-        Ok(model)
+        assembly::model(&built, &self.set.path, label, name, nalgebra::Isometry3::identity(), Vec::new())
     }
 
     /// Every serial assembly of at most `max_modules` modules that is a robot: a base module
@@ -77,6 +73,7 @@ impl TimorSet {
         let ids: Vec<String> = self.set.modules.iter().map(|m| m.id.clone()).collect();
         let names = |order: &[u16]| -> Vec<String> { order.iter().map(|&m| ids[usize::from(m)].clone()).collect() };
         let count = u16::try_from(ids.len()).unwrap_or(u16::MAX);
+        let needs_eef = self.set.modules.iter().flat_map(|m| &m.connectors).any(|c| c.kind == "eef");
         let mut found: Vec<Vec<String>> = Vec::new();
         // The prefixes that assemble, as module indices: each level's candidates are made from
         // the last level's on the fly, so only what assembles is kept.
@@ -108,10 +105,11 @@ impl TimorSet {
             let mut next_assembling = Vec::new();
             let mut over = false;
             for order in candidates.into_iter().chain(extended) {
+                let named = names(&order);
                 // A prefix that does not assemble has no assembling extension either.
-                let Some(robot) = self.judge(&names(&order)) else { continue };
+                let Some(robot) = self.judge(&named, needs_eef) else { continue };
                 if robot {
-                    robots.push(names(&order));
+                    robots.push(named);
                     if found.len() + robots.len() > MAX_ASSEMBLIES {
                         over = true;
                         break;
@@ -139,9 +137,9 @@ impl TimorSet {
         Ok((found, max_modules))
     }
 
-    /// Whether the serial assembly `order` assembles (`None` when not) and is a robot.
-    fn judge(&self, order: &[String]) -> Option<bool> {
-        let needs_eef = self.set.modules.iter().flat_map(|m| &m.connectors).any(|c| c.kind == "eef");
+    /// Whether the serial assembly `order` assembles (`None` when not) and is a robot (ending in
+    /// an `eef` tool where `needs_eef`).
+    fn judge(&self, order: &[String], needs_eef: bool) -> Option<bool> {
         let instances = assembly::instances(&self.set, order).ok()?;
         let built = Assembly::serial(instances).ok()?;
         // Where the robot must end in an end effector, only an assembly whose last module has an
@@ -150,9 +148,11 @@ impl TimorSet {
         if needs_eef && !last.module.connectors.iter().any(|c| c.kind == "eef") {
             return Some(false);
         }
+        let label = Path::new(&self.name);
         let Ok(model) = assembly::model(
             &built,
-            Path::new(&self.name),
+            &self.set.path,
+            label,
             String::new(),
             nalgebra::Isometry3::identity(),
             Vec::new(),
@@ -162,13 +162,15 @@ impl TimorSet {
         let crate::model::ModelSource::Timor { tool, .. } = &model.source else {
             return Some(false);
         };
-        let tool_is_eef = built.instances.iter().any(|i| {
-            i.module
-                .connectors
-                .iter()
-                .any(|c| format!("{}.{}", i.name, c.id) == *tool && c.kind == "eef")
-        });
-        Some(!needs_eef || tool_is_eef)
+        let tool_is_eef = || {
+            built.instances.iter().any(|i| {
+                i.module
+                    .connectors
+                    .iter()
+                    .any(|c| c.kind == "eef" && format!("{}.{}", i.name, c.id) == *tool)
+            })
+        };
+        Some(!needs_eef || tool_is_eef())
     }
 }
 
