@@ -178,7 +178,7 @@ fn search(c: &mut Criterion) {
             .iter()
             .enumerate()
             .find_map(|(index, goal)| match search(&model, goal, 300_000, |_| false) {
-                Some(Search::Proven { boxes }) => Some((index, goal, boxes)),
+                Some(Search::Proven { boxes, .. }) => Some((index, goal, boxes)),
                 _ => None,
             });
         let Some((index, goal, boxes)) = proven else { continue };

@@ -32,7 +32,8 @@ pub(crate) struct SweepArgs {
     /// With --full: the engines to run.
     #[arg(long, value_name = "LIST", default_value_t = Engines::all(), requires = "full")]
     engines: Engines,
-    /// Run the K-th of N shards: every pair whose canonical index i has i mod N = K - 1.
+    /// Run the K-th of N shards: the pairs ranked by a fixed hash of their index, dealt round
+    /// robin (shard sizes differ by at most one, each a fair sample of the sweep).
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
     /// Score against this finished sweep (e.g. the brute force over catalog:modular6) instead of

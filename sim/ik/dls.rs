@@ -50,6 +50,9 @@ pub(crate) struct Solver<'a> {
     /// The Jacobian and tool pose of `previous`, restored when a step is rejected.
     previous_jacobian: Matrix6xX<f64>,
     previous_tool: Isometry3<f64>,
+    /// Weight of the angular rows (m per rad), [`ANGULAR_WEIGHT_M_PER_RAD`] unless a caller
+    /// weighs the two kinds of error its own way.
+    pub(crate) angular_weight: f64,
 }
 
 impl<'a> Solver<'a> {
@@ -72,6 +75,7 @@ impl<'a> Solver<'a> {
             projected: vec![Vector6::zeros(); dof],
             previous_jacobian: Matrix6xX::zeros(dof),
             previous_tool: Isometry3::identity(),
+            angular_weight: ANGULAR_WEIGHT_M_PER_RAD,
         }
     }
 
@@ -235,10 +239,10 @@ impl<'a> Solver<'a> {
     fn projection(&self, goal: &Goal) -> Matrix6<f64> {
         let mut t = Matrix6::identity();
         let angular: Matrix3<f64> = match goal.tolerance {
-            Tolerance::Pose => Matrix3::identity() * ANGULAR_WEIGHT_M_PER_RAD,
+            Tolerance::Pose => Matrix3::identity() * self.angular_weight,
             Tolerance::ZSymmetric => {
                 let z: Vector3<f64> = self.ws.tool_in_world.rotation * Vector3::z();
-                (Matrix3::identity() - z * z.transpose()) * ANGULAR_WEIGHT_M_PER_RAD
+                (Matrix3::identity() - z * z.transpose()) * self.angular_weight
             }
             Tolerance::Position => Matrix3::zeros(),
         };
@@ -248,7 +252,7 @@ impl<'a> Solver<'a> {
 
     fn converged(&self, goal: &Goal, weighted: &Vector6<f64>, done: Convergence) -> bool {
         let position = weighted.fixed_rows::<3>(0).norm();
-        let angular = weighted.fixed_rows::<3>(3).norm() / ANGULAR_WEIGHT_M_PER_RAD;
+        let angular = weighted.fixed_rows::<3>(3).norm() / self.angular_weight;
         position <= done.position_m && (goal.tolerance == Tolerance::Position || angular <= done.orientation_rad)
     }
 }

@@ -16,6 +16,7 @@ mod lines;
 mod loss;
 pub mod parallel;
 mod reach;
+mod reduce;
 mod refine;
 pub mod search;
 mod selfmotion;
@@ -23,6 +24,7 @@ mod separate;
 pub mod solutions;
 pub mod solvers;
 mod spd6;
+mod toward;
 pub mod wrist;
 
 pub use error::{angle_between, goal_error, task_error, GoalError};
@@ -160,6 +162,7 @@ struct Methods {
     analytic: Option<UrArm>,
     all: Option<(AllSolutions, Tolerance)>,
     redundant: Option<HeldJoint>,
+    sub_chains: Vec<reduce::SubChain>,
 }
 
 impl Methods {
@@ -167,7 +170,13 @@ impl Methods {
         let analytic = UrArm::detect(model);
         let all = if analytic.is_none() { AllSolutions::of(model) } else { None };
         let redundant = HeldJoint::of(model);
-        Self { analytic, all, redundant }
+        let sub_chains = reduce::sub_chains(model);
+        Self {
+            analytic,
+            all,
+            redundant,
+            sub_chains,
+        }
     }
 }
 
@@ -190,6 +199,8 @@ pub struct Ik<'a> {
     held: Option<usize>,
     /// Parts of tolerances the goal being solved may still cut (see [`cells`]).
     parts_left: usize,
+    /// Sub-chains the joint-space search tries before the whole arm (see [`reduce`]).
+    sub_chains: Vec<reduce::SubChain>,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
@@ -236,6 +247,7 @@ impl<'a> Ik<'a> {
             redundant: methods.redundant.clone(),
             held: None,
             parts_left: cells::PARTS_PER_GOAL,
+            sub_chains: methods.sub_chains.clone(),
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -560,38 +572,114 @@ impl<'a> Ik<'a> {
     }
 
     /// Decides by the joint-space search a goal that nothing reached within the pose's tolerance
-    /// and nothing proved out of reach: a proof, a configuration within the tolerance (solved
-    /// from and judged; a colliding one stays undecided), or the budget named as the limit.
-    /// Goals that some solution reaches in pose are left to the collision certificates, and
-    /// poses out of the tool's reach to their cheaper proof.
+    /// and nothing proved out of reach: a proof, a free configuration within the tolerance, or
+    /// the budget named as the limit. Poses out of the tool's reach keep their cheaper proof.
+    ///
+    /// Where no configuration within the tolerance is known, the tolerance is first aimed at
+    /// directly ([`toward`]), then sub-chains try to prove it out of reach ([`reduce`]). The
+    /// search itself, with a collision world, discards boxes that collide throughout as well as
+    /// those out of the tolerance: it proves that every configuration within the tolerance
+    /// collides, or finds a free one (goals whose colliding solutions no certificate covers:
+    /// near a singularity, branches born within the tolerance).
     fn search_joint_space(&mut self, goal: &Goal, goal_index: usize, result: &mut GoalSolutions) {
-        let posed = result.solutions.iter().any(|s| s.pose_reached);
-        if result.reached() || result.proof.is_some() || posed || self.opts.search_boxes == 0 {
+        if result.reached() || result.proof.is_some() || self.opts.search_boxes == 0 {
             return;
         }
         let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
         if !finite || reach::beyond_reach(self.model, goal).is_some() {
             return;
         }
+        let mut posed = result.solutions.iter().any(|s| s.pose_reached);
+        if posed && self.checker.is_none() {
+            return;
+        }
+        if !posed {
+            if let Some(solution) = self.reach_tolerance(goal, goal_index, &result.solutions) {
+                result.starts += 1;
+                if solution.reached {
+                    result.undecided = None;
+                    add_found(result, solution);
+                    return;
+                }
+                let clearance = solution
+                    .clearance
+                    .as_ref()
+                    .map_or(String::new(), |c| format!(" (clearance {:.1} mm)", c.exact_m * 1e3));
+                result.undecided = Some(format!(
+                    "{}: the pose itself has no solution; a configuration within the goal's tolerance ({:.2} mm, {:.2} deg off) collides{clearance}",
+                    self.method(),
+                    solution.error.position_m * 1e3,
+                    solution.error.orientation_rad.to_degrees()
+                ));
+                add_found(result, solution);
+                posed = true;
+            }
+        }
+        let mut queries = COLLISION_QUERIES;
+        if let Some(proof) = self.search_sub_chains(goal, &mut queries) {
+            result.complete = true;
+            result.undecided = None;
+            result.proof = Some(proof);
+            return;
+        }
         let mut rng = self.rng(goal_index);
-        let (model, solver) = (self.model, &mut self.solver);
-        let local = |q: &mut [f64]| search::solve_locally(model, solver, goal, q, &mut rng);
-        let Some(outcome) = search::search(model, goal, self.opts.search_boxes, local) else {
+        let margin = self.margin();
+        let mut oracle = SearchOracle {
+            model: self.model,
+            goal,
+            solver: &mut self.solver,
+            // Collisions count only where a configuration within the tolerance is known: else
+            // the tolerance alone decides most boxes, and a query per box would only slow them.
+            checker: self.checker.as_mut().filter(|_| posed),
+            bounds: &self.bounds,
+            margin,
+            rng: &mut rng,
+            queries: &mut queries,
+        };
+        let reduced: Vec<(&reduce::SubChain, reduce::Reduced)> = self
+            .sub_chains
+            .iter()
+            .filter_map(|chain| Some((chain, chain.reduce(goal)?)))
+            .collect();
+        let helpers: Vec<search::Helper> = reduced
+            .iter()
+            .map(|(chain, reduced)| search::Helper {
+                model: &chain.model,
+                goal: &reduced.goal,
+                radii: reduced.radii,
+            })
+            .collect();
+        // Where a configuration within the tolerance is known, only collisions can decide, and
+        // each box may cost a query: a quarter of the budget (the 5-joint arm's proofs in
+        // collision on the cluttered tasks take up to 26 000 boxes; 6- and 7-joint arms' rarely
+        // finish at any budget, their sub-chains decide them).
+        let budget = if posed {
+            self.opts.search_boxes / 4
+        } else {
+            self.opts.search_boxes
+        };
+        let outcome = search::search_helped(self.model, goal, search::Radii::REACHED, budget, &mut oracle, &helpers);
+        let Some(outcome) = outcome else {
             return;
         };
         let before = result.undecided.take().map_or(String::new(), |open| format!("{open}; "));
         match outcome {
-            search::Search::Proven { boxes } => {
+            search::Search::Proven { boxes, colliding: 0 } if !posed => {
                 result.complete = true;
                 result.proof = Some(format!(
                     "joint-space search: no configuration within the joint limits comes within the goal's tolerance ({boxes} boxes, each ruled out by how far the tool can move within it)"
                 ));
             }
+            search::Search::Proven { boxes, colliding } => {
+                result.complete = true;
+                result.proof = Some(format!(
+                    "joint-space search: every configuration within the joint limits that comes within the goal's tolerance collides ({boxes} boxes: {colliding} collide throughout, their centre's overlap deeper than their bodies can move within them; the others are ruled out by how far the tool can move within them)"
+                ));
+            }
             search::Search::Found { q, boxes } => {
-                let margin = self.margin();
                 let (solved, used) = self.attempt(goal, q.clone(), true, margin, &mut rng);
                 // Judged again: the attempt's clearance is an estimate, the verdict's is exact.
-                let solution = if solved.pose_reached {
+                let solution = if solved.reached {
                     self.judge(goal, solved.q, Some(solved.error), margin)
                 } else {
                     self.judge(goal, q, None, margin)
@@ -606,7 +694,7 @@ impl<'a> Ik<'a> {
                 add_found(result, solution);
             }
             search::Search::Open { boxes } => {
-                let miss = result.solutions.first().map_or(String::new(), |s| {
+                let miss = result.solutions.first().filter(|s| !s.pose_reached).map_or(String::new(), |s| {
                     format!(
                         "no solution from {} IK starts (seed {}), closest miss {:.1} mm, {:.2} deg; ",
                         result.starts,
@@ -616,11 +704,60 @@ impl<'a> Ik<'a> {
                     )
                 });
                 let miss = if before.is_empty() { miss } else { before };
-                result.undecided = Some(format!(
-                    "{miss}a joint-space search of {boxes} boxes (its budget) neither ruled out a configuration within the goal's tolerance nor found one"
-                ));
+                let what = if posed {
+                    "neither proved every configuration within the goal's tolerance in collision nor found a free one"
+                } else {
+                    "neither ruled out a configuration within the goal's tolerance nor found one"
+                };
+                result.undecided = Some(format!("{miss}a joint-space search of {boxes} boxes (its budget) {what}"));
             }
         }
+    }
+
+    /// A proof that no free configuration reaches `goal`, from the first sub-chain whose search
+    /// rules out every configuration of its joints (see [`reduce`]): out of the reduced goal's
+    /// tolerance, or, with a collision world, in collision throughout among the links the
+    /// sub-chain moves (and the obstacles and floor). Each search has the whole budget. A
+    /// sub-chain that reaches its own goal free proves nothing: the joints left out may not
+    /// follow.
+    fn search_sub_chains(&mut self, goal: &Goal, queries: &mut usize) -> Option<String> {
+        let margin = self.margin();
+        let budget = self.opts.search_boxes;
+        for chain in &self.sub_chains {
+            let Some(reduced) = chain.reduce(goal) else { continue };
+            let mut oracle = SubChainOracle {
+                levels: self.checker.as_ref().map(|c| c.pairs_up_to(chain.joints)).unwrap_or_default(),
+                checker: self.checker.as_mut(),
+                bounds: &self.bounds,
+                margin,
+                queries: &mut *queries,
+                q: vec![0.0; self.model.dof()],
+                model: &chain.model,
+                solver: Solver::new(&chain.model),
+                reduced: &reduced,
+                rng: rand_chacha::ChaCha8Rng::seed_from_u64(self.opts.seed),
+            };
+            let outcome = search::search_with(&chain.model, &reduced.goal, reduced.radii, budget, &mut oracle);
+            let Some(search::Search::Proven { boxes, colliding }) = outcome else {
+                continue;
+            };
+            let direction = if reduced.goal.tolerance == Tolerance::ZSymmetric {
+                format!(" and its direction within {:.2} deg", reduced.radii.orientation_rad.to_degrees())
+            } else {
+                String::new()
+            };
+            let (joints, what, radius) = (chain.joints, &chain.what, reduced.radii.position_m * 1e3);
+            return Some(if colliding == 0 {
+                format!(
+                    "joint-space search of joints 1 to {joints} for {what}: no configuration of them within their limits brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must ({boxes} boxes, each ruled out by how far it can move within it)"
+                )
+            } else {
+                format!(
+                    "joint-space search of joints 1 to {joints} for {what}: every configuration of them within their limits that brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must, collides among links 1 to {joints}, the obstacles and the floor ({boxes} boxes: {colliding} collide throughout, their centre's overlap deeper than their bodies can move within them; the others are ruled out by how far it can move within them)"
+                )
+            });
+        }
+        None
     }
 
     /// Every solution of a world pose by the closed form or the all-solutions method, when the
@@ -970,6 +1107,130 @@ fn add_found(result: &mut GoalSolutions, solution: IkSolution) {
         result.solutions.retain(|s| s.pose_reached);
     }
     result.solutions.insert(0, solution);
+}
+
+/// Collision queries at most that one goal's joint-space searches make (about 15 us each, with
+/// exact depths): the searches' boxes cost a microsecond, so without a cap a goal whose
+/// configurations within the tolerance collide but are not certified would cost seconds.
+const COLLISION_QUERIES: usize = 20_000;
+
+/// The joint-space search's oracle for one goal: local solves by the numeric solver, and with a
+/// collision world, free centres and boxes certified in collision.
+struct SearchOracle<'s, 'a> {
+    model: &'a Model,
+    goal: &'s Goal,
+    solver: &'s mut Solver<'a>,
+    checker: Option<&'s mut Checker<'a>>,
+    bounds: &'s MotionBounds,
+    margin: f64,
+    rng: &'s mut rand_chacha::ChaCha8Rng,
+    /// Collision queries left to the goal's searches (see [`COLLISION_QUERIES`]).
+    queries: &'s mut usize,
+}
+
+impl search::Oracle for SearchOracle<'_, '_> {
+    fn local(&mut self, q: &mut [f64]) -> bool {
+        if !search::solve_locally(self.model, self.solver, self.goal, q, self.rng) {
+            return false;
+        }
+        // The sign of the exact clearance decides; the depth is not needed.
+        self.checker
+            .as_mut()
+            .is_none_or(|checker| checker.clearance(q, false).exact_m > self.margin)
+    }
+
+    fn clear(&mut self, centre: &[f64], half: &[f64]) -> search::Clear {
+        let Some(checker) = self.checker.as_mut() else {
+            return search::Clear::Free;
+        };
+        if *self.queries == 0 {
+            return search::Clear::Unknown;
+        }
+        *self.queries -= 1;
+        let clearance = checker.clearance(centre, true).exact_m;
+        if clearance > self.margin {
+            return search::Clear::Free;
+        }
+        let Some(pair) = checker.closest_pair() else {
+            return search::Clear::Unknown;
+        };
+        // Any configuration of the box is within `half` of the centre, joint by joint: the
+        // pair's points move apart by at most the bound, so the overlap stays.
+        let motion = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], half);
+        if clearance + motion <= self.margin {
+            search::Clear::Colliding
+        } else {
+            search::Clear::Unknown
+        }
+    }
+
+    fn collisions(&self) -> bool {
+        self.checker.is_some()
+    }
+}
+
+/// The oracle of a sub-chain's search ([`reduce`]): no local solves (a sub-chain's own goal says
+/// nothing of the arm's), and with a collision world the pairs among the links it moves.
+struct SubChainOracle<'s, 'a> {
+    model: &'s Model,
+    solver: Solver<'s>,
+    reduced: &'s reduce::Reduced,
+    rng: rand_chacha::ChaCha8Rng,
+    checker: Option<&'s mut Checker<'a>>,
+    levels: Vec<Option<f64>>,
+    bounds: &'s MotionBounds,
+    margin: f64,
+    queries: &'s mut usize,
+    /// A whole configuration of the arm: the sub-chain's joints in front, the others at zero
+    /// (they move no link the pairs hold).
+    q: Vec<f64>,
+}
+
+impl search::Oracle for SubChainOracle<'_, '_> {
+    /// A free configuration of the sub-chain within its goal's radii ends its search: what it
+    /// shows is that the sub-chain proves nothing.
+    fn local(&mut self, q: &mut [f64]) -> bool {
+        let goal = &self.reduced.goal;
+        self.solver.solve(goal, q, search::LOCAL_ITERATIONS, CONVERGED, &mut self.rng);
+        let error = goal_error(goal, &self.model.tool_pose(q));
+        let radii = self.reduced.radii;
+        if error.position_m >= radii.position_m || error.orientation_rad >= radii.orientation_rad {
+            return false;
+        }
+        let Some(checker) = self.checker.as_mut() else {
+            return true;
+        };
+        self.q[..q.len()].copy_from_slice(q);
+        checker.clearance_among(&self.q, &self.levels) > self.margin
+    }
+
+    fn clear(&mut self, centre: &[f64], half: &[f64]) -> search::Clear {
+        let Some(checker) = self.checker.as_mut() else {
+            return search::Clear::Free;
+        };
+        if *self.queries == 0 {
+            return search::Clear::Unknown;
+        }
+        *self.queries -= 1;
+        self.q[..centre.len()].copy_from_slice(centre);
+        let clearance = checker.clearance_among(&self.q, &self.levels);
+        if clearance > self.margin {
+            return search::Clear::Free;
+        }
+        let Some(pair) = checker.closest_pair() else {
+            return search::Clear::Unknown;
+        };
+        let motion = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], half);
+        if clearance + motion <= self.margin {
+            search::Clear::Colliding
+        } else {
+            search::Clear::Unknown
+        }
+    }
+
+    fn collisions(&self) -> bool {
+        self.checker.is_some()
+    }
 }
 
 /// The first few of `items`, and how many more.

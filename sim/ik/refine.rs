@@ -99,6 +99,31 @@ impl<'a> Checker<'a> {
         }
     }
 
+    /// Which pairs involve no link beyond `links` (obstacles and the floor count): the levels
+    /// [`Self::clearance_among`] measures them at.
+    pub(crate) fn pairs_up_to(&self, links: usize) -> Vec<Option<f64>> {
+        let within = |body: Body| !matches!(body, Body::Link(link) if link > links);
+        self.world
+            .pairs()
+            .iter()
+            .map(|pair| (within(pair.a) && within(pair.b)).then_some(f64::INFINITY))
+            .collect()
+    }
+
+    /// The exact clearance at `q` over the pairs `levels` measures (see [`Self::pairs_up_to`]),
+    /// overlaps by their exact depth; [`Self::closest_pair`] names the closest of them.
+    pub(crate) fn clearance_among(&mut self, q: &[f64], levels: &[Option<f64>]) -> f64 {
+        self.model.forward(q, &mut self.ws);
+        let query = QueryOptions {
+            margin: 0.0,
+            hulls: false,
+            exact_depth: true,
+            mesh_hulls: false,
+        };
+        collide::distances_among(self.world, &self.ws.link_in_world, &query, Some(levels), &mut self.exact);
+        self.exact.closest.map_or(f64::INFINITY, |c| c.distance)
+    }
+
     /// The pair that was closest at the last [`Self::clearance`] query: its bodies, their
     /// witness points (world) and their names.
     pub(crate) fn closest_pair(&self) -> Option<ClosestPair> {

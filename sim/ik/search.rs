@@ -30,10 +30,13 @@ use std::f64::consts::{PI, TAU};
 /// What the search established.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Search {
-    /// Every box was discarded: no configuration within the limits is within the tolerance.
+    /// Every box was discarded: no configuration within the limits is within the tolerance
+    /// (and free, where collisions count).
     Proven {
         /// Boxes visited.
         boxes: usize,
+        /// Boxes discarded because every configuration in them collides.
+        colliding: usize,
     },
     /// A configuration within the tolerance and the limits.
     Found {
@@ -51,6 +54,28 @@ pub enum Search {
 
 /// Rounding of the goal error at a box centre (m and rad), far below any tolerance.
 pub(super) const ROUNDING: f64 = 1e-9;
+
+/// The tolerance a search proves against: the harness's 1 mm and 1 degree, or wider ones for a
+/// sub-chain that stands in for the arm (see [`super::reduce`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Radii {
+    /// Position (m).
+    pub position_m: f64,
+    /// Orientation (rad): of the whole rotation (`pose`) or of the tool z axis (`z_symmetric`).
+    pub orientation_rad: f64,
+}
+
+impl Radii {
+    /// The harness's tolerance: [`REACHED_POSITION_M`] and [`REACHED_ORIENTATION_RAD`].
+    pub const REACHED: Radii = Radii {
+        position_m: REACHED_POSITION_M,
+        orientation_rad: REACHED_ORIENTATION_RAD,
+    };
+
+    fn holds(&self, error: &super::GoalError) -> bool {
+        error.position_m < self.position_m && error.orientation_rad < self.orientation_rad
+    }
+}
 
 /// One box: the lower and upper joint values.
 type JointBox = (Vec<f64>, Vec<f64>);
@@ -98,8 +123,11 @@ const FIRST_ORDER_M: f64 = 0.2;
 /// goals on cluttered task 00) decided the same goals with and without it, 14 % slower with.
 const FIRST_ORDER_BUDGET: usize = 10_000;
 
+/// Share of a box's tool motion bound below which a joint's split is not worth making.
+const SPLIT_SHARE: f64 = 1e-6;
+
 /// Jacobian evaluations of a local solve from a box centre.
-const LOCAL_ITERATIONS: usize = 20;
+pub(super) const LOCAL_ITERATIONS: usize = 20;
 
 /// The local solve [`search`] wants: the numeric solver from `q` (kept within the limits), true
 /// when it ends within the goal's tolerance.
@@ -122,6 +150,7 @@ enum Judged {
 struct Judge<'a> {
     model: &'a Model,
     goal: &'a Goal,
+    radii: Radii,
     ws: KinematicsWorkspace,
     revolute: Vec<bool>,
     centre: Vec<f64>,
@@ -133,14 +162,30 @@ struct Judge<'a> {
     separator: super::separate::Separator,
     /// Whether boxes face the separating test (see [`FIRST_ORDER_BUDGET`]).
     separating: bool,
+    /// Judges of sub-chains that stand in for the arm ([`Helper`]): a box whose first joints
+    /// one of them rules out is out.
+    helpers: Vec<Judge<'a>>,
+}
+
+/// A sub-chain of the searched arm (its first joints) with a goal it must reach within `radii`
+/// whenever the arm reaches its own (see [`super::reduce`]): its bounds, over the box's first
+/// joints alone, rule boxes out long before the whole arm's do.
+pub struct Helper<'a> {
+    /// The sub-chain: the searched arm's first joints.
+    pub model: &'a Model,
+    /// Where its tool must be.
+    pub goal: &'a Goal,
+    /// Within what.
+    pub radii: Radii,
 }
 
 impl<'a> Judge<'a> {
-    fn new(model: &'a Model, goal: &'a Goal) -> Self {
+    fn new(model: &'a Model, goal: &'a Goal, radii: Radii) -> Self {
         let dof = model.dof();
         Self {
             model,
             goal,
+            radii,
             ws: model.workspace(),
             revolute: model.joints.iter().map(|j| j.kind != JointKind::Prismatic).collect(),
             centre: vec![0.0; dof],
@@ -149,6 +194,7 @@ impl<'a> Judge<'a> {
             turns: vec![0.0; dof + 1],
             separator: super::separate::Separator::new(dof),
             separating: true,
+            helpers: Vec::new(),
         }
     }
 
@@ -190,14 +236,20 @@ impl<'a> Judge<'a> {
     fn judge(&mut self, lower: &[f64], upper: &[f64]) -> Judged {
         let goal = self.goal;
         let error = self.measure(lower, upper);
-        if super::is_reached(&error) {
+        if self.radii.holds(&error) {
             return Judged::Inside;
         }
         let (moves, turns) = (&self.moves, &self.turns);
-        let position_gap = error.position_m - ROUNDING - REACHED_POSITION_M;
-        let orientation_gap = error.orientation_rad - ROUNDING - REACHED_ORIENTATION_RAD;
+        let position_gap = error.position_m - ROUNDING - self.radii.position_m;
+        let orientation_gap = error.orientation_rad - ROUNDING - self.radii.orientation_rad;
         if moves[0] <= position_gap || turns[0] <= orientation_gap {
             return Judged::RuledOut;
+        }
+        for helper in &mut self.helpers {
+            let joints = helper.model.dof();
+            if matches!(helper.judge(&lower[..joints], &upper[..joints]), Judged::RuledOut) {
+                return Judged::RuledOut;
+            }
         }
         let bounds = Bounds {
             half: &self.half,
@@ -206,7 +258,7 @@ impl<'a> Judge<'a> {
             turns: &self.turns,
         };
         let (position_rest, axis_rest) = remainders(&self.ws, &bounds);
-        if linear_rules_out(goal, &self.ws, &bounds, &position_rest, &axis_rest) {
+        if linear_rules_out(goal, self.radii, &self.ws, &bounds, &position_rest, &axis_rest) {
             return Judged::RuledOut;
         }
         if !self.separating {
@@ -218,13 +270,27 @@ impl<'a> Judge<'a> {
             position_rest: &position_rest,
             axis_rest: &axis_rest,
         };
-        let Some(split) = self.separator.rules_out(goal, &self.ws, &separating) else {
+        let Some(split) = self.separator.rules_out(goal, self.radii, &self.ws, &separating) else {
             return Judged::RuledOut;
         };
-        if self.moves[0] <= FIRST_ORDER_M {
+        // A joint that moves the tool by next to nothing within the box (at a singularity of
+        // the chain) gains nothing by its split, however the first-order test weighs it: split
+        // that one forever and the box never shrinks.
+        let moves_tool = |j: usize| {
+            self.moves[j] - self.moves[j + 1] > SPLIT_SHARE * self.moves[0]
+                || self.turns[j] - self.turns[j + 1] > SPLIT_SHARE * self.turns[0]
+        };
+        if self.moves[0] <= FIRST_ORDER_M && moves_tool(split) {
             return Judged::Split(split, self.moves[0]);
         }
         Judged::Split(self.coarse_split(position_gap, orientation_gap), self.moves[0])
+    }
+
+    /// The split of a box whose centre is within the tolerance but collides: the joint that
+    /// moves the tool furthest within it.
+    fn widest(&self) -> usize {
+        let contribution = |j: usize| self.moves[j] - self.moves[j + 1];
+        (0..self.model.dof()).fold(0, |best, j| if contribution(j) > contribution(best) { j } else { best })
     }
 
     /// The split of a large box, where the first-order model says little: the joint that
@@ -248,19 +314,94 @@ impl<'a> Judge<'a> {
 /// `goal`: the test [`search`] discards boxes by, for checks against configurations known to
 /// be within the tolerance.
 pub fn rules_out(model: &Model, goal: &Goal, lower: &[f64], upper: &[f64]) -> bool {
-    matches!(Judge::new(model, goal).judge(lower, upper), Judged::RuledOut)
+    matches!(Judge::new(model, goal, Radii::REACHED).judge(lower, upper), Judged::RuledOut)
 }
+
+/// What a box's configurations are against collisions (see [`Oracle::clear`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Clear {
+    /// The centre is free.
+    Free,
+    /// Every configuration of the box collides: the centre's deepest overlap is deeper than its
+    /// bodies can move within the box.
+    Colliding,
+    /// The centre collides, the rest of the box may not.
+    Unknown,
+}
+
+/// What the search asks beyond its bounds: local solves from box centres and, where it looks
+/// for free configurations, collisions.
+pub trait Oracle {
+    /// Solves from a box centre in place: true when it ended within the tolerance and the
+    /// limits (and free, where collisions count).
+    fn local(&mut self, q: &mut [f64]) -> bool;
+    /// The box with centre `centre` and half-widths `half` against collisions; never asked when
+    /// [`Oracle::collisions`] is false.
+    fn clear(&mut self, centre: &[f64], half: &[f64]) -> Clear;
+    /// Whether collisions count: the search then proves that every configuration within the
+    /// tolerance collides, or finds a free one.
+    fn collisions(&self) -> bool;
+}
+
+/// An oracle of local solves alone.
+struct Solves<F: FnMut(&mut [f64]) -> bool>(F);
+
+impl<F: FnMut(&mut [f64]) -> bool> Oracle for Solves<F> {
+    fn local(&mut self, q: &mut [f64]) -> bool {
+        (self.0)(q)
+    }
+    fn clear(&mut self, _: &[f64], _: &[f64]) -> Clear {
+        Clear::Free
+    }
+    fn collisions(&self) -> bool {
+        false
+    }
+}
+
+/// Tool motion bound (m) below which a box the bounds keep is checked against collisions: a
+/// larger one moves its links further than any overlap is deep.
+const COLLISION_CHECK_M: f64 = 0.2;
 
 /// Searches the joint space of `model` for a configuration within `goal`'s tolerance, visiting
 /// at most `budget` boxes; `None` when the joint ranges are unbounded. `local` solves from a box
 /// centre in place and says whether it ended within the tolerance and the limits (`|_| false`
 /// leaves the search to its bounds alone).
-pub fn search(model: &Model, goal: &Goal, budget: usize, mut local: impl FnMut(&mut [f64]) -> bool) -> Option<Search> {
+pub fn search(model: &Model, goal: &Goal, budget: usize, local: impl FnMut(&mut [f64]) -> bool) -> Option<Search> {
+    search_with(model, goal, Radii::REACHED, budget, &mut Solves(local))
+}
+
+/// [`search`] against the tolerance `radii` instead of the harness's.
+pub fn search_within(model: &Model, goal: &Goal, radii: Radii, budget: usize, local: impl FnMut(&mut [f64]) -> bool) -> Option<Search> {
+    search_with(model, goal, radii, budget, &mut Solves(local))
+}
+
+/// [`search_within`] asking `oracle`: where it counts collisions, a box whose every
+/// configuration collides is discarded too, and only a free configuration is found.
+pub fn search_with(model: &Model, goal: &Goal, radii: Radii, budget: usize, oracle: &mut dyn Oracle) -> Option<Search> {
+    search_helped(model, goal, radii, budget, oracle, &[])
+}
+
+/// [`search_with`] with sub-chains that rule boxes out by their first joints.
+pub fn search_helped(
+    model: &Model,
+    goal: &Goal,
+    radii: Radii,
+    budget: usize,
+    oracle: &mut dyn Oracle,
+    helpers: &[Helper],
+) -> Option<Search> {
     let (lower, upper) = ranges(model)?;
-    let mut judge = Judge::new(model, goal);
+    let mut judge = Judge::new(model, goal, radii);
     judge.separating = budget >= FIRST_ORDER_BUDGET;
+    for helper in helpers {
+        let mut sub = Judge::new(helper.model, helper.goal, helper.radii);
+        sub.separating = judge.separating;
+        judge.helpers.push(sub);
+    }
+    let collisions = oracle.collisions();
     let mut stack = vec![(lower, upper, f64::INFINITY)];
     let mut boxes = 0;
+    let mut colliding = 0;
     let mut left_open = 0;
     while let Some((lower, upper, parent_moves)) = stack.pop() {
         if boxes == budget {
@@ -268,13 +409,27 @@ pub fn search(model: &Model, goal: &Goal, budget: usize, mut local: impl FnMut(&
         }
         boxes += 1;
         let (split, moves) = match judge.judge(&lower, &upper) {
-            Judged::Inside => return Some(Search::Found { q: judge.centre, boxes }),
+            Judged::Inside => match oracle.clear(&judge.centre, &judge.half) {
+                _ if !collisions => return Some(Search::Found { q: judge.centre, boxes }),
+                Clear::Free => return Some(Search::Found { q: judge.centre, boxes }),
+                Clear::Colliding => {
+                    colliding += 1;
+                    continue;
+                }
+                Clear::Unknown => (judge.widest(), judge.moves[0]),
+            },
             Judged::RuledOut => continue,
-            Judged::Split(split, moves) => (split, moves),
+            Judged::Split(split, moves) => {
+                if collisions && moves < COLLISION_CHECK_M && oracle.clear(&judge.centre, &judge.half) == Clear::Colliding {
+                    colliding += 1;
+                    continue;
+                }
+                (split, moves)
+            }
         };
         if moves < LOCAL_SOLVE_M && parent_moves >= LOCAL_SOLVE_M {
             let mut q = judge.centre.clone();
-            if local(&mut q) {
+            if oracle.local(&mut q) {
                 return Some(Search::Found { q, boxes });
             }
         }
@@ -283,7 +438,7 @@ pub fn search(model: &Model, goal: &Goal, budget: usize, mut local: impl FnMut(&
             // the tolerance's edge: the bounds cannot decide it at any size, so one local
             // solve tries to step inside, and the box is otherwise left open.
             let mut q = judge.centre.clone();
-            if local(&mut q) {
+            if oracle.local(&mut q) {
                 return Some(Search::Found { q, boxes });
             }
             left_open += 1;
@@ -299,7 +454,7 @@ pub fn search(model: &Model, goal: &Goal, budget: usize, mut local: impl FnMut(&
     if left_open > 0 {
         return Some(Search::Open { boxes });
     }
-    Some(Search::Proven { boxes })
+    Some(Search::Proven { boxes, colliding })
 }
 
 /// A box's half-widths and its zeroth-order bounds (see [`search`]).
@@ -323,7 +478,14 @@ const MIXES: [f64; 7] = [1.0, 0.9, 0.7, 0.5, 0.3, 0.1, 0.0];
 /// tool's axes. A weighted sum of the two normalised excesses that stays positive over the box
 /// means one of them always does. `ws` holds the Jacobian at the box centre, the rests are
 /// [`remainders`]. True when the box is ruled out.
-fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds, position_rest: &[f64], axis_rest: &[f64]) -> bool {
+fn linear_rules_out(
+    goal: &Goal,
+    radii: Radii,
+    ws: &KinematicsWorkspace,
+    bounds: &Bounds,
+    position_rest: &[f64],
+    axis_rest: &[f64],
+) -> bool {
     let half = bounds.half;
     let tool = &ws.tool_in_world;
     let offset = tool.translation.vector - goal.position;
@@ -332,8 +494,8 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds, posi
         return false;
     }
     let along = offset / distance;
-    let measure = Orientation::of(goal, &tool.rotation);
-    let position_rest: Vec<f64> = position_rest.iter().map(|r| r / REACHED_POSITION_M).collect();
+    let measure = Orientation::of(goal, radii, &tool.rotation);
+    let position_rest: Vec<f64> = position_rest.iter().map(|r| r / radii.position_m).collect();
     let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| r * measure.axes / measure.scale).collect();
     // Per joint: the rates at the centre along the error direction and of the orientation
     // measure.
@@ -350,10 +512,10 @@ fn linear_rules_out(goal: &Goal, ws: &KinematicsWorkspace, bounds: &Bounds, posi
     // remainder, both normalised.
     let share = |j: usize, mix: f64| {
         let (position, orientation) = rates[j];
-        let rate = mix * position / REACHED_POSITION_M - (1.0 - mix) * orientation / measure.scale;
+        let rate = mix * position / radii.position_m - (1.0 - mix) * orientation / measure.scale;
         rate.abs() * half[j] + mix * position_rest[j] + (1.0 - mix) * orientation_rest[j]
     };
-    let position_excess = (distance - REACHED_POSITION_M) / REACHED_POSITION_M;
+    let position_excess = (distance - radii.position_m) / radii.position_m;
     let orientation_excess = (measure.within - measure.value) / measure.scale;
     let mixes: &[f64] = if goal.tolerance == Tolerance::Position {
         &MIXES[..1]
@@ -386,9 +548,9 @@ struct Orientation {
 }
 
 impl Orientation {
-    fn of(goal: &Goal, tool: &nalgebra::UnitQuaternion<f64>) -> Self {
+    fn of(goal: &Goal, radii: Radii, tool: &nalgebra::UnitQuaternion<f64>) -> Self {
         let (rotation, target) = (tool.to_rotation_matrix(), goal.rotation.to_rotation_matrix());
-        let tolerance = REACHED_ORIENTATION_RAD;
+        let tolerance = radii.orientation_rad;
         let read = |columns: std::ops::Range<usize>| {
             columns.fold((0.0, Vector3::zeros()), |(value, gradient), k| {
                 let (axis, wanted) = (rotation.matrix().column(k).into_owned(), target.matrix().column(k).into_owned());
@@ -483,7 +645,7 @@ mod tests {
             for tolerance in [Tolerance::Pose, Tolerance::ZSymmetric] {
                 let q0: Vec<f64> = model.random_configuration(&mut rng);
                 let goal = goal_at(&model.tool_pose(&q0), tolerance);
-                let mut judge = Judge::new(&model, &goal);
+                let mut judge = Judge::new(&model, &goal, Radii::REACHED);
                 for _ in 0..300 {
                     let scale = rng.random_range((1e-3_f64).ln()..PI.ln()).exp();
                     let centre = model.random_configuration(&mut rng);
@@ -497,13 +659,13 @@ mod tests {
                         moves: &judge.moves,
                         turns: &judge.turns,
                     };
-                    let axes = Orientation::of(&goal, &judge.ws.tool_in_world.rotation).axes;
+                    let axes = Orientation::of(&goal, Radii::REACHED, &judge.ws.tool_in_world.rotation).axes;
                     let (position_rest, axis_rest) = remainders(&judge.ws, &bounds);
                     let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| axes * r).collect();
                     let axis_rest: f64 = axis_rest.iter().sum();
                     let checked_axes: &[usize] = if tolerance == Tolerance::Pose { &[0, 1, 2] } else { &[2] };
                     let at_centre = judge.ws.tool_in_world;
-                    let measure = Orientation::of(&goal, &at_centre.rotation);
+                    let measure = Orientation::of(&goal, Radii::REACHED, &at_centre.rotation);
                     for corner in 0..40 {
                         let delta: Vec<f64> = half
                             .iter()
@@ -555,7 +717,7 @@ mod tests {
                             let off = (at - from - linear).norm();
                             assert!(off <= axis_rest + 1e-12, "{name}: axis {k} remainder {off} > {axis_rest}");
                         }
-                        let change = Orientation::of(&goal, &tool.rotation).value - measure.value;
+                        let change = Orientation::of(&goal, Radii::REACHED, &tool.rotation).value - measure.value;
                         let rest: f64 = orientation_rest.iter().sum();
                         assert!(
                             (change - rate).abs() <= rest + 1e-12,

@@ -15,7 +15,7 @@
 //! direction shows it with the largest margin. Any `u` keeps the test rigorous; the fit only
 //! chooses a good one.
 
-use super::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use super::search::Radii;
 use crate::model::KinematicsWorkspace;
 use crate::scenario::{Goal, Tolerance};
 use nalgebra::{Matrix3, Vector3};
@@ -58,13 +58,13 @@ impl Separator {
 
     /// Whether the box whose centre's kinematics `ws` holds is ruled out for `goal` (`None`),
     /// else the joint whose motion within the box keeps it most from being ruled out.
-    pub(super) fn rules_out(&mut self, goal: &Goal, ws: &KinematicsWorkspace, bounds: &BoxBounds) -> Option<usize> {
+    pub(super) fn rules_out(&mut self, goal: &Goal, radii: Radii, ws: &KinematicsWorkspace, bounds: &BoxBounds) -> Option<usize> {
         let dof = bounds.half.len();
         let tool = &ws.tool_in_world;
         let rotation: Matrix3<f64> = *tool.rotation.to_rotation_matrix().matrix();
         let target: Matrix3<f64> = *goal.rotation.to_rotation_matrix().matrix();
-        let position_scale = 1.0 / REACHED_POSITION_M;
-        let half_chord = 2.0 * (REACHED_ORIENTATION_RAD / 2.0).sin();
+        let position_scale = 1.0 / radii.position_m;
+        let half_chord = 2.0 * (radii.orientation_rad / 2.0).sin();
         // The rotation block: which axes, and its scale and remainder (per axis, then the
         // block's norm: the Frobenius norm of three vectors each within the bound).
         let (axes, axis_scale, block_rest): (&[usize], f64, f64) = match goal.tolerance {
