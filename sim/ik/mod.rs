@@ -201,6 +201,8 @@ pub struct Ik<'a> {
     parts_left: usize,
     /// Sub-chains the joint-space search tries before the whole arm (see [`reduce`]).
     sub_chains: Vec<reduce::SubChain>,
+    /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
+    collision_queries: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
@@ -248,6 +250,7 @@ impl<'a> Ik<'a> {
             held: None,
             parts_left: cells::PARTS_PER_GOAL,
             sub_chains: methods.sub_chains.clone(),
+            collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
             opts,
@@ -615,11 +618,16 @@ impl<'a> Ik<'a> {
                 posed = true;
             }
         }
-        let mut queries = COLLISION_QUERIES;
+        let mut queries = self.collision_queries;
         if let Some(proof) = self.search_sub_chains(goal, &mut queries) {
             result.complete = true;
             result.undecided = None;
             result.proof = Some(proof);
+            return;
+        }
+        if posed && self.opts.search_boxes < search::FIRST_ORDER_BUDGET {
+            // A sweep's few boxes never get small enough to be certified in collision (the
+            // brute force on task 00: the same records without them, 51.0 s against 52.9 s).
             return;
         }
         let mut rng = self.rng(goal_index);
@@ -1109,10 +1117,26 @@ fn add_found(result: &mut GoalSolutions, solution: IkSolution) {
     result.solutions.insert(0, solution);
 }
 
-/// Collision queries at most that one goal's joint-space searches make (about 15 us each, with
-/// exact depths): the searches' boxes cost a microsecond, so without a cap a goal whose
-/// configurations within the tolerance collide but are not certified would cost seconds.
+/// Collision queries at most that one goal's joint-space searches make (about 15 us each among
+/// primitives, with exact depths): the searches' boxes cost a microsecond, so without a cap a
+/// goal whose configurations within the tolerance collide but are not certified would cost
+/// seconds.
 const COLLISION_QUERIES: usize = 20_000;
+/// The same with mesh links: an exact depth between meshes costs up to 5 ms (the Panda's),
+/// 20 000 of them 100 s a goal.
+const MESH_COLLISION_QUERIES: usize = 200;
+
+fn collision_queries(model: &Model) -> usize {
+    let meshes = model
+        .links
+        .iter()
+        .any(|link| link.colliders.iter().any(|c| matches!(c.shape, crate::model::Shape::Mesh(_))));
+    if meshes {
+        MESH_COLLISION_QUERIES
+    } else {
+        COLLISION_QUERIES
+    }
+}
 
 /// The joint-space search's oracle for one goal: local solves by the numeric solver, and with a
 /// collision world, free centres and boxes certified in collision.
@@ -1133,10 +1157,15 @@ impl search::Oracle for SearchOracle<'_, '_> {
         if !search::solve_locally(self.model, self.solver, self.goal, q, self.rng) {
             return false;
         }
+        let Some(checker) = self.checker.as_mut() else {
+            return true;
+        };
+        if *self.queries == 0 {
+            return false;
+        }
+        *self.queries -= 1;
         // The sign of the exact clearance decides; the depth is not needed.
-        self.checker
-            .as_mut()
-            .is_none_or(|checker| checker.clearance(q, false).exact_m > self.margin)
+        checker.clearance(q, false).exact_m > self.margin
     }
 
     fn clear(&mut self, centre: &[f64], half: &[f64]) -> search::Clear {
@@ -1149,7 +1178,7 @@ impl search::Oracle for SearchOracle<'_, '_> {
         *self.queries -= 1;
         let clearance = checker.clearance(centre, true).exact_m;
         if clearance > self.margin {
-            return search::Clear::Free;
+            return free_within(self.bounds, self.model.links.len(), half, clearance - self.margin);
         }
         let Some(pair) = checker.closest_pair() else {
             return search::Clear::Unknown;
@@ -1166,6 +1195,20 @@ impl search::Oracle for SearchOracle<'_, '_> {
 
     fn collisions(&self) -> bool {
         self.checker.is_some()
+    }
+}
+
+/// A box whose centre keeps `room` beyond the margin: free throughout when no two bodies can
+/// approach by that much within it (each link moves by at most its bound against the world, a
+/// pair of links by at most both).
+fn free_within(bounds: &MotionBounds, links: usize, half: &[f64], room: f64) -> search::Clear {
+    let farthest = (1..links)
+        .map(|link| bounds.relative_motion(crate::collide::Body::Link(link), crate::collide::Body::Floor, half))
+        .fold(0.0, f64::max);
+    if 2.0 * farthest < room {
+        search::Clear::FreeThroughout
+    } else {
+        search::Clear::Free
     }
 }
 
@@ -1200,8 +1243,12 @@ impl search::Oracle for SubChainOracle<'_, '_> {
         let Some(checker) = self.checker.as_mut() else {
             return true;
         };
+        if *self.queries == 0 {
+            return false;
+        }
+        *self.queries -= 1;
         self.q[..q.len()].copy_from_slice(q);
-        checker.clearance_among(&self.q, &self.levels) > self.margin
+        checker.clearance_among(&self.q, &self.levels, false) > self.margin
     }
 
     fn clear(&mut self, centre: &[f64], half: &[f64]) -> search::Clear {
@@ -1213,9 +1260,9 @@ impl search::Oracle for SubChainOracle<'_, '_> {
         }
         *self.queries -= 1;
         self.q[..centre.len()].copy_from_slice(centre);
-        let clearance = checker.clearance_among(&self.q, &self.levels);
+        let clearance = checker.clearance_among(&self.q, &self.levels, true);
         if clearance > self.margin {
-            return search::Clear::Free;
+            return free_within(self.bounds, self.model.links.len(), half, clearance - self.margin);
         }
         let Some(pair) = checker.closest_pair() else {
             return search::Clear::Unknown;

@@ -111,13 +111,14 @@ impl<'a> Checker<'a> {
     }
 
     /// The exact clearance at `q` over the pairs `levels` measures (see [`Self::pairs_up_to`]),
-    /// overlaps by their exact depth; [`Self::closest_pair`] names the closest of them.
-    pub(crate) fn clearance_among(&mut self, q: &[f64], levels: &[Option<f64>]) -> f64 {
+    /// overlaps by their exact depth where `exact_depth` (else the sign alone is exact);
+    /// [`Self::closest_pair`] names the closest of them.
+    pub(crate) fn clearance_among(&mut self, q: &[f64], levels: &[Option<f64>], exact_depth: bool) -> f64 {
         self.model.forward(q, &mut self.ws);
         let query = QueryOptions {
             margin: 0.0,
             hulls: false,
-            exact_depth: true,
+            exact_depth,
             mesh_hulls: false,
         };
         collide::distances_among(self.world, &self.ws.link_in_world, &query, Some(levels), &mut self.exact);

@@ -121,7 +121,7 @@ const FIRST_ORDER_M: f64 = 0.2;
 /// Budget (boxes) from which a search uses the separating test: a smaller one never splits
 /// boxes down to where that test pays. The brute force's 200-box searches (60 375 undecided
 /// goals on cluttered task 00) decided the same goals with and without it, 14 % slower with.
-const FIRST_ORDER_BUDGET: usize = 10_000;
+pub(super) const FIRST_ORDER_BUDGET: usize = 10_000;
 
 /// Share of a box's tool motion bound below which a joint's split is not worth making.
 const SPLIT_SHARE: f64 = 1e-6;
@@ -322,6 +322,9 @@ pub fn rules_out(model: &Model, goal: &Goal, lower: &[f64], upper: &[f64]) -> bo
 pub enum Clear {
     /// The centre is free.
     Free,
+    /// Every configuration of the box is free: the centre's clearance exceeds how far any two
+    /// bodies can approach within the box (nothing in it is worth another query).
+    FreeThroughout,
     /// Every configuration of the box collides: the centre's deepest overlap is deeper than its
     /// bodies can move within the box.
     Colliding,
@@ -399,19 +402,21 @@ pub fn search_helped(
         judge.helpers.push(sub);
     }
     let collisions = oracle.collisions();
-    let mut stack = vec![(lower, upper, f64::INFINITY)];
+    // Per box: its bounds, its parent's tool motion bound, and whether it is known free
+    // throughout (a box inside one that is).
+    let mut stack = vec![(lower, upper, f64::INFINITY, !collisions)];
     let mut boxes = 0;
     let mut colliding = 0;
     let mut left_open = 0;
-    while let Some((lower, upper, parent_moves)) = stack.pop() {
+    while let Some((lower, upper, parent_moves, mut free)) = stack.pop() {
         if boxes == budget {
             return Some(Search::Open { boxes });
         }
         boxes += 1;
         let (split, moves) = match judge.judge(&lower, &upper) {
+            Judged::Inside if free => return Some(Search::Found { q: judge.centre, boxes }),
             Judged::Inside => match oracle.clear(&judge.centre, &judge.half) {
-                _ if !collisions => return Some(Search::Found { q: judge.centre, boxes }),
-                Clear::Free => return Some(Search::Found { q: judge.centre, boxes }),
+                Clear::Free | Clear::FreeThroughout => return Some(Search::Found { q: judge.centre, boxes }),
                 Clear::Colliding => {
                     colliding += 1;
                     continue;
@@ -420,9 +425,15 @@ pub fn search_helped(
             },
             Judged::RuledOut => continue,
             Judged::Split(split, moves) => {
-                if collisions && moves < COLLISION_CHECK_M && oracle.clear(&judge.centre, &judge.half) == Clear::Colliding {
-                    colliding += 1;
-                    continue;
+                if !free && moves < COLLISION_CHECK_M {
+                    match oracle.clear(&judge.centre, &judge.half) {
+                        Clear::Colliding => {
+                            colliding += 1;
+                            continue;
+                        }
+                        Clear::FreeThroughout => free = true,
+                        Clear::Free | Clear::Unknown => {}
+                    }
                 }
                 (split, moves)
             }
@@ -445,7 +456,7 @@ pub fn search_helped(
             continue;
         }
         let middle = judge.centre[split];
-        let (mut low_half, mut high_half) = ((lower.clone(), upper.clone(), moves), (lower, upper, moves));
+        let (mut low_half, mut high_half) = ((lower.clone(), upper.clone(), moves, free), (lower, upper, moves, free));
         low_half.1[split] = middle;
         high_half.0[split] = middle;
         stack.push(high_half);

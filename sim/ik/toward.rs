@@ -19,6 +19,8 @@ const ROUNDS: usize = 40;
 const STEPS: usize = 10;
 /// Misses the projections start from (the closest first).
 const STARTS: usize = 4;
+/// A round that leaves more than this share of the excess over the tolerance ends the start.
+const STALLED: f64 = 0.99;
 /// Fraction of the tolerance the projected target stays within, so that an arm reaching it is
 /// within the tolerance after rounding.
 const INSIDE: f64 = 0.98;
@@ -57,7 +59,11 @@ impl Ik<'_> {
     /// collide). `None` when no projection lands within the tolerance.
     pub(super) fn reach_tolerance(&mut self, goal: &Goal, goal_index: usize, misses: &[IkSolution]) -> Option<IkSolution> {
         let mut rng = self.rng(goal_index);
-        let mut misses: Vec<&IkSolution> = misses.iter().filter(|s| !s.pose_reached).collect();
+        // A miss far beyond the tolerance is not one the tolerance's own trade of turn for
+        // distance can close: only those within ten times it (the brute force's undecided goals
+        // are mostly far misses, and each start here costs 400 solver iterations).
+        let near = |s: &&IkSolution| s.error.position_m < super::NEARBY_MISS_M && s.error.orientation_rad < super::NEARBY_MISS_RAD;
+        let mut misses: Vec<&IkSolution> = misses.iter().filter(|s| !s.pose_reached).filter(near).collect();
         misses.sort_by(|a, b| super::rank(&a.error).total_cmp(&super::rank(&b.error)));
         // Errors weighed as the tolerance weighs them: the solver's own weighting (0.5 m per
         // rad) keeps the turn small where the tolerance would rather spend it.
@@ -66,12 +72,21 @@ impl Ik<'_> {
         let mut within = Vec::new();
         for miss in misses.into_iter().take(STARTS) {
             let mut q = miss.q.clone();
+            let mut last = f64::INFINITY;
             for _ in 0..ROUNDS {
                 let tool = self.model.tool_pose(&q);
-                if is_reached(&goal_error(goal, &tool)) {
+                let error = goal_error(goal, &tool);
+                if is_reached(&error) {
                     within.push(q);
                     break;
                 }
+                // The excess over the tolerance, in units of it: where a round no longer cuts it,
+                // the two sets are apart (or meet too slowly to be worth the rounds).
+                let excess = (error.position_m / super::REACHED_POSITION_M).max(error.orientation_rad / super::REACHED_ORIENTATION_RAD);
+                if excess > STALLED * last {
+                    break;
+                }
+                last = excess;
                 let target = project(goal, &tool);
                 self.solver.solve(&target, &mut q, STEPS, CONVERGED, &mut rng);
             }
