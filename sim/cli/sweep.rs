@@ -46,9 +46,9 @@ pub(crate) struct SweepArgs {
     /// IK starts per goal.
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     ik_seeds: u64,
-    /// Boxes at most the joint-space search visits for a goal that IK neither reaches nor
-    /// proves out of reach (0 turns it off: such goals stay undecided; validation's default is
-    /// 200 000).
+    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's) for
+    /// a goal that IK neither reaches nor decides (0 turns the searches off: such goals stay
+    /// undecided; validation's default is 200 000).
     #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SWEEP_SEARCH_BOXES)]
     search_boxes: usize,
     /// Rows of each ranked table.

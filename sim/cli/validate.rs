@@ -87,8 +87,9 @@ pub(crate) struct ValidateArgs {
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     pub(crate) ik_seeds: u64,
-    /// Boxes at most the joint-space search visits for a goal that IK neither reaches nor
-    /// proves out of reach (0 turns it off: such goals stay undecided).
+    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's) for
+    /// a goal that IK neither reaches nor decides (0 turns the searches off: such goals stay
+    /// undecided).
     #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SEARCH_BOXES)]
     pub(crate) search_boxes: usize,
     /// Judge every goal by this tolerance mode instead of the scenario's.
