@@ -56,7 +56,7 @@ pub enum Search {
 pub(super) const ROUNDING: f64 = 1e-9;
 
 /// The tolerance a search proves against: the harness's 1 mm and 1 degree, or wider ones for a
-/// sub-chain that stands in for the arm (see [`super::reduce`]).
+/// sub-chain that stands in for the arm (`ik::reduce`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Radii {
     /// Position (m).
@@ -168,7 +168,7 @@ struct Judge<'a> {
 }
 
 /// A sub-chain of the searched arm (its first joints) with a goal it must reach within `radii`
-/// whenever the arm reaches its own (see [`super::reduce`]): its bounds, over the box's first
+/// whenever the arm reaches its own (`ik::reduce`): its bounds, over the box's first
 /// joints alone, rule boxes out long before the whole arm's do.
 pub struct Helper<'a> {
     /// The sub-chain: the searched arm's first joints.
