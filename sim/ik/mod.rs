@@ -1177,20 +1177,7 @@ impl search::Oracle for SearchOracle<'_, '_> {
         }
         *self.queries -= 1;
         let clearance = checker.clearance(centre, true).exact_m;
-        if clearance > self.margin {
-            return free_within(self.bounds, self.model.links.len(), half, clearance - self.margin);
-        }
-        let Some(pair) = checker.closest_pair() else {
-            return search::Clear::Unknown;
-        };
-        // Any configuration of the box is within `half` of the centre, joint by joint: the
-        // pair's points move apart by at most the bound, so the overlap stays.
-        let motion = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], half);
-        if clearance + motion <= self.margin {
-            search::Clear::Colliding
-        } else {
-            search::Clear::Unknown
-        }
+        judge_box(checker, self.bounds, self.model.links.len(), half, clearance, self.margin)
     }
 
     fn collisions(&self) -> bool {
@@ -1198,17 +1185,30 @@ impl search::Oracle for SearchOracle<'_, '_> {
     }
 }
 
-/// A box whose centre keeps `room` beyond the margin: free throughout when no two bodies can
-/// approach by that much within it (each link moves by at most its bound against the world, a
-/// pair of links by at most both).
-fn free_within(bounds: &MotionBounds, links: usize, half: &[f64], room: f64) -> search::Clear {
-    let farthest = (1..links)
-        .map(|link| bounds.relative_motion(crate::collide::Body::Link(link), crate::collide::Body::Floor, half))
-        .fold(0.0, f64::max);
-    if 2.0 * farthest < room {
-        search::Clear::FreeThroughout
+/// A box of half-widths `half` (joint by joint) whose centre has `clearance` (the checker's
+/// last query) against collisions. Free at the centre: free throughout when no two bodies can
+/// approach by the room it keeps beyond the margin (each link moves by at most its bound
+/// against the world, a pair of links by at most both). In collision: throughout when the
+/// closest pair's overlap is deeper than its bodies can move apart within the box.
+fn judge_box(checker: &Checker, bounds: &MotionBounds, links: usize, half: &[f64], clearance: f64, margin: f64) -> search::Clear {
+    if clearance > margin {
+        let farthest = (1..links)
+            .map(|link| bounds.relative_motion(crate::collide::Body::Link(link), crate::collide::Body::Floor, half))
+            .fold(0.0, f64::max);
+        return if 2.0 * farthest < clearance - margin {
+            search::Clear::FreeThroughout
+        } else {
+            search::Clear::Free
+        };
+    }
+    let Some(pair) = checker.closest_pair() else {
+        return search::Clear::Unknown;
+    };
+    let motion = bounds.relative_motion(pair.bodies[0], pair.bodies[1], half);
+    if clearance + motion <= margin {
+        search::Clear::Colliding
     } else {
-        search::Clear::Free
+        search::Clear::Unknown
     }
 }
 
@@ -1261,18 +1261,7 @@ impl search::Oracle for SubChainOracle<'_, '_> {
         *self.queries -= 1;
         self.q[..centre.len()].copy_from_slice(centre);
         let clearance = checker.clearance_among(&self.q, &self.levels, true);
-        if clearance > self.margin {
-            return free_within(self.bounds, self.model.links.len(), half, clearance - self.margin);
-        }
-        let Some(pair) = checker.closest_pair() else {
-            return search::Clear::Unknown;
-        };
-        let motion = self.bounds.relative_motion(pair.bodies[0], pair.bodies[1], half);
-        if clearance + motion <= self.margin {
-            search::Clear::Colliding
-        } else {
-            search::Clear::Unknown
-        }
+        judge_box(checker, self.bounds, self.model.links.len(), half, clearance, self.margin)
     }
 
     fn collisions(&self) -> bool {
