@@ -7,8 +7,8 @@
 
 mod common;
 
-use common::repo;
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use common::{in_ball, repo, within_limits};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use proving_ground::collide::{self, Distances, QueryOptions};
 use proving_ground::ik::{goal_error, Ik, IkOptions, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use proving_ground::model::Model;
@@ -16,14 +16,9 @@ use proving_ground::pipeline::{collision_world, load_model, LoadOptions};
 use proving_ground::scenario::generate::cluttered;
 use proving_ground::scenario::{Goal, Scenario};
 use rand::{Rng, SeedableRng};
-use std::f64::consts::TAU;
 
 /// The cluttered tasks of another seed than the shipped ones, as a new user makes them.
 const SEED: u64 = 77;
-
-fn in_ball(rng: &mut impl Rng, radius: f64) -> Vector3<f64> {
-    common::unit(rng) * radius * rng.random::<f64>().cbrt()
-}
 
 /// A pose within the goal's tolerance, anywhere in it (a third of them on its edge).
 fn within_tolerance(goal: &Goal, rng: &mut impl Rng) -> Isometry3<f64> {
@@ -43,15 +38,6 @@ fn within_tolerance(goal: &Goal, rng: &mut impl Rng) -> Isometry3<f64> {
         Translation3::from(goal.position + shift),
         UnitQuaternion::from_scaled_axis(turn) * goal.rotation,
     )
-}
-
-fn within_limits(model: &Model, q: &[f64]) -> bool {
-    model.joints.iter().zip(q).all(|(joint, value)| {
-        joint.limits.is_none_or(|[lower, upper]| {
-            let k = ((lower - value) / TAU).ceil();
-            value + k * TAU <= upper
-        })
-    })
 }
 
 fn placed(design: &str, task: usize) -> (Model, Scenario) {

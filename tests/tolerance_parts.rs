@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::repo;
+use common::{in_ball, repo, within_limits};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use proving_ground::collide::{self, CollisionWorld, Distances, QueryOptions};
 use proving_ground::ik::{goal_error, Ik, IkOptions, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
@@ -14,22 +14,6 @@ use proving_ground::model::Model;
 use proving_ground::pipeline::{collision_world, load, LoadOptions};
 use proving_ground::scenario::{load as load_scenario, Goal, Scenario, Tolerance};
 use rand::{Rng, SeedableRng};
-use std::f64::consts::TAU;
-
-/// A point uniformly in the ball of `radius`.
-fn in_ball(rng: &mut impl Rng, radius: f64) -> nalgebra::Vector3<f64> {
-    common::unit(rng) * radius * rng.random::<f64>().cbrt()
-}
-
-/// Whether some whole-turn equivalent of `q` is within the model's limits.
-fn within_limits(model: &Model, q: &[f64]) -> bool {
-    model.joints.iter().zip(q).all(|(joint, value)| {
-        joint.limits.is_none_or(|[lower, upper]| {
-            let k = ((lower - value) / TAU).ceil();
-            value + k * TAU <= upper
-        })
-    })
-}
 
 /// A design placed on a scenario, with the collision world a run checks.
 fn placed(design: &str, scenario: &str) -> (Model, Scenario, CollisionWorld) {

@@ -618,8 +618,15 @@ impl<'a> Ik<'a> {
                 posed = true;
             }
         }
+        // Each sub-chain's goal, by its index in `sub_chains`.
+        let reduced: Vec<(usize, reduce::Reduced)> = self
+            .sub_chains
+            .iter()
+            .enumerate()
+            .filter_map(|(index, chain)| Some((index, chain.reduce(goal)?)))
+            .collect();
         let mut queries = self.collision_queries;
-        if let Some(proof) = self.search_sub_chains(goal, &mut queries) {
+        if let Some(proof) = self.search_sub_chains(&reduced, &mut queries) {
             result.complete = true;
             result.undecided = None;
             result.proof = Some(proof);
@@ -644,15 +651,10 @@ impl<'a> Ik<'a> {
             rng: &mut rng,
             queries: &mut queries,
         };
-        let reduced: Vec<(&reduce::SubChain, reduce::Reduced)> = self
-            .sub_chains
-            .iter()
-            .filter_map(|chain| Some((chain, chain.reduce(goal)?)))
-            .collect();
         let helpers: Vec<search::Helper> = reduced
             .iter()
-            .map(|(chain, reduced)| search::Helper {
-                model: &chain.model,
+            .map(|(index, reduced)| search::Helper {
+                model: &self.sub_chains[*index].model,
                 goal: &reduced.goal,
                 radii: reduced.radii,
             })
@@ -723,16 +725,16 @@ impl<'a> Ik<'a> {
     }
 
     /// A proof that no free configuration reaches `goal`, from the first sub-chain whose search
-    /// rules out every configuration of its joints (see [`reduce`]): out of the reduced goal's
+    /// rules out every configuration of its joints (`reduced`, see [`reduce`]): out of its
     /// tolerance, or, with a collision world, in collision throughout among the links the
     /// sub-chain moves (and the obstacles and floor). Each search has the whole budget. A
     /// sub-chain that reaches its own goal free proves nothing: the joints left out may not
     /// follow.
-    fn search_sub_chains(&mut self, goal: &Goal, queries: &mut usize) -> Option<String> {
+    fn search_sub_chains(&mut self, reduced: &[(usize, reduce::Reduced)], queries: &mut usize) -> Option<String> {
         let margin = self.margin();
         let budget = self.opts.search_boxes;
-        for chain in &self.sub_chains {
-            let Some(reduced) = chain.reduce(goal) else { continue };
+        for (index, reduced) in reduced {
+            let chain = &self.sub_chains[*index];
             let mut oracle = SubChainOracle {
                 levels: self.checker.as_ref().map(|c| c.pairs_up_to(chain.joints)).unwrap_or_default(),
                 checker: self.checker.as_mut(),
@@ -742,7 +744,7 @@ impl<'a> Ik<'a> {
                 q: vec![0.0; self.model.dof()],
                 model: &chain.model,
                 solver: Solver::new(&chain.model),
-                reduced: &reduced,
+                reduced,
                 rng: rand_chacha::ChaCha8Rng::seed_from_u64(self.opts.seed),
             };
             let outcome = search::search_with(&chain.model, &reduced.goal, reduced.radii, budget, &mut oracle);
@@ -1126,6 +1128,15 @@ const COLLISION_QUERIES: usize = 20_000;
 /// 20 000 of them 100 s a goal.
 const MESH_COLLISION_QUERIES: usize = 200;
 
+/// Takes one of the collision queries `left`; false when none is.
+fn take_query(left: &mut usize) -> bool {
+    let Some(fewer) = left.checked_sub(1) else {
+        return false;
+    };
+    *left = fewer;
+    true
+}
+
 fn collision_queries(model: &Model) -> usize {
     let meshes = model
         .links
@@ -1160,10 +1171,9 @@ impl search::Oracle for SearchOracle<'_, '_> {
         let Some(checker) = self.checker.as_mut() else {
             return true;
         };
-        if *self.queries == 0 {
+        if !take_query(self.queries) {
             return false;
         }
-        *self.queries -= 1;
         // The sign of the exact clearance decides; the depth is not needed.
         checker.clearance(q, false).exact_m > self.margin
     }
@@ -1172,10 +1182,9 @@ impl search::Oracle for SearchOracle<'_, '_> {
         let Some(checker) = self.checker.as_mut() else {
             return search::Clear::Free;
         };
-        if *self.queries == 0 {
+        if !take_query(self.queries) {
             return search::Clear::Unknown;
         }
-        *self.queries -= 1;
         let clearance = checker.clearance(centre, true).exact_m;
         judge_box(checker, self.bounds, self.model.links.len(), half, clearance, self.margin)
     }
@@ -1212,8 +1221,8 @@ fn judge_box(checker: &Checker, bounds: &MotionBounds, links: usize, half: &[f64
     }
 }
 
-/// The oracle of a sub-chain's search ([`reduce`]): no local solves (a sub-chain's own goal says
-/// nothing of the arm's), and with a collision world the pairs among the links it moves.
+/// The oracle of a sub-chain's search ([`reduce`]): local solves toward the sub-chain's own
+/// goal, and with a collision world the pairs among the links it moves.
 struct SubChainOracle<'s, 'a> {
     model: &'s Model,
     solver: Solver<'s>,
@@ -1235,18 +1244,15 @@ impl search::Oracle for SubChainOracle<'_, '_> {
     fn local(&mut self, q: &mut [f64]) -> bool {
         let goal = &self.reduced.goal;
         self.solver.solve(goal, q, search::LOCAL_ITERATIONS, CONVERGED, &mut self.rng);
-        let error = goal_error(goal, &self.model.tool_pose(q));
-        let radii = self.reduced.radii;
-        if error.position_m >= radii.position_m || error.orientation_rad >= radii.orientation_rad {
+        if !self.reduced.radii.holds(&goal_error(goal, &self.model.tool_pose(q))) {
             return false;
         }
         let Some(checker) = self.checker.as_mut() else {
             return true;
         };
-        if *self.queries == 0 {
+        if !take_query(self.queries) {
             return false;
         }
-        *self.queries -= 1;
         self.q[..q.len()].copy_from_slice(q);
         checker.clearance_among(&self.q, &self.levels, false) > self.margin
     }
@@ -1255,10 +1261,9 @@ impl search::Oracle for SubChainOracle<'_, '_> {
         let Some(checker) = self.checker.as_mut() else {
             return search::Clear::Free;
         };
-        if *self.queries == 0 {
+        if !take_query(self.queries) {
             return search::Clear::Unknown;
         }
-        *self.queries -= 1;
         self.q[..centre.len()].copy_from_slice(centre);
         let clearance = checker.clearance_among(&self.q, &self.levels, true);
         judge_box(checker, self.bounds, self.model.links.len(), half, clearance, self.margin)

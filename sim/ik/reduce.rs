@@ -231,15 +231,9 @@ impl SubChain {
 
 #[cfg(test)]
 mod tests {
+    use super::super::search::tests::preset;
     use super::*;
     use rand::{Rng, SeedableRng};
-
-    fn preset(name: &str) -> Model {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("designs")
-            .join(format!("{name}.json"));
-        crate::pipeline::load_model(&path, &Default::default()).expect("shipped design")
-    }
 
     /// The oracle for every proof by a sub-chain: whatever configuration of the arm puts the
     /// tool within the tolerance of a goal, its first joints put the sub-chain's tool within

@@ -48,6 +48,16 @@ pub(crate) struct ClosestPair {
     pub(crate) name: String,
 }
 
+/// The exact model's query at `q` (no margin, no hulls), with exact overlap depths or not.
+fn exact_query(exact_depth: bool) -> QueryOptions {
+    QueryOptions {
+        margin: 0.0,
+        hulls: false,
+        exact_depth,
+        mesh_hulls: false,
+    }
+}
+
 /// Collision queries for IK, with their buffers.
 pub(crate) struct Checker<'a> {
     world: &'a CollisionWorld,
@@ -84,12 +94,7 @@ impl<'a> Checker<'a> {
     /// bounding capsules' estimate (the sign, which decides the verdict, is exact either way).
     pub(crate) fn clearance(&mut self, q: &[f64], exact_depth: bool) -> Clearance {
         self.model.forward(q, &mut self.ws);
-        let query = QueryOptions {
-            margin: 0.0,
-            hulls: false,
-            exact_depth,
-            mesh_hulls: false,
-        };
+        let query = exact_query(exact_depth);
         collide::distances(self.world, &self.ws.link_in_world, &query, &mut self.exact);
         collide::approximate_distances(self.world, &self.ws.link_in_world, &query, &mut self.approximate);
         let smallest = |d: &Distances| d.closest.map_or(f64::INFINITY, |c| c.distance);
@@ -115,12 +120,7 @@ impl<'a> Checker<'a> {
     /// [`Self::closest_pair`] names the closest of them.
     pub(crate) fn clearance_among(&mut self, q: &[f64], levels: &[Option<f64>], exact_depth: bool) -> f64 {
         self.model.forward(q, &mut self.ws);
-        let query = QueryOptions {
-            margin: 0.0,
-            hulls: false,
-            exact_depth,
-            mesh_hulls: false,
-        };
+        let query = exact_query(exact_depth);
         collide::distances_among(self.world, &self.ws.link_in_world, &query, Some(levels), &mut self.exact);
         self.exact.closest.map_or(f64::INFINITY, |c| c.distance)
     }

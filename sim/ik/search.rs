@@ -72,7 +72,8 @@ impl Radii {
         orientation_rad: REACHED_ORIENTATION_RAD,
     };
 
-    fn holds(&self, error: &super::GoalError) -> bool {
+    /// Whether `error` is within these radii.
+    pub(super) fn holds(&self, error: &super::GoalError) -> bool {
         error.position_m < self.position_m && error.orientation_rad < self.orientation_rad
     }
 }
@@ -373,13 +374,9 @@ pub fn search(model: &Model, goal: &Goal, budget: usize, local: impl FnMut(&mut 
     search_with(model, goal, Radii::REACHED, budget, &mut Solves(local))
 }
 
-/// [`search`] against the tolerance `radii` instead of the harness's.
-pub fn search_within(model: &Model, goal: &Goal, radii: Radii, budget: usize, local: impl FnMut(&mut [f64]) -> bool) -> Option<Search> {
-    search_with(model, goal, radii, budget, &mut Solves(local))
-}
-
-/// [`search_within`] asking `oracle`: where it counts collisions, a box whose every
-/// configuration collides is discarded too, and only a free configuration is found.
+/// [`search`] against the tolerance `radii`, asking `oracle`: where it counts collisions, a
+/// box whose every configuration collides is discarded too, and only a free configuration is
+/// found.
 pub fn search_with(model: &Model, goal: &Goal, radii: Radii, budget: usize, oracle: &mut dyn Oracle) -> Option<Search> {
     search_helped(model, goal, radii, budget, oracle, &[])
 }
@@ -608,7 +605,7 @@ fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f64>, Vec<f64>)
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use nalgebra::{Isometry3, UnitQuaternion};
 
@@ -618,7 +615,8 @@ mod tests {
         search(model, goal, budget, |q| solve_locally(model, &mut solver, goal, q, &mut rng))
     }
 
-    fn preset(name: &str) -> Model {
+    /// A shipped design, for the `ik` modules' unit tests.
+    pub(in crate::ik) fn preset(name: &str) -> Model {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("designs")
             .join(format!("{name}.json"));

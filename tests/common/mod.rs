@@ -198,6 +198,21 @@ pub fn pose_goal(
     }
 }
 
+/// A point uniformly in the ball of `radius`.
+pub fn in_ball(rng: &mut impl rand::Rng, radius: f64) -> nalgebra::Vector3<f64> {
+    unit(rng) * radius * rng.random::<f64>().cbrt()
+}
+
+/// Whether some whole-turn equivalent of `q` is within the model's limits.
+pub fn within_limits(model: &Model, q: &[f64]) -> bool {
+    model.joints.iter().zip(q).all(|(joint, value)| {
+        joint.limits.is_none_or(|[lower, upper]| {
+            let k = ((lower - value) / std::f64::consts::TAU).ceil();
+            value + k * std::f64::consts::TAU <= upper
+        })
+    })
+}
+
 /// A random unit vector (uniform in direction: rejection from the unit ball).
 pub fn unit(rng: &mut impl rand::Rng) -> nalgebra::Vector3<f64> {
     loop {
