@@ -13,7 +13,7 @@ use proving_ground::ik::{goal_error, Ik, IkOptions, REACHED_ORIENTATION_RAD, REA
 use proving_ground::model::Model;
 use proving_ground::pipeline::{collision_world, load, LoadOptions};
 use proving_ground::scenario::{load as load_scenario, Goal, Scenario, Tolerance};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 
 /// A design placed on a scenario, with the collision world a run checks.
 fn placed(design: &str, scenario: &str) -> (Model, Scenario, CollisionWorld) {

@@ -255,10 +255,6 @@ mod tests {
             let chains = sub_chains(&model);
             assert!(!chains.is_empty(), "{name}: the last axis always stands in");
             for chain in &chains {
-                eprintln!(
-                    "{name}: joints 1 to {} for {} (drift {:e} m)",
-                    chain.joints, chain.what, chain.drift
-                );
                 for tolerance in [Tolerance::Pose, Tolerance::ZSymmetric] {
                     for _ in 0..300 {
                         let q = model.random_configuration(&mut rng);
