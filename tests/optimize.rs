@@ -366,7 +366,7 @@ fn designs_tuned_in_one_batch_end_as_each_alone() {
     let first = design("free-offset-6dof.json");
     let designs = [first.clone(), scaled(&first, 1.15, "longer"), scaled(&first, 0.9, "shorter")];
     let opts = OptimizeOptions {
-        steps: 40,
+        steps: 60,
         ..Default::default()
     };
     let (batch, start) = optimize::starts_of(&designs, &scenario, &opts).expect("one batch");

@@ -215,9 +215,12 @@ fn analyse_pair(
     let touching = |pose: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize), exact: bool| {
         world.collider_distance_with(pose, (i, a), (j, b), exact).unwrap_or(f64::INFINITY)
     };
+    // Each shape pair's cheap measure at each sample, kept for the tests below.
+    let mut estimates: Vec<Vec<f64>> = Vec::with_capacity(configurations.len());
     for q in configurations {
         placed(model, link_pair, q, &mut pose);
-        let estimate = shape_pairs.iter().map(|&p| touching(&pose, p, false)).fold(f64::INFINITY, f64::min);
+        let each: Vec<f64> = shape_pairs.iter().map(|&p| touching(&pose, p, false)).collect();
+        let estimate = each.iter().copied().fold(f64::INFINITY, f64::min);
         let in_contact = estimate <= TOUCHING_M
             || (estimate <= ESTIMATE_SLACK_M
                 && shape_pairs.iter().map(|&p| touching(&pose, p, true)).fold(f64::INFINITY, f64::min) <= TOUCHING_M);
@@ -225,36 +228,47 @@ fn analyse_pair(
             return found;
         }
         placements.push(pose.clone());
+        estimates.push(each);
     }
     let sampled = format!("in contact at all {} sampled configurations (seed {})", opts.samples, opts.seed);
-    // Each shape pair at each sample is measured at most once (the tests below read it up to
-    // three times).
-    let mut measured: std::collections::HashMap<(usize, (usize, usize)), f64> = std::collections::HashMap::new();
-    let mut distance = |sample: usize, (a, b): (usize, usize)| -> f64 {
-        *measured.entry((sample, (a, b))).or_insert_with(|| {
+    // The exact measure (EPA for an overlap, most of this function's cost) only where the cheap
+    // one cannot answer: it is a lower bound within the GJK slack (a capsule overlaps at least
+    // as deep as its shape), and each shape pair at each sample is measured at most once.
+    let mut measured: std::collections::HashMap<(usize, usize), f64> = std::collections::HashMap::new();
+    let mut distance = |sample: usize, p: usize| -> f64 {
+        *measured.entry((sample, p)).or_insert_with(|| {
+            let (a, b) = shape_pairs[p];
             world
                 .collider_distance(&placements[sample], (i, a), (j, b))
                 .unwrap_or(f64::INFINITY)
         })
     };
-    let mut overlapping: Vec<(usize, usize)> = Vec::new();
-    for &p in &shape_pairs {
-        if (0..configurations.len()).all(|k| distance(k, p) <= TOUCHING_M) {
-            overlapping.push(p);
-        }
-    }
+    let samples = 0..configurations.len();
+    let touches = |distance: &mut dyn FnMut(usize, usize) -> f64, k: usize, p: usize| {
+        let estimate = estimates[k][p];
+        estimate <= TOUCHING_M || (estimate <= ESTIMATE_SLACK_M && distance(k, p) <= TOUCHING_M)
+    };
+    let overlapping: Vec<usize> = (0..shape_pairs.len())
+        .filter(|&p| samples.clone().all(|k| touches(&mut distance, k, p)))
+        .collect();
     // How deep the two links overlap by construction: the rest counts only beyond it, and beyond
-    // the slack the samples may fall short of the deepest configuration by.
+    // the slack the samples may fall short of the deepest configuration by. A sample whose
+    // capsules overlap no deeper than the deepest so far cannot be deeper.
     let mut deepest = 0.0_f64;
     for &p in &overlapping {
-        for k in 0..configurations.len() {
-            deepest = deepest.max(-distance(k, p));
+        for k in samples.clone() {
+            if -estimates[k][p] > deepest {
+                deepest = deepest.max(-distance(k, p));
+            }
         }
     }
     let depth = DEPTH_SLACK_M + deepest;
-    let rest: Vec<(usize, usize)> = shape_pairs.iter().copied().filter(|p| !overlapping.contains(p)).collect();
+    let rest: Vec<usize> = (0..shape_pairs.len()).filter(|p| !overlapping.contains(p)).collect();
     // Without the overlapping pieces, is the rest of the two links free at some sample?
-    let rest_free_somewhere = (0..configurations.len()).any(|k| rest.iter().all(|&p| distance(k, p) + depth > TOUCHING_M));
+    let rest_free_somewhere = samples.clone().any(|k| {
+        rest.iter()
+            .all(|&p| estimates[k][p] + depth > TOUCHING_M + ESTIMATE_SLACK_M || distance(k, p) + depth > TOUCHING_M)
+    });
     if overlapping.is_empty() || rest.is_empty() || !rest_free_somewhere {
         found.pairs.push(ExcludedPair::new(
             a_name,
@@ -272,12 +286,13 @@ fn analyse_pair(
         // The capsule bound overlaps at least as deep as the shapes: where even it does not reach
         // the construction's depth, the exact distance cannot either.
         let deeper = |exact: bool, p: (usize, usize)| touching(&pose, p, exact) + depth <= 0.0;
-        rest.iter().any(|&p| deeper(false, p) && deeper(true, p))
+        rest.iter().any(|&p| deeper(false, shape_pairs[p]) && deeper(true, shape_pairs[p]))
     });
     if !folds {
         let labels: Vec<String> = overlapping
             .iter()
-            .map(|&(a, b)| format!("{} / {}", model.links[i].colliders[a].label, model.links[j].colliders[b].label))
+            .map(|&p| shape_pairs[p])
+            .map(|(a, b)| format!("{} / {}", model.links[i].colliders[a].label, model.links[j].colliders[b].label))
             .collect();
         found.pairs.push(ExcludedPair::new(
             a_name,
@@ -301,7 +316,7 @@ fn analyse_pair(
             depth * 1e3
         ),
     });
-    for (a, b) in overlapping {
+    for (a, b) in overlapping.into_iter().map(|p| shape_pairs[p]) {
         found.shapes.push(ExcludedShapePair {
             a: a_name.to_string(),
             a_shape: a,

@@ -199,6 +199,9 @@ pub struct Ik<'a> {
     held: Option<usize>,
     /// Parts of tolerances the goal being solved may still cut (see [`cells`]).
     parts_left: usize,
+    /// The goal being solved's closest distinct misses from the numeric solver, best first:
+    /// starts for aiming at its tolerance (see [`toward`]).
+    misses: Vec<IkSolution>,
     /// Sub-chains the joint-space search tries before the whole arm (see [`reduce`]).
     sub_chains: Vec<reduce::SubChain>,
     /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
@@ -249,6 +252,7 @@ impl<'a> Ik<'a> {
             redundant: methods.redundant.clone(),
             held: None,
             parts_left: cells::PARTS_PER_GOAL,
+            misses: Vec::new(),
             sub_chains: methods.sub_chains.clone(),
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
@@ -281,6 +285,7 @@ impl<'a> Ik<'a> {
     /// tolerance, or finds one.
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
         self.parts_left = cells::PARTS_PER_GOAL;
+        self.misses.clear();
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
         judge_task_tolerance(self.model, goal, &mut result);
@@ -304,26 +309,26 @@ impl<'a> Ik<'a> {
             }
             (None, Some((method, Tolerance::Pose))) if self.opts.analytic && finite && goal.tolerance == Tolerance::ZSymmetric => {
                 let starts = method.solve(&pose).configurations;
-                let mut result = self.solve_numeric(goal, goal_index, first_seed, &starts);
+                let mut result = self.solve_numeric(goal, goal_index, first_seed, &starts, true);
                 if !result.reached() {
                     self.sweep_free_turn(goal, &mut result);
                 }
                 return result;
             }
             (None, None) if self.redundant.is_some() && self.opts.analytic && finite && goal.tolerance == Tolerance::Pose => {
-                let mut result = self.solve_numeric(goal, goal_index, first_seed, &[]);
+                let mut result = self.solve_numeric(goal, goal_index, first_seed, &[], true);
                 if !result.reached() {
                     self.sweep_held_joint(goal, &mut result);
                 }
                 return result;
             }
-            _ => return self.solve_numeric(goal, goal_index, first_seed, &[]),
+            _ => return self.solve_numeric(goal, goal_index, first_seed, &[], true),
         };
         if goal.tolerance == Tolerance::ZSymmetric && self.analytic.is_some() {
             // A continuum of solutions (any turn about tool z): the goal rotation's own are on
             // every branch, good starts, never the whole set; what they miss, the self-motion
             // sweep decides.
-            let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+            let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations, true);
             if !result.reached() {
                 self.sweep_free_turn(goal, &mut result);
             }
@@ -332,7 +337,7 @@ impl<'a> Ik<'a> {
         if exact.finite && !exact.configurations.is_empty() {
             return self.solve_closed_form(goal, goal_index, first_seed, &exact);
         }
-        let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations);
+        let mut result = self.solve_numeric(goal, goal_index, first_seed, &exact.configurations, true);
         // A pose within the tolerance has solutions only where the workspace's boundary passes
         // within it; the numeric search then ends close to the goal. Far misses skip the
         // nearby poses (48 exact solves, the brute force's largest cost), undecided all the same.
@@ -508,7 +513,9 @@ impl<'a> Ik<'a> {
             // Before a proof, the numeric search as a cross-check: near a workspace boundary a
             // pose within the tolerance can have solutions the exact pose lacks (a branch pair
             // born inside the tolerance), which no certificate around the exact ones covers.
-            let numeric = self.solve_numeric(goal, goal_index, first_seed, &[]);
+            // Its question is where the pose can be reached, not whether freely: its attempts
+            // are not refined around collisions (the exact branches' are certified above).
+            let numeric = self.solve_numeric(goal, goal_index, first_seed, &[], false);
             if numeric.reached() {
                 return numeric;
             }
@@ -597,7 +604,11 @@ impl<'a> Ik<'a> {
             return;
         }
         if !posed {
-            if let Some(solution) = self.reach_tolerance(goal, goal_index, &result.solutions) {
+            // The numeric solver's other misses too: its closest may lie on a branch whose
+            // configurations within the tolerance collide while another's are free.
+            let mut misses = std::mem::take(&mut self.misses);
+            misses.extend(result.solutions.iter().cloned());
+            if let Some(solution) = self.reach_tolerance(goal, goal_index, &misses) {
                 result.starts += 1;
                 if solution.reached {
                     result.undecided = None;
@@ -912,7 +923,14 @@ impl<'a> Ik<'a> {
     /// The numeric solver: `first_seed`, random starts and then `extra` starts (closed-form
     /// configurations); then, for `pose` goals of 6R arms, starts on the other branches of each
     /// solution found (see [`branches`]).
-    fn solve_numeric(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>, extra: &[[f64; 6]]) -> GoalSolutions {
+    fn solve_numeric(
+        &mut self,
+        goal: &Goal,
+        goal_index: usize,
+        first_seed: Option<&[f64]>,
+        extra: &[[f64; 6]],
+        refine: bool,
+    ) -> GoalSolutions {
         let mut rng = self.rng(goal_index);
         let mut found: Vec<IkSolution> = Vec::new();
         let mut closest: Option<IkSolution> = None;
@@ -929,8 +947,9 @@ impl<'a> Ik<'a> {
             if start >= self.opts.seeds && found.iter().any(|s| self.same_configuration(&s.q, &q)) {
                 continue;
             }
-            let (solution, used) = self.attempt(goal, q, true, margin, &mut rng);
+            let (solution, used) = self.attempt(goal, q, refine, margin, &mut rng);
             iterations += used;
+            self.keep_miss(&solution);
             self.keep(solution, &mut found, &mut closest);
         }
         if goal.tolerance == Tolerance::Pose && branches::applies(self.model) {
@@ -946,8 +965,9 @@ impl<'a> Ik<'a> {
                 continue;
             }
             starts += 1;
-            let (solution, used) = self.attempt(goal, q, true, margin, &mut given_rng);
+            let (solution, used) = self.attempt(goal, q, refine, margin, &mut given_rng);
             iterations += used;
+            self.keep_miss(&solution);
             self.keep(solution, &mut found, &mut closest);
         }
         // Clearances were estimated while searching (overlap depths from bounding capsules, gaps
@@ -1018,6 +1038,7 @@ impl<'a> Ik<'a> {
                 let (solution, used) = self.attempt(goal, q, false, margin, rng);
                 iterations += used;
                 let before = found.len();
+                self.keep_miss(&solution);
                 self.keep(solution, found, closest);
                 if found.len() > before {
                     origins.push(found[before].q.clone());
@@ -1035,10 +1056,17 @@ impl<'a> Ik<'a> {
         let iterations = self.solver.solve(goal, &mut q, self.opts.max_iterations, done, rng);
         let mut clearance = None;
         if let Some(checker) = self.checker.as_mut() {
-            // An unreached pose is refined whatever its clearance: measure only what is kept.
-            let unreached = refine && !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
-            let mut measured = (!unreached).then(|| checker.clearance(&q, false));
-            if refine && measured.is_none_or(|m| m.exact_m <= margin) {
+            let miss = refine && !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
+            // A miss is refined whatever its clearance (measure only what is kept), except where
+            // the arm has as many joints as the goal constrains (six on a pose goal): there the
+            // solutions are isolated points, closed forms list them where they exist, and the
+            // refinement could only restart the miss at random, as the solve's stall restarts
+            // do. With more joints it moves along the null space; with fewer, the tolerance
+            // holds every solution there is, and its restarts are the search for one.
+            let refine_miss = miss && self.model.dof() != refine::constrained_dimensions(goal.tolerance);
+            let mut measured = (!refine_miss).then(|| checker.clearance(&q, false));
+            let colliding = !miss && measured.is_some_and(|m| m.exact_m <= margin);
+            if refine && (refine_miss || colliding) {
                 checker.margin = margin;
                 refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, rng);
                 measured = Some(checker.clearance(&q, false));
@@ -1067,6 +1095,19 @@ impl<'a> Ik<'a> {
             }
         } else if closest.as_ref().is_none_or(|c| rank(&solution.error) < rank(&c.error)) {
             *closest = Some(solution);
+        }
+    }
+
+    /// Adds `solution` to [`Self::misses`] when it misses the pose and is among the
+    /// [`toward::STARTS`] closest distinct misses so far.
+    fn keep_miss(&mut self, solution: &IkSolution) {
+        if solution.pose_reached || self.misses.iter().any(|m| self.same_configuration(&m.q, &solution.q)) {
+            return;
+        }
+        let at = self.misses.partition_point(|m| rank(&m.error) <= rank(&solution.error));
+        if at < toward::STARTS {
+            self.misses.insert(at, solution.clone());
+            self.misses.truncate(toward::STARTS);
         }
     }
 

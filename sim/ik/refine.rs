@@ -267,7 +267,7 @@ pub(crate) fn refine<R: rand::Rng>(
 }
 
 /// Dimensions of the tool pose a goal of this tolerance constrains.
-fn constrained_dimensions(tolerance: Tolerance) -> usize {
+pub(super) fn constrained_dimensions(tolerance: Tolerance) -> usize {
     match tolerance {
         Tolerance::Pose => 6,
         // Free about the tool's z axis.

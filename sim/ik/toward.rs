@@ -7,7 +7,9 @@
 //! reachable (0.8 mm off, turned 0.9 degrees: trading turn for distance, which the metric does
 //! not). Here the target is moved instead: to the pose within the tolerance nearest where the
 //! arm ended, the arm solved toward it, and again; where the two sets meet, the arm ends within
-//! the tolerance.
+//! the tolerance. The projections start from the numeric solver's closest distinct misses; where
+//! the pose they end at collides and the arm has a closed form, its other solutions at that pose
+//! (the other branches, within the tolerance too) are judged as well.
 
 use super::{goal_error, is_reached, Ik, IkSolution, CONVERGED};
 use crate::scenario::{Goal, Tolerance};
@@ -17,8 +19,8 @@ use nalgebra::{Isometry3, UnitQuaternion};
 const ROUNDS: usize = 40;
 /// Solver iterations per round.
 const STEPS: usize = 10;
-/// Misses the projections start from (the closest first).
-const STARTS: usize = 4;
+/// Misses the projections start from (the closest distinct ones first).
+pub(super) const STARTS: usize = 4;
 /// A round that leaves more than this share of the excess over the tolerance ends the start.
 const STALLED: f64 = 0.99;
 /// Fraction of the tolerance the projected target stays within, so that an arm reaching it is
@@ -65,6 +67,7 @@ impl Ik<'_> {
         let near = |s: &&IkSolution| s.error.position_m < super::NEARBY_MISS_M && s.error.orientation_rad < super::NEARBY_MISS_RAD;
         let mut misses: Vec<&IkSolution> = misses.iter().filter(|s| !s.pose_reached).filter(near).collect();
         misses.sort_by(|a, b| super::rank(&a.error).total_cmp(&super::rank(&b.error)));
+        misses.dedup_by(|a, b| self.same_configuration(&a.q, &b.q));
         // Errors weighed as the tolerance weighs them: the solver's own weighting (0.5 m per
         // rad) keeps the turn small where the tolerance would rather spend it.
         let weight = self.solver.angular_weight;
@@ -94,7 +97,8 @@ impl Ik<'_> {
         self.solver.angular_weight = weight;
         let margin = self.margin();
         let mut colliding: Option<IkSolution> = None;
-        for mut q in within {
+        for q in &within {
+            let mut q = q.clone();
             if !self.shift_into_limits(&mut q, None) {
                 continue;
             }
@@ -103,6 +107,27 @@ impl Ik<'_> {
                 return Some(solution);
             }
             colliding.get_or_insert(solution);
+        }
+        // A pose within the tolerance that the arm reaches has every solution in closed form
+        // where the arm has one: the other branches at the same pose, which may be free.
+        for q in &within {
+            let pose = self.model.tool_pose(q);
+            let at_pose = Goal {
+                position: pose.translation.vector,
+                rotation: pose.rotation,
+                ..goal.clone()
+            };
+            for configuration in self.exact_pose(&pose).map(|e| e.configurations).unwrap_or_default() {
+                let mut q = configuration[..self.model.dof()].to_vec();
+                self.polish(&at_pose, &mut q);
+                if !is_reached(&goal_error(goal, &self.model.tool_pose(&q))) || !self.shift_into_limits(&mut q, None) {
+                    continue;
+                }
+                let solution = self.judge(goal, q, None, margin);
+                if solution.reached {
+                    return Some(solution);
+                }
+            }
         }
         colliding
     }
