@@ -9,7 +9,7 @@ use super::primitives::{order_key, Measured, BOUND_ROUNDING_M};
 /// polytopes stops within its tolerance, far below this.
 const HULL_SLACK_M: f64 = 1e-4;
 use super::world::{CollisionWorld, Other};
-use super::{effective_margin, Body, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
+use super::{effective_margin, Body, ClearanceByKind, CollisionFinding, Distances, PairDistance, PairEstimate, Part, QueryOptions, Stage};
 use crate::frames::{parry_pose, vector_from_parry};
 use nalgebra::Isometry3;
 use parry3d_f64::bounding_volume::Aabb;
@@ -44,6 +44,50 @@ pub fn distances_among(
     link_in_world: &[Isometry3<f64>],
     query: &QueryOptions,
     levels: Option<&[Option<f64>]>,
+    out: &mut Distances,
+) {
+    search(world, link_in_world, query, levels, false, out);
+}
+
+/// Each kind's smallest signed distance (obstacles, self, floor) at one configuration, in the
+/// exact geometry with exact depths: what [`ClearanceByKind::of`] reads from a query with an
+/// infinite margin, with every pair measured only when it could be closer than its kind's
+/// closest so far. `out` lends its buffers.
+///
+/// # Panics
+/// When `link_in_world.len()` differs from [`CollisionWorld::link_count`].
+pub fn clearance_by_kind(world: &CollisionWorld, link_in_world: &[Isometry3<f64>], out: &mut Distances) -> ClearanceByKind {
+    let query = QueryOptions {
+        margin: 0.0,
+        hulls: false,
+        exact_depth: true,
+        mesh_hulls: false,
+    };
+    search(world, link_in_world, &query, None, true, out);
+    let mut by_kind = ClearanceByKind::default();
+    for best in out.scratch.best.iter().flatten() {
+        by_kind.lower(best.b.body, best.distance);
+    }
+    by_kind
+}
+
+/// The slot of a pair's kind in a search by kind: obstacles, self, floor.
+fn kind_slot(other: Other) -> usize {
+    match other {
+        Other::Obstacle(_) => 0,
+        Other::Link(_) => 1,
+        Other::Floor => 2,
+    }
+}
+
+/// [`distances_among`], or with `by_kind` the closest pair of each kind (see [`kind_slot`])
+/// rather than the closest of all.
+fn search(
+    world: &CollisionWorld,
+    link_in_world: &[Isometry3<f64>],
+    query: &QueryOptions,
+    levels: Option<&[Option<f64>]>,
+    by_kind: bool,
     out: &mut Distances,
 ) {
     assert_eq!(
@@ -91,7 +135,9 @@ pub fn distances_among(
     // a pair's distance within the margin (it could be below the pair's best so far), the
     // closest pair (it could be below the closest so far), or a hull finding. Its bounding
     // capsules are tried before its shapes.
-    let mut closest = if levels.is_some() { f64::NEG_INFINITY } else { f64::INFINITY };
+    let mut closest = [if levels.is_some() { f64::NEG_INFINITY } else { f64::INFINITY }; 3];
+    let slot = |other: Other| if by_kind { kind_slot(other) } else { 0 };
+    let slots = if by_kind { 3 } else { 1 };
     scratch.queue.clear();
     scratch.queue.extend(
         scratch
@@ -103,14 +149,16 @@ pub fn distances_among(
     );
     while let Some(Reverse((_, index))) = scratch.queue.pop() {
         let bound = scratch.bounds[index];
-        if bound > margin && bound >= closest.max(highest_level) {
+        let farthest = closest[..slots].iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        if bound > margin && bound >= farthest.max(highest_level) {
             break;
         }
         let candidate = &world.candidates[index];
+        let kind = slot(candidate.b);
         let pair_best = scratch.best[candidate.pair].map_or(f64::INFINITY, |best| best.distance);
         let by_hulls = query.mesh_hulls && world.has_mesh(candidate);
         let hulls = query.hulls && !by_hulls && bound <= margin && world.has_mesh(candidate);
-        if !(bound < closest.max(level(candidate.pair)) || (bound <= margin && (bound < pair_best || hulls))) {
+        if !(bound < closest[kind].max(level(candidate.pair)) || (bound <= margin && (bound < pair_best || hulls))) {
             continue;
         }
         if scratch.stages[index] == Stage::Boxed && candidate.b != Other::Floor {
@@ -127,7 +175,7 @@ pub fn distances_among(
         }
         *narrow_phase_calls += 1;
         let (distance, hull_measured) = measure(world, index, scratch, findings, hulls, query.exact_depth, by_hulls);
-        closest = closest.min(distance);
+        closest[kind] = closest[kind].min(distance);
         *hull_calls += usize::from(hull_measured);
     }
 

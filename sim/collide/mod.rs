@@ -112,7 +112,7 @@ mod world;
 pub use approx::approximate_distances;
 pub(crate) use approx::{capsule_floor, capsule_model, capsule_shape_distance, CapsuleModel, CapsuleOther};
 pub use compare::compare;
-pub use exact::{clear, distances, distances_among};
+pub use exact::{clear, clearance_by_kind, distances, distances_among};
 pub use motion::MotionBounds;
 pub use pairs::{CheckedPair, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 pub(crate) use primitives::{capsules, Closest};

@@ -971,15 +971,13 @@ impl<'a> Ik<'a> {
             self.keep(solution, &mut found, &mut closest);
         }
         // Clearances were estimated while searching (overlap depths from bounding capsules, gaps
-        // unpolished); the solutions kept are measured exactly.
+        // unpolished), misses not measured at all; the solutions kept are measured exactly.
         if let Some(checker) = self.checker.as_mut() {
             for solution in found.iter_mut().chain(closest.iter_mut()) {
-                if solution.clearance.is_some() {
-                    let exact = checker.clearance(&solution.q, true);
-                    // Touching within rounding, GJK's overlap test and EPA may disagree on the sign.
-                    solution.reached = solution.pose_reached && exact.exact_m > margin;
-                    solution.clearance = Some(exact);
-                }
+                let exact = checker.clearance(&solution.q, true);
+                // Touching within rounding, GJK's overlap test and EPA may disagree on the sign.
+                solution.reached = solution.pose_reached && exact.exact_m > margin;
+                solution.clearance = Some(exact);
             }
         }
         found.sort_by(|a, b| b.reached.cmp(&a.reached).then(rank(&a.error).total_cmp(&rank(&b.error))));
@@ -1056,17 +1054,18 @@ impl<'a> Ik<'a> {
         let iterations = self.solver.solve(goal, &mut q, self.opts.max_iterations, done, rng);
         let mut clearance = None;
         if let Some(checker) = self.checker.as_mut() {
-            let miss = refine && !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
+            let miss = !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
             // A miss is refined whatever its clearance (measure only what is kept), except where
             // the arm has as many joints as the goal constrains (six on a pose goal): there the
             // solutions are isolated points, closed forms list them where they exist, and the
             // refinement could only restart the miss at random, as the solve's stall restarts
             // do. With more joints it moves along the null space; with fewer, the tolerance
             // holds every solution there is, and its restarts are the search for one.
-            let refine_miss = miss && self.model.dof() != refine::constrained_dimensions(goal.tolerance);
-            let mut measured = (!refine_miss).then(|| checker.clearance(&q, false));
-            let colliding = !miss && measured.is_some_and(|m| m.exact_m <= margin);
-            if refine && (refine_miss || colliding) {
+            let refine_miss = refine && miss && self.model.dof() != refine::constrained_dimensions(goal.tolerance);
+            // A miss that is not refined is measured only if kept ([`Self::solve_numeric`]).
+            let mut measured = (!miss).then(|| checker.clearance(&q, false));
+            let colliding = refine && measured.is_some_and(|m| m.exact_m <= margin);
+            if refine_miss || colliding {
                 checker.margin = margin;
                 refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, rng);
                 measured = Some(checker.clearance(&q, false));

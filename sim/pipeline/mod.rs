@@ -378,20 +378,13 @@ fn goal_clearances_by_kind(
 ) -> Vec<Option<collide::ClearanceByKind>> {
     let mut ws = model.workspace();
     let mut out = collide::Distances::new();
-    let query = collide::QueryOptions {
-        margin: f64::INFINITY,
-        hulls: false,
-        exact_depth: true,
-        mesh_hulls: false,
-    };
     solutions
         .iter()
         .enumerate()
         .map(|(index, found)| {
             let q = goal_configuration(index, found, trajectory)?;
             model.forward(q, &mut ws);
-            collide::distances(world, &ws.link_in_world, &query, &mut out);
-            Some(collide::ClearanceByKind::of(&out))
+            Some(collide::clearance_by_kind(world, &ws.link_in_world, &mut out))
         })
         .collect()
 }
