@@ -762,7 +762,7 @@ fn clear_agrees_with_the_closest_pair_against_the_margin() {
 }
 
 #[test]
-fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
+fn branch_and_bound_finds_the_same_closest_pair_and_closest_of_each_kind_as_brute_force() {
     let model = design("modular-elbow.json");
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);
     let obstacles: Vec<Obstacle> = (0..8)
@@ -794,7 +794,7 @@ fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
         exact_depth: true,
         mesh_hulls: false,
     };
-    let (mut contacts, mut near) = (Distances::new(), Distances::new());
+    let (mut contacts, mut near, mut kinds) = (Distances::new(), Distances::new(), Distances::new());
     let mut ws = model.workspace();
     let (mut calls, mut all, mut ties) = (0, 0, 0);
     let mut alone = Worst("brute force: branch and bound vs each collider pair alone", 0.0);
@@ -866,6 +866,20 @@ fn branch_and_bound_finds_the_same_closest_pair_as_brute_force() {
             parry.check((pair_minimum[index] - by_parry).abs(), PARRY_GJK_M, context);
         }
 
+        // Each kind's closest by its own branch and bound.
+        let by_kind = collide::clearance_by_kind(&world, &ws.link_in_world, &mut kinds);
+        let kind_minimum = |obstacles: bool| {
+            world
+                .pairs()
+                .iter()
+                .zip(&pair_minimum)
+                .filter(|(pair, _)| matches!(pair.b, Body::Obstacle(_)) == obstacles)
+                .fold(f64::INFINITY, |a, (_, &d)| a.min(d))
+        };
+        for (found, expected) in [(by_kind.obstacles_m, kind_minimum(true)), (by_kind.self_m, kind_minimum(false))] {
+            alone.check((found.expect("pairs of the kind") - expected).abs(), BRUTE_FORCE_M, context);
+        }
+        assert_eq!(by_kind.floor_m, None, "{}", context());
         let (best_pair, best) = pair_minimum
             .iter()
             .copied()
