@@ -10,6 +10,7 @@
 use super::{world, Body, CollideError, CollideOptions, ExcludedPair, ExcludedShapePair, StructuralAllowance};
 use crate::model::Model;
 use crate::scenario::Scenario;
+use nalgebra::Vector3;
 use rand::SeedableRng;
 
 /// Signed distance up to which a pair counts as in contact while sampling (m).
@@ -22,6 +23,14 @@ pub(super) const DEPTH_SLACK_M: f64 = 1e-3;
 /// Gap (m) within which the cheap sampling query's GJK distance (at most 1.3e-5 m longer than
 /// the true one on curved shapes) is re-measured exactly before a pair counts as not touching.
 const ESTIMATE_SLACK_M: f64 = 1e-4;
+
+/// How far a sample's depth bound may exceed the deepest measured and the sample still be
+/// skipped (m): below EPA's own error on curved shapes (3e-10 m measured, `tests/collide.rs`)
+/// and a millionth of the slack added to the deepest.
+const DEPTH_RESOLUTION_M: f64 = 1e-9;
+
+/// Normals of measured overlaps kept per shape pair to bound the depth at other samples.
+const NORMALS_KEPT: usize = 16;
 
 /// Mixed into the seed of the fold samples, so they are not the first samples again.
 const FOLD_STREAM: u64 = 0x464f_4c44;
@@ -234,31 +243,47 @@ fn analyse_pair(
     // The exact measure (EPA for an overlap, most of this function's cost) only where the cheap
     // one cannot answer: it is a lower bound within the GJK slack (a capsule overlaps at least
     // as deep as its shape), and each shape pair at each sample is measured at most once.
-    let mut measured: std::collections::HashMap<(usize, usize), f64> = std::collections::HashMap::new();
-    let mut distance = |sample: usize, p: usize| -> f64 {
+    let mut measured: std::collections::HashMap<(usize, usize), (f64, Vector3<f64>)> = std::collections::HashMap::new();
+    let mut contact = |sample: usize, p: usize| -> (f64, Vector3<f64>) {
         *measured.entry((sample, p)).or_insert_with(|| {
             let (a, b) = shape_pairs[p];
             world
-                .collider_distance(&placements[sample], (i, a), (j, b))
-                .unwrap_or(f64::INFINITY)
+                .collider_contact(&placements[sample], (i, a), (j, b))
+                .unwrap_or((f64::INFINITY, Vector3::z()))
         })
     };
     let samples = 0..configurations.len();
-    let touches = |distance: &mut dyn FnMut(usize, usize) -> f64, k: usize, p: usize| {
+    let touches = |contact: &mut dyn FnMut(usize, usize) -> (f64, Vector3<f64>), k: usize, p: usize| {
         let estimate = estimates[k][p];
-        estimate <= TOUCHING_M || (estimate <= ESTIMATE_SLACK_M && distance(k, p) <= TOUCHING_M)
+        estimate <= TOUCHING_M || (estimate <= ESTIMATE_SLACK_M && contact(k, p).0 <= TOUCHING_M)
     };
     let overlapping: Vec<usize> = (0..shape_pairs.len())
-        .filter(|&p| samples.clone().all(|k| touches(&mut distance, k, p)))
+        .filter(|&p| samples.clone().all(|k| touches(&mut contact, k, p)))
         .collect();
     // How deep the two links overlap by construction: the rest counts only beyond it, and beyond
-    // the slack the samples may fall short of the deepest configuration by. A sample whose
-    // capsules overlap no deeper than the deepest so far cannot be deeper.
+    // the slack the samples may fall short of the deepest configuration by. A sample cannot be
+    // deeper than the deepest so far where its capsules overlap no deeper, or where the shapes
+    // overlap no deeper along the normal of an overlap measured before (any direction bounds
+    // the depth; the frame is the first link's at every sample), to within what EPA resolves:
+    // a depth the same at every sample bounds itself only to rounding.
     let mut deepest = 0.0_f64;
     for &p in &overlapping {
+        let (a, b) = shape_pairs[p];
+        let mut normals: Vec<Vector3<f64>> = Vec::new();
         for k in samples.clone() {
-            if -estimates[k][p] > deepest {
-                deepest = deepest.max(-distance(k, p));
+            let bounded = -estimates[k][p] <= deepest
+                || normals.iter().any(|n| {
+                    world
+                        .collider_overlap_along(&placements[k], (i, a), (j, b), n)
+                        .is_some_and(|bound| bound <= deepest + DEPTH_RESOLUTION_M)
+                });
+            if bounded {
+                continue;
+            }
+            let (gap, normal) = contact(k, p);
+            deepest = deepest.max(-gap);
+            if normals.len() < NORMALS_KEPT {
+                normals.push(normal);
             }
         }
     }
@@ -267,7 +292,7 @@ fn analyse_pair(
     // Without the overlapping pieces, is the rest of the two links free at some sample?
     let rest_free_somewhere = samples.clone().any(|k| {
         rest.iter()
-            .all(|&p| estimates[k][p] + depth > TOUCHING_M + ESTIMATE_SLACK_M || distance(k, p) + depth > TOUCHING_M)
+            .all(|&p| estimates[k][p] + depth > TOUCHING_M + ESTIMATE_SLACK_M || contact(k, p).0 + depth > TOUCHING_M)
     });
     if overlapping.is_empty() || rest.is_empty() || !rest_free_somewhere {
         found.pairs.push(ExcludedPair::new(

@@ -275,6 +275,40 @@ impl CollisionWorld {
         self.collider_distance_with(link_in_world, a, b, true)
     }
 
+    /// [`Self::collider_distance`] with the contact normal (unit, world frame, from `a` to `b`).
+    pub fn collider_contact(&self, link_in_world: &[Isometry3<f64>], a: (usize, usize), b: (usize, usize)) -> Option<(f64, Vector3<f64>)> {
+        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
+        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
+        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let measured = super::narrow::measure_shapes(&pose_a, &ca.geometry, &pose_b, &cb.geometry, true);
+        Some((measured.distance, vector_from_parry(measured.normal)))
+    }
+
+    /// An upper bound on how deep collider `a` overlaps collider `b` (m): how far `b` must move
+    /// along `normal` (unit, world frame) to clear `a`, the extent of the two shapes along it.
+    /// The depth is that move along the best direction, so any direction bounds it. `None` for
+    /// a mesh or a collider the model does not have.
+    pub fn collider_overlap_along(
+        &self,
+        link_in_world: &[Isometry3<f64>],
+        a: (usize, usize),
+        b: (usize, usize),
+        normal: &Vector3<f64>,
+    ) -> Option<f64> {
+        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
+        let (map_a, map_b) = (ca.geometry.shape.as_support_map()?, cb.geometry.shape.as_support_map()?);
+        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
+        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let n = parry_vector(normal);
+        let farthest_a = map_a.support_point(&pose_a, n).dot(n);
+        let nearest_b = map_b.support_point(&pose_b, -n).dot(n);
+        Some(farthest_a - nearest_b)
+    }
+
+    fn collider(&self, (link, element): (usize, usize)) -> Option<&ColliderGeometry> {
+        self.colliders.iter().find(|c| c.link == link && c.element == element)
+    }
+
     /// [`Self::collider_distance`], or with `exact_depth` false its cheap bound (see
     /// [`super::QueryOptions::exact_depth`]): an overlap as the bounding capsules' (at least as
     /// deep), a gap as GJK's own (at most 1.3e-5 m long).
@@ -285,8 +319,7 @@ impl CollisionWorld {
         b: (usize, usize),
         exact_depth: bool,
     ) -> Option<f64> {
-        let find = |(link, element): (usize, usize)| self.colliders.iter().find(|c| c.link == link && c.element == element);
-        let (ca, cb) = (find(a)?, find(b)?);
+        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
         let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
         let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
         Some(super::narrow::measure_shapes(&pose_a, &ca.geometry, &pose_b, &cb.geometry, exact_depth).distance)
