@@ -1657,3 +1657,53 @@ fn mesh_hulls_never_measure_farther_than_the_meshes() {
         "{closer} of {compared} pairs closer by their hulls"
     );
 }
+
+/// The extent of two overlapping shapes along a direction bounds their depth from above (the
+/// structural check skips EPA by it): at least EPA's depth along random directions, and EPA's
+/// depth itself along EPA's normal (worst measured 1.7e-7 m).
+#[test]
+fn overlap_along_any_direction_bounds_the_depth_and_along_the_normal_is_it() {
+    let model = design("modular-elbow.json");
+    let world = collide::world(&model, &scenario(vec![], None), &CollideOptions::default()).expect("valid");
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let mut ws = model.workspace();
+    let (mut overlaps, mut along_normal) = (0, Worst("extent along EPA's normal vs EPA's depth", 0.0));
+    for sample in 0..300 {
+        let q = model.random_configuration(&mut rng);
+        model.forward(&q, &mut ws);
+        for i in 0..model.links.len() {
+            for j in i + 1..model.links.len() {
+                for a in 0..model.links[i].colliders.len() {
+                    for b in 0..model.links[j].colliders.len() {
+                        let Some((distance, normal)) = world.collider_contact(&ws.link_in_world, (i, a), (j, b)) else {
+                            continue;
+                        };
+                        if distance >= 0.0 {
+                            continue;
+                        }
+                        overlaps += 1;
+                        let context = || format!("sample {sample}: link {i} shape {a}, link {j} shape {b}, depth {}", -distance);
+                        let extent = world
+                            .collider_overlap_along(&ws.link_in_world, (i, a), (j, b), &normal)
+                            .expect("convex shapes");
+                        // Shapes just touching (tubes end to end, 1e-17 m) have no normal to speak of.
+                        if distance < -1e-6 {
+                            along_normal.check((extent + distance).abs(), 1e-6, context);
+                        } else {
+                            assert!(extent >= -distance - 1e-9, "{}: {extent}", context());
+                        }
+                        for _ in 0..8 {
+                            let direction = random_rotation(&mut rng) * Vector3::x();
+                            let bound = world
+                                .collider_overlap_along(&ws.link_in_world, (i, a), (j, b), &direction)
+                                .expect("convex shapes");
+                            assert!(bound >= -distance - 1e-9, "{}: {bound} along {direction:?}", context());
+                        }
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{overlaps} overlapping shape pairs");
+    assert!(overlaps > 100, "{overlaps}");
+}
