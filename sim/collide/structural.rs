@@ -224,11 +224,22 @@ fn analyse_pair(
     let touching = |pose: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize), exact: bool| {
         world.collider_distance_with(pose, (i, a), (j, b), exact).unwrap_or(f64::INFINITY)
     };
+    let capsules = |pose: &[nalgebra::Isometry3<f64>], (a, b): (usize, usize)| {
+        world.collider_capsule_distance(pose, (i, a), (j, b)).unwrap_or(f64::NEG_INFINITY)
+    };
     // Each shape pair's cheap measure at each sample, kept for the tests below.
     let mut estimates: Vec<Vec<f64>> = Vec::with_capacity(configurations.len());
     for q in configurations {
         placed(model, link_pair, q, &mut pose);
-        let each: Vec<f64> = shape_pairs.iter().map(|&p| touching(&pose, p, false)).collect();
+        // Capsules apart by more than the slack answer every test below as the cheap measure
+        // (never nearer than they are) would.
+        let each: Vec<f64> = shape_pairs
+            .iter()
+            .map(|&p| match capsules(&pose, p) {
+                apart if apart > ESTIMATE_SLACK_M => apart,
+                _ => touching(&pose, p, false),
+            })
+            .collect();
         let estimate = each.iter().copied().fold(f64::INFINITY, f64::min);
         let in_contact = estimate <= TOUCHING_M
             || (estimate <= ESTIMATE_SLACK_M
@@ -311,7 +322,10 @@ fn analyse_pair(
         // The capsule bound overlaps at least as deep as the shapes: where even it does not reach
         // the construction's depth, the exact distance cannot either.
         let deeper = |exact: bool, p: (usize, usize)| touching(&pose, p, exact) + depth <= 0.0;
-        rest.iter().any(|&p| deeper(false, shape_pairs[p]) && deeper(true, shape_pairs[p]))
+        rest.iter().any(|&p| {
+            let p = shape_pairs[p];
+            capsules(&pose, p) + depth <= ESTIMATE_SLACK_M && deeper(false, p) && deeper(true, p)
+        })
     });
     if !folds {
         let labels: Vec<String> = overlapping

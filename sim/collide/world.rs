@@ -305,6 +305,27 @@ impl CollisionWorld {
         Some(farthest_a - nearest_b)
     }
 
+    /// The signed distance (m) of the bounding capsules of collider `a` and collider `b`: a
+    /// lower bound of theirs, in closed form.
+    pub fn collider_capsule_distance(&self, link_in_world: &[Isometry3<f64>], a: (usize, usize), b: (usize, usize)) -> Option<f64> {
+        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
+        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
+        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let (ba, bb) = (&ca.geometry.bounding, &cb.geometry.bounding);
+        let end = |pose: &Pose, point| vector_from_parry(pose * point);
+        Some(
+            super::primitives::capsules(
+                end(&pose_a, ba.start),
+                end(&pose_a, ba.end),
+                ba.radius,
+                end(&pose_b, bb.start),
+                end(&pose_b, bb.end),
+                bb.radius,
+            )
+            .distance,
+        )
+    }
+
     fn collider(&self, (link, element): (usize, usize)) -> Option<&ColliderGeometry> {
         self.colliders.iter().find(|c| c.link == link && c.element == element)
     }
