@@ -264,12 +264,13 @@ fn analyse_pair(
         })
     };
     let samples = 0..configurations.len();
-    let touches = |contact: &mut dyn FnMut(usize, usize) -> (f64, Vector3<f64>), k: usize, p: usize| {
-        let estimate = estimates[k][p];
-        estimate <= TOUCHING_M || (estimate <= ESTIMATE_SLACK_M && contact(k, p).0 <= TOUCHING_M)
-    };
     let overlapping: Vec<usize> = (0..shape_pairs.len())
-        .filter(|&p| samples.clone().all(|k| touches(&mut contact, k, p)))
+        .filter(|&p| {
+            samples.clone().all(|k| {
+                let estimate = estimates[k][p];
+                estimate <= TOUCHING_M || (estimate <= ESTIMATE_SLACK_M && contact(k, p).0 <= TOUCHING_M)
+            })
+        })
         .collect();
     // How deep the two links overlap by construction: the rest counts only beyond it, and beyond
     // the slack the samples may fall short of the deepest configuration by. A sample cannot be

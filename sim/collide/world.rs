@@ -277,9 +277,7 @@ impl CollisionWorld {
 
     /// [`Self::collider_distance`] with the contact normal (unit, world frame, from `a` to `b`).
     pub fn collider_contact(&self, link_in_world: &[Isometry3<f64>], a: (usize, usize), b: (usize, usize)) -> Option<(f64, Vector3<f64>)> {
-        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
-        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
-        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let [(ca, pose_a), (cb, pose_b)] = self.placed_pair(link_in_world, a, b)?;
         let measured = super::narrow::measure_shapes(&pose_a, &ca.geometry, &pose_b, &cb.geometry, true);
         Some((measured.distance, vector_from_parry(measured.normal)))
     }
@@ -295,10 +293,8 @@ impl CollisionWorld {
         b: (usize, usize),
         normal: &Vector3<f64>,
     ) -> Option<f64> {
-        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
+        let [(ca, pose_a), (cb, pose_b)] = self.placed_pair(link_in_world, a, b)?;
         let (map_a, map_b) = (ca.geometry.shape.as_support_map()?, cb.geometry.shape.as_support_map()?);
-        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
-        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
         let n = parry_vector(normal);
         let farthest_a = map_a.support_point(&pose_a, n).dot(n);
         let nearest_b = map_b.support_point(&pose_b, -n).dot(n);
@@ -308,9 +304,7 @@ impl CollisionWorld {
     /// The signed distance (m) of the bounding capsules of collider `a` and collider `b`: a
     /// lower bound of theirs, in closed form.
     pub fn collider_capsule_distance(&self, link_in_world: &[Isometry3<f64>], a: (usize, usize), b: (usize, usize)) -> Option<f64> {
-        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
-        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
-        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let [(ca, pose_a), (cb, pose_b)] = self.placed_pair(link_in_world, a, b)?;
         let (ba, bb) = (&ca.geometry.bounding, &cb.geometry.bounding);
         let end = |pose: &Pose, point| vector_from_parry(pose * point);
         Some(
@@ -330,6 +324,20 @@ impl CollisionWorld {
         self.colliders.iter().find(|c| c.link == link && c.element == element)
     }
 
+    /// Colliders `a` and `b` with their shapes' world poses, links placed at `link_in_world`.
+    fn placed_pair(
+        &self,
+        link_in_world: &[Isometry3<f64>],
+        a: (usize, usize),
+        b: (usize, usize),
+    ) -> Option<[(&ColliderGeometry, Pose); 2]> {
+        let place = |index| {
+            let collider = self.collider(index)?;
+            Some((collider, parry_pose(link_in_world.get(collider.link)?) * collider.link_from_shape))
+        };
+        Some([place(a)?, place(b)?])
+    }
+
     /// [`Self::collider_distance`], or with `exact_depth` false its cheap bound (see
     /// [`super::QueryOptions::exact_depth`]): an overlap as the bounding capsules' (at least as
     /// deep), a gap as GJK's own (at most 1.3e-5 m long).
@@ -340,9 +348,7 @@ impl CollisionWorld {
         b: (usize, usize),
         exact_depth: bool,
     ) -> Option<f64> {
-        let (ca, cb) = (self.collider(a)?, self.collider(b)?);
-        let pose_a = parry_pose(link_in_world.get(ca.link)?) * ca.link_from_shape;
-        let pose_b = parry_pose(link_in_world.get(cb.link)?) * cb.link_from_shape;
+        let [(ca, pose_a), (cb, pose_b)] = self.placed_pair(link_in_world, a, b)?;
         Some(super::narrow::measure_shapes(&pose_a, &ca.geometry, &pose_b, &cb.geometry, exact_depth).distance)
     }
 

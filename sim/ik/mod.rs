@@ -1053,8 +1053,9 @@ impl<'a> Ik<'a> {
         let done = CONVERGED;
         let iterations = self.solver.solve(goal, &mut q, self.opts.max_iterations, done, rng);
         let mut clearance = None;
+        let mut error = goal_error(goal, &self.model.tool_pose(&q));
         if let Some(checker) = self.checker.as_mut() {
-            let miss = !is_reached(&goal_error(goal, &self.model.tool_pose(&q)));
+            let miss = !is_reached(&error);
             // A miss is refined whatever its clearance (measure only what is kept), except where
             // the arm has as many joints as the goal constrains (six on a pose goal): there the
             // solutions are isolated points, closed forms list them where they exist, and the
@@ -1069,10 +1070,10 @@ impl<'a> Ik<'a> {
                 checker.margin = margin;
                 refine::refine(&mut self.solver, checker, goal, &mut q, self.opts.refinement_steps, done, rng);
                 measured = Some(checker.clearance(&q, false));
+                error = goal_error(goal, &self.model.tool_pose(&q));
             }
             clearance = measured;
         }
-        let error = goal_error(goal, &self.model.tool_pose(&q));
         let pose_reached = is_reached(&error);
         let reached = pose_reached && clearance.is_none_or(|c| c.exact_m > margin);
         let solution = IkSolution {
