@@ -46,7 +46,8 @@ pub(crate) struct SweepArgs {
     /// IK starts per goal.
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     ik_seeds: u64,
-    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's) for
+    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's,
+    /// which below 10 000 boxes runs only where no sub-chain stands in) for
     /// a goal that IK neither reaches nor decides (0 turns the searches off: such goals stay
     /// undecided; validation's default is 200 000).
     #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SWEEP_SEARCH_BOXES)]

@@ -87,7 +87,8 @@ pub(crate) struct ValidateArgs {
     /// IK starts per goal (the first seeded from the previous goal where the planner re-solves).
     #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=proving_ground::limits::MAX_IK_SEEDS))]
     pub(crate) ik_seeds: u64,
-    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's) for
+    /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's,
+    /// which below 10 000 boxes runs only where no sub-chain stands in) for
     /// a goal that IK neither reaches nor decides (0 turns the searches off: such goals stay
     /// undecided).
     #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SEARCH_BOXES)]
