@@ -133,57 +133,79 @@ pub fn structural_overlaps(model: &Model, opts: &StructuralOptions) -> Result<St
 }
 
 /// Link pairs decided so far, by [`pair_key`].
-static CACHE: std::sync::Mutex<Option<std::collections::HashMap<String, StructuralExclusions>>> = std::sync::Mutex::new(None);
+static CACHE: std::sync::Mutex<Option<std::collections::HashMap<Vec<u8>, StructuralExclusions>>> = std::sync::Mutex::new(None);
 
 /// Pairs remembered at most (a catalog robot has 15; the 15 625 of the modular catalog share a
 /// few thousand); beyond, the memory starts over.
 const CACHE_ENTRIES: usize = 1 << 16;
 
-/// Everything a link pair's answer depends on, exactly (floats by their shortest round-trip
-/// text): the sampling, every joint's kind and limits (they decide the random stream), the
-/// joints between the two links, their shapes, labels and names. `None` for a pair with a mesh,
-/// which is decided every time (a mesh's key would be the whole mesh).
-fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &str, opts: &StructuralOptions) -> Option<String> {
-    use std::fmt::Write;
-    // Names and labels quoted ({:?}), so no two different lists of them read the same.
-    let mut key = format!(
-        "{} {} {} {first} {second} {a_name:?} {b_name:?};",
-        opts.samples, opts.seed, opts.fold_samples
-    );
+/// A key's bytes: numbers by their bits (so exactly), texts and lists prefixed by their length
+/// (so no two different sequences of them read the same). Bytes, not text: formatting every
+/// float of a model was a fiftieth of a sweep's time.
+#[derive(Default)]
+struct Key(Vec<u8>);
+
+impl Key {
+    fn number(&mut self, value: f64) {
+        self.0.extend_from_slice(&value.to_bits().to_le_bytes());
+    }
+    fn count(&mut self, value: usize) {
+        self.0.extend_from_slice(&(value as u64).to_le_bytes());
+    }
+    fn numbers(&mut self, values: &[f64]) {
+        self.count(values.len());
+        values.iter().for_each(|&v| self.number(v));
+    }
+    fn text(&mut self, value: &str) {
+        self.count(value.len());
+        self.0.extend_from_slice(value.as_bytes());
+    }
+    fn joint(&mut self, kind: crate::model::JointKind) {
+        self.0.push(kind as u8);
+    }
+}
+
+/// Everything a link pair's answer depends on, exactly: the sampling, every joint's kind and
+/// limits (they decide the random stream), the joints between the two links, their shapes,
+/// labels and names. `None` for a pair with a mesh, which is decided every time (a mesh's key
+/// would be the whole mesh).
+fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &str, opts: &StructuralOptions) -> Option<Vec<u8>> {
+    use crate::model::Shape;
+    let mut key = Key::default();
+    key.count(opts.samples);
+    key.0.extend_from_slice(&opts.seed.to_le_bytes());
+    key.count(opts.fold_samples);
+    key.count(first);
+    key.count(second);
+    key.text(a_name);
+    key.text(b_name);
+    key.count(model.joints.len());
     for joint in &model.joints {
-        let _ = write!(key, "{:?} {:?};", joint.kind, joint.limits);
+        key.joint(joint.kind);
+        key.numbers(joint.limits.as_ref().map_or(&[][..], |l| &l[..]));
     }
     for joint in &model.joints[first..second] {
-        let t = joint.parent_from_joint.translation.vector;
-        let r = joint.parent_from_joint.rotation.quaternion().coords;
-        let _ = write!(
-            key,
-            "[{:?} {:?} {:?} {:?}]",
-            t.as_slice(),
-            r.as_slice(),
-            joint.axis.as_slice(),
-            joint.kind
-        );
+        key.numbers(joint.parent_from_joint.translation.vector.as_slice());
+        key.numbers(joint.parent_from_joint.rotation.quaternion().coords.as_slice());
+        key.numbers(joint.axis.as_slice());
+        key.joint(joint.kind);
     }
     for link in [first, second] {
+        key.count(model.links[link].colliders.len());
         for collider in &model.links[link].colliders {
-            if matches!(collider.shape, crate::model::Shape::Mesh(_)) {
-                return None;
+            key.numbers(collider.link_from_shape.translation.vector.as_slice());
+            key.numbers(collider.link_from_shape.rotation.quaternion().coords.as_slice());
+            match &collider.shape {
+                Shape::Sphere { radius } => key.numbers(&[0.0, *radius]),
+                Shape::Cylinder { radius, length } => key.numbers(&[1.0, *radius, *length]),
+                Shape::Capsule { radius, length } => key.numbers(&[2.0, *radius, *length]),
+                Shape::Box { half_extents } => key.numbers(&[3.0, half_extents[0], half_extents[1], half_extents[2]]),
+                Shape::Mesh(_) => return None,
             }
-            let t = collider.link_from_shape.translation.vector;
-            let r = collider.link_from_shape.rotation.quaternion().coords;
-            let _ = write!(
-                key,
-                "<{:?} {:?} {:?} {:?}>",
-                t.as_slice(),
-                r.as_slice(),
-                collider.shape,
-                collider.label
-            );
+            key.text(&collider.label);
         }
-        key.push('|');
     }
-    Some(key)
+    Some(key.0)
 }
 
 /// Where link `second` is in link `first`'s frame at configuration `q`, laid out as the world

@@ -160,6 +160,11 @@ struct Judge<'a> {
     // and the joints after it (the recursion's D and A).
     moves: Vec<f64>,
     turns: Vec<f64>,
+    // Per joint: the second-order remainders of the box ([`remainders`]) and the first-order
+    // test's rates (scratch, reused box after box).
+    position_rest: Vec<f64>,
+    axis_rest: Vec<f64>,
+    rates: Vec<(f64, f64)>,
     separator: super::separate::Separator,
     /// Whether boxes face the separating test (see [`FIRST_ORDER_BUDGET`]).
     separating: bool,
@@ -193,6 +198,9 @@ impl<'a> Judge<'a> {
             half: vec![0.0; dof],
             moves: vec![0.0; dof + 1],
             turns: vec![0.0; dof + 1],
+            position_rest: vec![0.0; dof],
+            axis_rest: vec![0.0; dof],
+            rates: vec![(0.0, 0.0); dof],
             separator: super::separate::Separator::new(dof),
             separating: true,
             helpers: Vec::new(),
@@ -258,8 +266,9 @@ impl<'a> Judge<'a> {
             moves: &self.moves,
             turns: &self.turns,
         };
-        let (position_rest, axis_rest) = remainders(&self.ws, &bounds);
-        if linear_rules_out(goal, self.radii, &self.ws, &bounds, &position_rest, &axis_rest) {
+        remainders(&self.ws, &bounds, &mut self.position_rest, &mut self.axis_rest);
+        let rests = (self.position_rest.as_slice(), self.axis_rest.as_slice());
+        if linear_rules_out(goal, self.radii, &self.ws, &bounds, rests, &mut self.rates) {
             return Judged::RuledOut;
         }
         if !self.separating {
@@ -268,8 +277,8 @@ impl<'a> Judge<'a> {
         let separating = super::separate::BoxBounds {
             half: &self.half,
             revolute: &self.revolute,
-            position_rest: &position_rest,
-            axis_rest: &axis_rest,
+            position_rest: &self.position_rest,
+            axis_rest: &self.axis_rest,
         };
         let Some(split) = self.separator.rules_out(goal, self.radii, &self.ws, &separating) else {
             return Judged::RuledOut;
@@ -399,13 +408,20 @@ pub fn search_helped(
         judge.helpers.push(sub);
     }
     let collisions = oracle.collisions();
-    // Per box: its bounds, its parent's tool motion bound, and whether it is known free
-    // throughout (a box inside one that is).
-    let mut stack = vec![(lower, upper, f64::INFINITY, !collisions)];
+    let dof = model.dof();
+    // Per box: its bounds (lower then upper, flat: no allocation per box), its parent's tool
+    // motion bound, and whether it is known free throughout (a box inside one that is).
+    let mut stack: Vec<f64> = [lower.as_slice(), upper.as_slice()].concat();
+    let mut parents = vec![(f64::INFINITY, !collisions)];
+    let (mut lower, mut upper) = (lower, upper);
     let mut boxes = 0;
     let mut colliding = 0;
     let mut left_open = 0;
-    while let Some((lower, upper, parent_moves, mut free)) = stack.pop() {
+    while let Some((parent_moves, mut free)) = parents.pop() {
+        let top = stack.len() - 2 * dof;
+        lower.copy_from_slice(&stack[top..top + dof]);
+        upper.copy_from_slice(&stack[top + dof..]);
+        stack.truncate(top);
         if boxes == budget {
             return Some(Search::Open { boxes });
         }
@@ -453,11 +469,16 @@ pub fn search_helped(
             continue;
         }
         let middle = judge.centre[split];
-        let (mut low_half, mut high_half) = ((lower.clone(), upper.clone(), moves, free), (lower, upper, moves, free));
-        low_half.1[split] = middle;
-        high_half.0[split] = middle;
-        stack.push(high_half);
-        stack.push(low_half);
+        // The upper half first, so the lower one is searched first.
+        let top = stack.len();
+        stack.extend_from_slice(&lower);
+        stack.extend_from_slice(&upper);
+        stack[top + split] = middle;
+        stack.extend_from_slice(&lower);
+        stack.extend_from_slice(&upper);
+        stack[top + 3 * dof + split] = middle;
+        parents.push((moves, free));
+        parents.push((moves, free));
     }
     if left_open > 0 {
         return Some(Search::Open { boxes });
@@ -491,8 +512,8 @@ fn linear_rules_out(
     radii: Radii,
     ws: &KinematicsWorkspace,
     bounds: &Bounds,
-    position_rest: &[f64],
-    axis_rest: &[f64],
+    (position_rest, axis_rest): (&[f64], &[f64]),
+    rates: &mut [(f64, f64)],
 ) -> bool {
     let half = bounds.half;
     let tool = &ws.tool_in_world;
@@ -503,25 +524,22 @@ fn linear_rules_out(
     }
     let along = offset / distance;
     let measure = Orientation::of(goal, radii, &tool.rotation);
-    let position_rest: Vec<f64> = position_rest.iter().map(|r| r / radii.position_m).collect();
-    let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| r * measure.axes / measure.scale).collect();
     // Per joint: the rates at the centre along the error direction and of the orientation
     // measure.
     let dof = half.len();
-    let rates: Vec<(f64, f64)> = (0..dof)
-        .map(|j| {
-            let column = ws.jacobian.column(j);
-            let linear = Vector3::new(column[0], column[1], column[2]);
-            let axis = Vector3::new(column[3], column[4], column[5]);
-            (along.dot(&linear), axis.dot(&measure.gradient))
-        })
-        .collect();
+    for (j, rate) in rates.iter_mut().enumerate() {
+        let column = ws.jacobian.column(j);
+        let linear = Vector3::new(column[0], column[1], column[2]);
+        let axis = Vector3::new(column[3], column[4], column[5]);
+        *rate = (along.dot(&linear), axis.dot(&measure.gradient));
+    }
     // Joint `j`'s share of the first-order bound at weight `mix`: its rate over the box and its
     // remainder, both normalised.
     let share = |j: usize, mix: f64| {
         let (position, orientation) = rates[j];
         let rate = mix * position / radii.position_m - (1.0 - mix) * orientation / measure.scale;
-        rate.abs() * half[j] + mix * position_rest[j] + (1.0 - mix) * orientation_rest[j]
+        let (position_rest, orientation_rest) = (position_rest[j] / radii.position_m, axis_rest[j] * measure.axes / measure.scale);
+        rate.abs() * half[j] + mix * position_rest + (1.0 - mix) * orientation_rest
     };
     let position_excess = (distance - radii.position_m) / radii.position_m;
     let orientation_excess = (measure.within - measure.value) / measure.scale;
@@ -589,9 +607,10 @@ impl Orientation {
 /// Per joint, the second-order remainders over the box, beyond the centre's rates times the
 /// turns: of the tool position (m) and of one tool axis (a unit vector's displacement; the
 /// orientation measure of [`Orientation`] reads [`Orientation::axes`] of them).
-fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f64>, Vec<f64>) {
+fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds, position: &mut [f64], orientation: &mut [f64]) {
     let dof = bounds.half.len();
-    let (mut position, mut orientation) = (vec![0.0; dof], vec![0.0; dof]);
+    position.fill(0.0);
+    orientation.fill(0.0);
     for j in (0..dof).filter(|&j| bounds.revolute[j]) {
         let h = bounds.half[j];
         // Both terms grow with the turn up to half a turn, the most a box spans.
@@ -601,7 +620,6 @@ fn remainders(ws: &KinematicsWorkspace, bounds: &Bounds) -> (Vec<f64>, Vec<f64>)
         position[j] = second * (lever + moved) + h * moved;
         orientation[j] = second + h * turned;
     }
-    (position, orientation)
 }
 
 #[cfg(test)]
@@ -669,7 +687,8 @@ pub(super) mod tests {
                         turns: &judge.turns,
                     };
                     let axes = Orientation::of(&goal, Radii::REACHED, &judge.ws.tool_in_world.rotation).axes;
-                    let (position_rest, axis_rest) = remainders(&judge.ws, &bounds);
+                    let (mut position_rest, mut axis_rest) = (vec![0.0; model.dof()], vec![0.0; model.dof()]);
+                    remainders(&judge.ws, &bounds, &mut position_rest, &mut axis_rest);
                     let orientation_rest: Vec<f64> = axis_rest.iter().map(|r| axes * r).collect();
                     let axis_rest: f64 = axis_rest.iter().sum();
                     let checked_axes: &[usize] = if tolerance == Tolerance::Pose { &[0, 1, 2] } else { &[2] };

@@ -36,6 +36,9 @@ pub struct ValidateOptions {
     /// The paper's static metric alone: per goal a collision-free IK solution, no trajectory,
     /// no engines (default false).
     pub reach_only: bool,
+    /// Leaves the per-goal clearances of the report (exact, and per kind of pair) unmeasured:
+    /// a sweep's record reads none of them (default false).
+    pub skip_goal_clearances: bool,
 }
 
 impl ValidateOptions {
@@ -155,8 +158,16 @@ pub fn validate_with_progress(
         excluded: world.excluded().to_vec(),
         excluded_shapes: world.excluded_shapes().to_vec(),
         structural_allowances: world.structural_allowances().to_vec(),
-        goal_clearances: goal_clearances(&model, &world, &solutions, motion.trajectory.as_ref(), opts.certify),
-        goal_clearances_by_kind: goal_clearances_by_kind(&model, &world, &solutions, motion.trajectory.as_ref()),
+        goal_clearances: if opts.skip_goal_clearances {
+            vec![None; solutions.len()]
+        } else {
+            goal_clearances(&model, &world, &solutions, motion.trajectory.as_ref(), opts.certify)
+        },
+        goal_clearances_by_kind: if opts.skip_goal_clearances {
+            vec![None; solutions.len()]
+        } else {
+            goal_clearances_by_kind(&model, &world, &solutions, motion.trajectory.as_ref())
+        },
         input_warnings,
         kinematics_check: None,
         model,

@@ -74,6 +74,7 @@ pub fn evaluate(
         SweepMode::ReachOnly { ik } => pipeline::ValidateOptions {
             ik: ik.clone(),
             reach_only: true,
+            skip_goal_clearances: true,
             ..Default::default()
         },
         SweepMode::Full { ik, engines } => pipeline::ValidateOptions {
