@@ -83,6 +83,16 @@ impl Default for OptimizeOptions {
     }
 }
 
+/// Pose distances (m for the position, rad for the rotation angle) below which a sample's
+/// distance counts as zero, its gradient too. The norm's gradient is the direction of the
+/// residual, and an exact IK solution (the starts are) leaves a residual of rounding alone:
+/// that gradient was noise, and Adam's first step, which moves every parameter whose gradient
+/// is not exactly zero by the whole rate, turned it into a kick of 0.1 rad per joint in a
+/// random direction. One ulp of one DH parameter changed the design gradient at step 1 by up to
+/// 4.3 and the tuned design by 0.1 after 200 steps; a CUDA run, whose rounding differs, diverged
+/// the same way. Zero is the norm's own subgradient at zero; the value moves by less than this.
+pub(crate) const POSE_DEAD_ZONE: f64 = 1e-9;
+
 /// Adam's moment decay rates and denominator floor (Kingma and Ba's defaults, as the paper's
 /// PyTorch optimizer).
 const BETA1: f64 = 0.9;

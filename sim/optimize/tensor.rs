@@ -165,6 +165,13 @@ fn column(m: &Tensor, c: usize) -> candle_core::Result<Tensor> {
     m.narrow(2, c, 1)?.squeeze(2)
 }
 
+/// `x` where it exceeds the pose distance's dead zone ([`super::POSE_DEAD_ZONE`]), else 0 with
+/// no gradient.
+fn beyond_dead_zone(x: &Tensor) -> candle_core::Result<Tensor> {
+    let outside = x.gt(super::POSE_DEAD_ZONE)?.to_dtype(x.dtype())?;
+    x * outside
+}
+
 /// `sqrt(sum(v^2) + SQRT_FLOOR)` over the last dimension.
 fn norm(v: &Tensor) -> candle_core::Result<Tensor> {
     (v.sqr()?.sum(v.rank() - 1)? + SQRT_FLOOR)?.sqrt()
@@ -327,12 +334,12 @@ impl Graph {
         let goal_position = vectors(device, &targets.iter().map(|t| t.position).collect::<Vec<_>>())?;
         let goal_rotation = matrices(device, &targets.iter().map(|t| t.rotation).collect::<Vec<_>>())?;
         let goal_transposed = matrices(device, &targets.iter().map(|t| t.rotation.transpose()).collect::<Vec<_>>())?;
-        let position = norm(&(&tool_position - &goal_position)?)?;
+        let position = beyond_dead_zone(&norm(&(&tool_position - &goal_position)?)?)?;
         let error = mat_mul(&goal_transposed, &tool_rotation)?.reshape((count, 9))?;
         let pick = |indices: &[u32]| error.index_select(&Tensor::new(indices, device)?, 1);
         let trace = pick(&[0, 4, 8])?.sum(1)?;
         let skew = (pick(&[7, 2, 3])? - pick(&[5, 6, 1])?)?;
-        let angle = atan2(&(norm(&skew)? * 0.5)?, &((trace - 1.0)? * 0.5)?)?;
+        let angle = beyond_dead_zone(&atan2(&(norm(&skew)? * 0.5)?, &((trace - 1.0)? * 0.5)?)?)?;
         let z_symmetric = ((dot(&column(&goal_rotation, 2)?, &column(&tool_rotation, 2)?)?.neg()? + 1.0)? * 0.5)?;
         let mask = |mode: Tolerance| {
             Tensor::from_vec(
