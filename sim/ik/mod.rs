@@ -8,6 +8,7 @@ mod bilinear;
 mod branches;
 mod cells;
 mod certify;
+mod coaxial;
 mod dls;
 mod eigen;
 mod error;
@@ -163,6 +164,7 @@ struct Methods {
     all: Option<(AllSolutions, Tolerance)>,
     redundant: Option<HeldJoint>,
     sub_chains: Vec<reduce::SubChain>,
+    coaxial: Option<coaxial::Merged>,
 }
 
 impl Methods {
@@ -176,6 +178,7 @@ impl Methods {
             all,
             redundant,
             sub_chains,
+            coaxial: coaxial::Merged::of(model),
         }
     }
 }
@@ -204,6 +207,8 @@ pub struct Ik<'a> {
     misses: Vec<IkSolution>,
     /// Sub-chains the joint-space search tries before the whole arm (see [`reduce`]).
     sub_chains: Vec<reduce::SubChain>,
+    /// The arm with its coaxial joints merged, which the search tries first (see [`coaxial`]).
+    coaxial: Option<coaxial::Merged>,
     /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
     collision_queries: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
@@ -254,6 +259,7 @@ impl<'a> Ik<'a> {
             parts_left: cells::PARTS_PER_GOAL,
             misses: Vec::new(),
             sub_chains: methods.sub_chains.clone(),
+            coaxial: methods.coaxial.clone(),
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
             ws: model.workspace(),
@@ -637,7 +643,13 @@ impl<'a> Ik<'a> {
             .filter_map(|(index, chain)| Some((index, chain.reduce(goal)?)))
             .collect();
         let mut queries = self.collision_queries;
-        if let Some(proof) = self.search_sub_chains(&reduced, &mut queries) {
+        // The arm with its coaxial joints merged after the arm's own sub-chains: a proof it
+        // adds, none it replaces (its boxes split differently, and with a sweep's budget each
+        // finds proofs the other misses).
+        let proof = self
+            .search_sub_chains(&reduced, &mut queries)
+            .or_else(|| if posed { None } else { self.search_merged(goal) });
+        if let Some(proof) = proof {
             result.complete = true;
             result.undecided = None;
             result.proof = Some(proof);
@@ -786,6 +798,56 @@ impl<'a> Ik<'a> {
             });
         }
         None
+    }
+
+    /// The searches of the arm with its coaxial joints merged ([`coaxial`]): its sub-chains',
+    /// then (from [`search::FIRST_ORDER_BUDGET`] boxes, or without sub-chains) its own; the
+    /// proof when one rules the goal's tolerance out.
+    fn search_merged(&self, goal: &Goal) -> Option<String> {
+        let merged = self.coaxial.as_ref()?;
+        let budget = self.opts.search_boxes;
+        let mut oracle = coaxial::BoundsAlone;
+        let reduced: Vec<(&reduce::SubChain, reduce::Reduced)> = merged
+            .sub_chains
+            .iter()
+            .filter_map(|chain| Some((chain, chain.reduce(goal)?)))
+            .collect();
+        for (chain, reduced) in &reduced {
+            if let Some(search::Search::Proven { boxes, .. }) =
+                search::search_with(&chain.model, &reduced.goal, reduced.radii, budget, &mut oracle)
+            {
+                let direction = if reduced.goal.tolerance == Tolerance::ZSymmetric {
+                    format!(" and its direction within {:.2} deg", reduced.radii.orientation_rad.to_degrees())
+                } else {
+                    String::new()
+                };
+                return Some(format!(
+                    "{}: joint-space search of its joints 1 to {} for {}: no configuration of them within their limits brings it within {:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must ({boxes} boxes, each ruled out by how far it can move within it)",
+                    merged.describe(),
+                    chain.joints,
+                    chain.what,
+                    reduced.radii.position_m * 1e3
+                ));
+            }
+        }
+        if !reduced.is_empty() && budget < search::FIRST_ORDER_BUDGET {
+            return None;
+        }
+        let helpers: Vec<search::Helper> = reduced
+            .iter()
+            .map(|(chain, reduced)| search::Helper {
+                model: &chain.model,
+                goal: &reduced.goal,
+                radii: reduced.radii,
+            })
+            .collect();
+        match search::search_helped(&merged.model, goal, search::Radii::REACHED, budget, &mut oracle, &helpers)? {
+            search::Search::Proven { boxes, .. } => Some(format!(
+                "{}: joint-space search of the arm so merged: no configuration within the joint limits comes within the goal's tolerance ({boxes} boxes, each ruled out by how far the tool can move within it)",
+                merged.describe()
+            )),
+            _ => None,
+        }
     }
 
     /// Every solution of a world pose by the closed form or the all-solutions method, when the
