@@ -36,7 +36,7 @@ pub(super) struct Merged {
 impl Merged {
     /// The arm `model` with every run of coaxial revolute joints merged; `None` when it has none.
     pub(super) fn of(model: &Model) -> Option<Merged> {
-        let mut merged = without_geometry(model);
+        let mut merged = reduce::truncated(model, model.dof(), model.last_from_tool);
         // Original joint numbers of the merged model's joints.
         let mut groups: Vec<Vec<usize>> = (1..=model.dof()).map(|j| vec![j]).collect();
         let mut names: Vec<String> = (1..=model.dof()).map(|j| j.to_string()).collect();
@@ -137,35 +137,12 @@ impl super::search::Oracle for BoundsAlone {
     }
 }
 
-/// `model`'s chain without its geometry (the merged arm is for reach alone).
-fn without_geometry(model: &Model) -> Model {
-    Model {
-        name: model.name.clone(),
-        source: model.source.clone(),
-        world_from_base: model.world_from_base,
-        joints: model.joints.clone(),
-        links: model
-            .links
-            .iter()
-            .map(|link| crate::model::Link {
-                name: link.name.clone(),
-                merged: Vec::new(),
-                colliders: Vec::new(),
-                inertial: link.inertial.clone(),
-                segments: Vec::new(),
-            })
-            .collect(),
-        last_from_tool: model.last_from_tool,
-        diagnostics: Vec::new(),
-    }
-}
-
 /// Joint values of the merged arm for a configuration `q` of the arm: what the tool pose says
 /// they are (for tests).
 #[cfg(test)]
 fn merged_configuration(model: &Model, q: &[f64]) -> Vec<f64> {
     let mut q = q.to_vec();
-    let mut merged = without_geometry(model);
+    let mut merged = reduce::truncated(model, model.dof(), model.last_from_tool);
     while let Some((j, sign)) = coaxial_pair(&merged) {
         let first = q.remove(j);
         q[j] += sign * first;

@@ -150,7 +150,7 @@ fn drift(misses: &[f64]) -> f64 {
 
 /// The first `joints` joints of `model`, without geometry, with their tool at `tool` in the last
 /// link kept.
-fn truncated(model: &Model, joints: usize, tool: Isometry3<f64>) -> Model {
+pub(super) fn truncated(model: &Model, joints: usize, tool: Isometry3<f64>) -> Model {
     let links = model.links[..=joints]
         .iter()
         .map(|link| crate::model::Link {
