@@ -150,7 +150,10 @@ impl Key {
         self.0.extend_from_slice(&value.to_bits().to_le_bytes());
     }
     fn count(&mut self, value: usize) {
-        self.0.extend_from_slice(&(value as u64).to_le_bytes());
+        self.word(value as u64);
+    }
+    fn word(&mut self, value: u64) {
+        self.0.extend_from_slice(&value.to_le_bytes());
     }
     fn numbers(&mut self, values: &[f64]) {
         self.count(values.len());
@@ -173,7 +176,7 @@ fn pair_key(model: &Model, first: usize, second: usize, a_name: &str, b_name: &s
     use crate::model::Shape;
     let mut key = Key::default();
     key.count(opts.samples);
-    key.0.extend_from_slice(&opts.seed.to_le_bytes());
+    key.word(opts.seed);
     key.count(opts.fold_samples);
     key.count(first);
     key.count(second);

@@ -207,13 +207,34 @@ pub struct Ik<'a> {
     misses: Vec<IkSolution>,
     /// Sub-chains the joint-space search tries before the whole arm (see [`reduce`]).
     sub_chains: Vec<reduce::SubChain>,
-    /// The arm with its coaxial joints merged, which the search tries first (see [`coaxial`]).
+    /// The arm with its coaxial joints merged, which the search tries after the arm's own
+    /// sub-chains (see [`coaxial`]).
     coaxial: Option<coaxial::Merged>,
     /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
     collision_queries: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     ws: KinematicsWorkspace,
+}
+
+/// What a sub-chain's search proved, from "joints 1 to k for ...": out of the goal's reach, or
+/// (with `colliding` boxes) in collision wherever within it.
+fn sub_chain_proof(chain: &reduce::SubChain, reduced: &reduce::Reduced, boxes: usize, colliding: usize) -> String {
+    let direction = if reduced.goal.tolerance == Tolerance::ZSymmetric {
+        format!(" and its direction within {:.2} deg", reduced.radii.orientation_rad.to_degrees())
+    } else {
+        String::new()
+    };
+    let (joints, what, radius) = (chain.joints, &chain.what, reduced.radii.position_m * 1e3);
+    if colliding == 0 {
+        format!(
+            "joints 1 to {joints} for {what}: no configuration of them within their limits brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must ({boxes} boxes, each ruled out by how far it can move within it)"
+        )
+    } else {
+        format!(
+            "joints 1 to {joints} for {what}: every configuration of them within their limits that brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must, collides among links 1 to {joints}, the obstacles and the floor ({boxes} boxes: {colliding} collide throughout, their centre's overlap deeper than their bodies can move within them; the others are ruled out by how far it can move within them)"
+        )
+    }
 }
 
 /// Pose error (m and rad) the closed form's solutions are polished to with Newton steps on the
@@ -781,21 +802,10 @@ impl<'a> Ik<'a> {
             let Some(search::Search::Proven { boxes, colliding }) = outcome else {
                 continue;
             };
-            let direction = if reduced.goal.tolerance == Tolerance::ZSymmetric {
-                format!(" and its direction within {:.2} deg", reduced.radii.orientation_rad.to_degrees())
-            } else {
-                String::new()
-            };
-            let (joints, what, radius) = (chain.joints, &chain.what, reduced.radii.position_m * 1e3);
-            return Some(if colliding == 0 {
-                format!(
-                    "joint-space search of joints 1 to {joints} for {what}: no configuration of them within their limits brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must ({boxes} boxes, each ruled out by how far it can move within it)"
-                )
-            } else {
-                format!(
-                    "joint-space search of joints 1 to {joints} for {what}: every configuration of them within their limits that brings it within {radius:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must, collides among links 1 to {joints}, the obstacles and the floor ({boxes} boxes: {colliding} collide throughout, their centre's overlap deeper than their bodies can move within them; the others are ruled out by how far it can move within them)"
-                )
-            });
+            return Some(format!(
+                "joint-space search of {}",
+                sub_chain_proof(chain, reduced, boxes, colliding)
+            ));
         }
         None
     }
@@ -813,21 +823,11 @@ impl<'a> Ik<'a> {
             .filter_map(|chain| Some((chain, chain.reduce(goal)?)))
             .collect();
         for (chain, reduced) in &reduced {
-            if let Some(search::Search::Proven { boxes, .. }) =
+            if let Some(search::Search::Proven { boxes, colliding }) =
                 search::search_with(&chain.model, &reduced.goal, reduced.radii, budget, &mut oracle)
             {
-                let direction = if reduced.goal.tolerance == Tolerance::ZSymmetric {
-                    format!(" and its direction within {:.2} deg", reduced.radii.orientation_rad.to_degrees())
-                } else {
-                    String::new()
-                };
-                return Some(format!(
-                    "{}: joint-space search of its joints 1 to {} for {}: no configuration of them within their limits brings it within {:.2} mm{direction} of where the goal puts it, as every configuration within the goal's tolerance must ({boxes} boxes, each ruled out by how far it can move within it)",
-                    merged.describe(),
-                    chain.joints,
-                    chain.what,
-                    reduced.radii.position_m * 1e3
-                ));
+                let words = sub_chain_proof(chain, reduced, boxes, colliding);
+                return Some(format!("{}: joint-space search of its {words}", merged.describe()));
             }
         }
         if !reduced.is_empty() && budget < search::FIRST_ORDER_BUDGET {

@@ -161,10 +161,10 @@ struct Judge<'a> {
     moves: Vec<f64>,
     turns: Vec<f64>,
     // Per joint: the second-order remainders of the box ([`remainders`]) and the first-order
-    // test's rates (scratch, reused box after box).
+    // test's terms ([`linear_rules_out`]); scratch, reused box after box.
     position_rest: Vec<f64>,
     axis_rest: Vec<f64>,
-    rates: Vec<(f64, f64)>,
+    rates: Vec<Rates>,
     separator: super::separate::Separator,
     /// Whether boxes face the separating test (see [`FIRST_ORDER_BUDGET`]).
     separating: bool,
@@ -200,7 +200,7 @@ impl<'a> Judge<'a> {
             turns: vec![0.0; dof + 1],
             position_rest: vec![0.0; dof],
             axis_rest: vec![0.0; dof],
-            rates: vec![(0.0, 0.0); dof],
+            rates: vec![Rates::default(); dof],
             separator: super::separate::Separator::new(dof),
             separating: true,
             helpers: Vec::new(),
@@ -513,7 +513,7 @@ fn linear_rules_out(
     ws: &KinematicsWorkspace,
     bounds: &Bounds,
     (position_rest, axis_rest): (&[f64], &[f64]),
-    rates: &mut [(f64, f64)],
+    rates: &mut [Rates],
 ) -> bool {
     let half = bounds.half;
     let tool = &ws.tool_in_world;
@@ -524,22 +524,24 @@ fn linear_rules_out(
     }
     let along = offset / distance;
     let measure = Orientation::of(goal, radii, &tool.rotation);
-    // Per joint: the rates at the centre along the error direction and of the orientation
-    // measure.
     let dof = half.len();
     for (j, rate) in rates.iter_mut().enumerate() {
         let column = ws.jacobian.column(j);
         let linear = Vector3::new(column[0], column[1], column[2]);
         let axis = Vector3::new(column[3], column[4], column[5]);
-        *rate = (along.dot(&linear), axis.dot(&measure.gradient));
+        *rate = Rates {
+            position: along.dot(&linear),
+            orientation: axis.dot(&measure.gradient),
+            position_rest: position_rest[j] / radii.position_m,
+            orientation_rest: axis_rest[j] * measure.axes / measure.scale,
+        };
     }
     // Joint `j`'s share of the first-order bound at weight `mix`: its rate over the box and its
     // remainder, both normalised.
     let share = |j: usize, mix: f64| {
-        let (position, orientation) = rates[j];
-        let rate = mix * position / radii.position_m - (1.0 - mix) * orientation / measure.scale;
-        let (position_rest, orientation_rest) = (position_rest[j] / radii.position_m, axis_rest[j] * measure.axes / measure.scale);
-        rate.abs() * half[j] + mix * position_rest + (1.0 - mix) * orientation_rest
+        let r = &rates[j];
+        let rate = mix * r.position / radii.position_m - (1.0 - mix) * r.orientation / measure.scale;
+        rate.abs() * half[j] + mix * r.position_rest + (1.0 - mix) * r.orientation_rest
     };
     let position_excess = (distance - radii.position_m) / radii.position_m;
     let orientation_excess = (measure.within - measure.value) / measure.scale;
@@ -557,6 +559,16 @@ fn linear_rules_out(
         }
     }
     false
+}
+
+/// One joint's terms in the first-order test: the rates at the box centre along the error
+/// direction and of the orientation measure, and the remainders, normalised.
+#[derive(Debug, Clone, Copy, Default)]
+struct Rates {
+    position: f64,
+    orientation: f64,
+    position_rest: f64,
+    orientation_rest: f64,
 }
 
 /// The orientation measure of the first-order test, linear in the tool's axes.

@@ -119,7 +119,7 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
 
     // Pose distance.
     let error = tool_origin - target.position;
-    let position = Some(error.norm()).filter(|&p| p > super::POSE_DEAD_ZONE).unwrap_or(0.0);
+    let position = super::beyond_dead_zone(error.norm());
     if position > 0.0 {
         gradient.add_point(&frames, n, n, &tool_origin, None, &(error * (DISTANCE_WEIGHT / position)));
     }
@@ -127,9 +127,7 @@ fn sample(batch: &Batch, params: &Params, b: usize, gradient: &mut Gradient) -> 
         Tolerance::Pose => {
             let m = target.rotation.transpose() * tool_rotation;
             let v = Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)]);
-            let angle = Some((v.norm() / 2.0).atan2((m.trace() - 1.0) / 2.0))
-                .filter(|&angle| angle > super::POSE_DEAD_ZONE)
-                .unwrap_or(0.0);
+            let angle = super::beyond_dead_zone((v.norm() / 2.0).atan2((m.trace() - 1.0) / 2.0));
             let length = v.norm();
             // d angle = axis . omega, the axis of R R_g^T in the world.
             let axis = if angle > 0.0 && length > 0.0 {

@@ -93,6 +93,15 @@ impl Default for OptimizeOptions {
 /// the same way. Zero is the norm's own subgradient at zero; the value moves by less than this.
 pub(crate) const POSE_DEAD_ZONE: f64 = 1e-9;
 
+/// `distance` beyond [`POSE_DEAD_ZONE`], else 0.
+pub(crate) fn beyond_dead_zone(distance: f64) -> f64 {
+    if distance > POSE_DEAD_ZONE {
+        distance
+    } else {
+        0.0
+    }
+}
+
 /// Adam's moment decay rates and denominator floor (Kingma and Ba's defaults, as the paper's
 /// PyTorch optimizer).
 const BETA1: f64 = 0.9;

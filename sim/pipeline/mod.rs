@@ -153,21 +153,22 @@ pub fn validate_with_progress(
     } else {
         Motion::run(&model, &world, &scenario, &solutions, opts, &ik, progress)?
     };
+    let (goal_clearances, goal_clearances_by_kind) = if opts.skip_goal_clearances {
+        (vec![None; solutions.len()], vec![None; solutions.len()])
+    } else {
+        let trajectory = motion.trajectory.as_ref();
+        (
+            goal_clearances(&model, &world, &solutions, trajectory, opts.certify),
+            goal_clearances_by_kind(&model, &world, &solutions, trajectory),
+        )
+    };
     Ok(Validation {
         pairs: world.pairs().to_vec(),
         excluded: world.excluded().to_vec(),
         excluded_shapes: world.excluded_shapes().to_vec(),
         structural_allowances: world.structural_allowances().to_vec(),
-        goal_clearances: if opts.skip_goal_clearances {
-            vec![None; solutions.len()]
-        } else {
-            goal_clearances(&model, &world, &solutions, motion.trajectory.as_ref(), opts.certify)
-        },
-        goal_clearances_by_kind: if opts.skip_goal_clearances {
-            vec![None; solutions.len()]
-        } else {
-            goal_clearances_by_kind(&model, &world, &solutions, motion.trajectory.as_ref())
-        },
+        goal_clearances,
+        goal_clearances_by_kind,
         input_warnings,
         kinematics_check: None,
         model,
