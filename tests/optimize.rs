@@ -795,3 +795,68 @@ fn the_optimizers_configurations_are_ik_starts_of_the_validation() {
     }
     eprintln!("goals reached: {without} without the optimizer's starts, {with} with them");
 }
+
+/// Issue 25: CUDA computes what the CPU computes. The graph is the same f64 operations on both;
+/// only the rounding of the device's `exp`, `sqrt` and sums may differ, so values and gradients
+/// agree to 1e-12 of their largest magnitude, and 20 steps of tuning end within 1e-6 (the dead
+/// zone keeps a start's rounding from steering Adam). After 200 steps the difference is printed,
+/// not asserted: on the CPU alone one ulp of one DH parameter moves the 200-step result by 0.008
+/// (a goal's best start changes, a pair crosses the collision threshold), so no two arithmetics
+/// that round differently can promise 1e-6 there. Skips, saying why, where the crate was built
+/// without the `cuda` feature or no CUDA GPU is present (`scripts/gpu-check.sh` runs it on a GPU
+/// machine).
+#[test]
+fn cuda_computes_what_the_cpu_computes() {
+    let mut cuda = match Tensors::cuda(0) {
+        Ok(cuda) => cuda,
+        Err(why) => {
+            eprintln!("skipped: no CUDA device to compare with the CPU ({why})");
+            return;
+        }
+    };
+    let normwise = |ours: &[f64], theirs: &[f64]| -> f64 {
+        let scale = ours.iter().chain(theirs).fold(0.0f64, |m, x| m.max(x.abs()));
+        let apart = ours.iter().zip(theirs).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        if scale == 0.0 {
+            apart
+        } else {
+            apart / scale
+        }
+    };
+    for (name, path) in CASES {
+        let design = design(name);
+        let scenario = scenario(path);
+        let (batch, params) = random_batch(&design, &scenario, 8, 17);
+        let cpu = Tensors::default().evaluate(&batch, &params).expect("cpu");
+        let gpu = cuda.evaluate(&batch, &params).expect("cuda");
+        for (what, ours, theirs) in [
+            ("distance", &cpu.distance, &gpu.distance),
+            ("collision", &cpu.collision, &gpu.collision),
+            ("grad q", &cpu.grad_q, &gpu.grad_q),
+            ("grad d", &cpu.grad_d, &gpu.grad_d),
+            ("grad a", &cpu.grad_a, &gpu.grad_a),
+        ] {
+            let apart = normwise(ours, theirs);
+            assert!(apart <= 1e-12, "{name} on {path}: {what} {apart:e} apart (relative)");
+        }
+    }
+    let design = design("free-offset-6dof.json");
+    let scenario = scenario("scenarios/cluttered/task-03.json");
+    for steps in [20, 200] {
+        let opts = OptimizeOptions {
+            steps,
+            ..Default::default()
+        };
+        let (batch, params) = optimize::starts(&design, &scenario, &opts).expect("starts");
+        let tuned = |objective: &mut Tensors| {
+            let optimized = optimize::optimize(objective, &batch, std::slice::from_ref(&design), params.clone(), &opts).expect("optimize");
+            optimized.params.d.iter().chain(&optimized.params.a).copied().collect::<Vec<f64>>()
+        };
+        let (cpu, gpu) = (tuned(&mut Tensors::default()), tuned(&mut cuda));
+        let apart = cpu.iter().zip(&gpu).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        eprintln!("tuned designs after {steps} steps, CPU against CUDA: {apart:e} apart");
+        if steps == 20 {
+            assert!(apart < 1e-6, "the tuned designs are {apart} apart after 20 steps");
+        }
+    }
+}

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Issue 25's GPU checks in one command, on a machine with an NVIDIA GPU and its driver:
+#
+#   bash scripts/gpu-check.sh [SIZES...]
+#
+# 1. the CUDA 13.0 toolkit from PyPI into .cuda/venv (scripts/cuda-toolkit.sh: compiler, headers
+#    and the libraries candle links; libcuda is the driver's), nothing installed system-wide;
+# 2. the `cuda` build (its own target folder, target/cuda);
+# 3. the CPU-against-CUDA agreement test (values and gradients to 1e-12, 20 tuning steps to 1e-6,
+#    the 200-step difference printed);
+# 4. the timing table: `optimize` of 1, 8, 64, 256 and 4096 free designs, 8 goals x 4 starts x 200
+#    steps, on the CPU (up to 256) and on CUDA (`examples/optimize_devices.rs`).
+#
+# Exit codes: 0 all ran and passed, 1 a check failed, 2 no NVIDIA GPU or driver here.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! command -v nvidia-smi >/dev/null || ! nvidia-smi -L >/dev/null 2>&1; then
+  echo "gpu-check: no NVIDIA GPU or driver on this machine (nvidia-smi -L fails): nothing to check" >&2
+  exit 2
+fi
+nvidia-smi -L
+
+capability=$(nvidia-smi --query-gpu=compute_cap --format=csv,noheader | head -1 | tr -d ' .')
+export CUDA_COMPUTE_CAP="$capability" CUDA_LIBRARIES=1
+# shellcheck source=scripts/cuda-toolkit.sh
+source scripts/cuda-toolkit.sh
+cuda=$cuda_root
+
+# The linker wants unversioned names; PyPI ships libcublas.so.13 and the like, the driver
+# libcuda.so.1. A folder of links gives them.
+links=$PWD/.cuda/lib
+mkdir -p "$links"
+for lib in nvrtc curand cublas cublasLt; do
+  found=$(ls "$cuda/lib/lib$lib.so."* 2>/dev/null | grep -v alt | head -1 || true)
+  [ -n "$found" ] || { echo "gpu-check: lib$lib not in $cuda/lib" >&2; exit 1; }
+  ln -sf "$found" "$links/lib$lib.so"
+done
+driver=$(ldconfig -p | awk '/libcuda\.so\.1 .*x86-64/ {print $NF; exit}')
+[ -n "$driver" ] || { echo "gpu-check: the driver's libcuda.so.1 is not in ldconfig's cache" >&2; exit 2; }
+ln -sf "$driver" "$links/libcuda.so"
+
+export LIBRARY_PATH="$links${LIBRARY_PATH:+:$LIBRARY_PATH}"
+export LD_LIBRARY_PATH="$links:$cuda/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+export CARGO_TARGET_DIR=target/cuda
+echo "gpu-check: CUDA toolkit $(nvcc --version | sed -n 's/.*release \([0-9.]*\).*/\1/p'), compute capability $capability"
+
+status=0
+cargo build --release --locked --features cuda --example optimize_devices
+cargo test --release --locked --features cuda --test optimize cuda_computes_what_the_cpu_computes -- --nocapture || status=1
+"$CARGO_TARGET_DIR/release/examples/optimize_devices" "$@" || status=1
+exit $status
