@@ -6,6 +6,7 @@
 pub mod analytic;
 mod bilinear;
 mod branches;
+mod cap;
 mod cells;
 mod certify;
 mod coaxial;
@@ -328,10 +329,17 @@ impl<'a> Ik<'a> {
             (Some(arm), _) if all_solutions => arm.solve(&pose),
             (None, Some((method, mode))) if self.opts.analytic && finite && goal.tolerance == *mode => {
                 let found = method.solve(&pose);
+                // The solve tried the cheap proof; the goal's own may spend more.
+                let out_of_reach = match found.out_of_reach {
+                    None if found.resolved && found.configurations.is_empty() => {
+                        method.out_of_reach_over_turn(&pose, 0.0, self.cap_evaluations())
+                    }
+                    proof => proof,
+                };
                 AnalyticSolutions {
                     configurations: found.configurations,
                     finite: found.resolved,
-                    out_of_reach: found.out_of_reach,
+                    out_of_reach,
                 }
             }
             (None, Some((method, Tolerance::Pose))) if self.opts.analytic && finite && goal.tolerance == Tolerance::ZSymmetric => {
@@ -872,9 +880,14 @@ impl<'a> Ik<'a> {
     fn exact_out_of_reach(&self, pose: &Isometry3<f64>, turn: f64) -> Option<String> {
         match (&self.analytic, &self.all) {
             (Some(arm), _) => arm.out_of_reach_over_turn(pose, turn),
-            (None, Some((method, Tolerance::Pose))) => method.out_of_reach_over_turn(pose, turn),
+            (None, Some((method, Tolerance::Pose))) => method.out_of_reach_over_turn(pose, turn, self.cap_evaluations()),
             _ => None,
         }
+    }
+
+    /// What a spherical wrist's out-of-reach proof may spend on the tolerance's cap.
+    fn cap_evaluations(&self) -> usize {
+        cap::evaluations_for(self.opts.search_boxes)
     }
 
     /// Which all-solutions method this solver uses, for proofs.

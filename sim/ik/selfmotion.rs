@@ -165,7 +165,8 @@ impl Ik<'_> {
             Parameter::Held => {
                 let held = self.redundant.as_ref()?;
                 // Joint 7 turns the six's virtual tool about its own z.
-                held.method.out_of_reach_over_turn(&held.pose_of_six(&pose, value), slack)
+                held.method
+                    .out_of_reach_over_turn(&held.pose_of_six(&pose, value), slack, self.cap_evaluations())
             }
         }
     }

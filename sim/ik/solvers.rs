@@ -81,10 +81,11 @@ impl AllSolutions {
     }
 
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within the
-    /// tolerance, when the method proves it.
-    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+    /// tolerance, when the method proves it (within `evaluations`, see
+    /// [`SphericalWrist::out_of_reach_over_turn`]).
+    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64, evaluations: usize) -> Option<String> {
         match self {
-            AllSolutions::Wrist(wrist) => wrist.out_of_reach_over_turn(goal, turn),
+            AllSolutions::Wrist(wrist) => wrist.out_of_reach_over_turn(goal, turn, evaluations),
             AllSolutions::General(_) | AllSolutions::Parallel(_) => None,
         }
     }

@@ -13,6 +13,7 @@
 //! axes); joint 6 is the rest.
 
 use super::bilinear;
+use super::cap::Cap;
 use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, Vector3};
@@ -124,7 +125,9 @@ impl SphericalWrist {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.solve_chain(&rotation, &translation);
         if out.resolved && out.configurations.is_empty() {
-            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0);
+            // The ball alone: poses solved in bulk (a self-motion's samples, the nearby poses) do
+            // not read it; a goal's own proof asks [`Self::out_of_reach_over_turn`].
+            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0, 0);
         }
         if self.reversed {
             for q in &mut out.configurations {
@@ -135,10 +138,12 @@ impl SphericalWrist {
     }
 
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within the
-    /// tolerance: the wrist-centre proof with the turn added to the slack.
-    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+    /// tolerance: the wrist-centre proof with the turn added to the slack, and where that fails
+    /// the cap within it, at up to `evaluations` distances (about 30 ns each; none: the ball
+    /// alone).
+    pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64, evaluations: usize) -> Option<String> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
-        self.out_of_reach(&rotation, &translation, turn)
+        self.out_of_reach(&rotation, &translation, turn, evaluations)
     }
 
     /// Why no configuration reaches the pose within the tolerance, from the wrist centre alone:
@@ -155,7 +160,9 @@ impl SphericalWrist {
     /// A wrist at the base is the same on the reversed chain: its centre (where axes 1 to 3
     /// meet) is fixed in the world, and must be where joints 6 to 4 put it in the tool frame;
     /// the tolerance moves that target by the same `1 mm + L * 1 deg`.
-    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, turn: f64) -> Option<String> {
+    ///
+    /// Where the ball fails, the cap within it ([`Cap`]) within `evaluations`.
+    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, turn: f64, evaluations: usize) -> Option<String> {
         let chain = self.arm.chain(self.reversed);
         let scale = self.arm.scale();
         let target = self.target(chain, rotation, translation);
@@ -183,16 +190,40 @@ impl SphericalWrist {
         // at axis 3's point's distance from axis 2 plus the centre's from that point.
         let lipschitz3 = (self.centre - l3.point).cross(&l3.axis).norm();
         let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (self.centre - l3.point).norm();
-        let closest = lower_bound_above(&gap, [lipschitz2, lipschitz3], slack)?;
         let centre = if self.reversed {
             "the point where axes 1 to 3 meet (a wrist at the base) is never closer than"
         } else {
             "its wrist centre comes no closer than"
         };
+        if let Some(closest) = lower_bound_above(&gap, [lipschitz2, lipschitz3], slack) {
+            return Some(format!(
+                "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
+                closest * scale * 1e3,
+                slack * scale * 1e3
+            ));
+        }
+        if evaluations == 0 {
+            return None;
+        }
+        // The ball holds every place a tolerated tool can need the centre, but those lie on a
+        // sphere about the tool's origin (the tool frame's origin on the reversed chain): within
+        // the position's share of the slack of a cap of it.
+        let origin = if self.reversed { Vector3::zeros() } else { *translation };
+        let arm = target - origin;
+        let position = (super::REACHED_POSITION_M + self.arm.tool_lever * super::REACHED_ORIENTATION_RAD) / scale;
+        let cap = Cap {
+            centre: origin,
+            axis: arm.try_normalize(0.0)?,
+            radius: arm.norm(),
+            angle: super::REACHED_ORIENTATION_RAD + turn,
+        };
+        let closest = cap.lower_bound_above([l1, l2, l3], &self.centre, position, evaluations)?;
         Some(format!(
-            "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
+            "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where a tool within 1 mm and 1 degree would need it ({:.0} mm from the tool, turned up to {:.2} deg), more than the {:.1} mm the tool's position allows",
             closest * scale * 1e3,
-            slack * scale * 1e3
+            cap.radius * scale * 1e3,
+            cap.angle.to_degrees(),
+            position * scale * 1e3
         ))
     }
 
