@@ -212,7 +212,7 @@ impl UrArm {
         let mut out = AnalyticSolutions {
             configurations: Vec::with_capacity(8),
             finite: true,
-            out_of_reach: self.out_of_reach(&centre, 0.0),
+            out_of_reach: self.out_of_reach(goal, 0.0),
         };
         let rotation = flange.rotation.to_rotation_matrix();
         let (x6, y6, z6) = (
@@ -395,21 +395,27 @@ impl UrArm {
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within 1 mm and
     /// 1 degree: the wrist-centre proof of [`UrArm::solve`] with the turn added to the slack.
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
-        let flange = self.base_inverse * goal * self.tool_inverse;
-        self.out_of_reach(&flange.translation.vector, turn)
-            .or_else(|| self.elbow_out_of_reach(goal, turn))
+        self.out_of_reach(goal, turn).or_else(|| self.elbow_out_of_reach(goal, turn))
     }
 
     /// Why no configuration reaches `goal` within 1 mm and 1 degree, from the wrist centre
-    /// `centre` (DH base frame) alone: it lies `d4` off the arm's plane, at most `|a2| + |a3| +
-    /// |d5|` and at least `||a2| - |a3|| - |d5|` from axis 2 in that plane. A tool within the
-    /// tolerance puts the wrist centre within `1 mm + L * 1 deg` of it (`L` its distance from the
-    /// tool), so a centre further than that outside the region proves the pose out of reach.
+    /// (the flange's origin, DH base frame) alone: it lies `d4` off the arm's plane, at most
+    /// `|a2| + |a3| + |d5|` and at least `||a2| - |a3|| - |d5|` from axis 2 in that plane. A tool
+    /// within the tolerance puts the wrist centre within `1 mm + L * 1 deg` of it (`L` its
+    /// distance from the tool), so a centre further than that outside the region proves the pose
+    /// out of reach. Inside that ball, the distance from the shoulder is bounded more tightly: a
+    /// turn of the tool about its own point moves the centre on the sphere of radius `L` about
+    /// it, over a cap within 1 degree of where the pose needs it, and the distance from the
+    /// shoulder over such a cap has a closed form (the shoulder's direction seen from the tool
+    /// against the cap's).
     ///
     /// With `turn` > 0 the pose may also turn that much about tool z (a sample of a
     /// `z_symmetric` goal's free turn): the centre moves by at most `L * turn` more.
-    fn out_of_reach(&self, centre: &Vector3<f64>, turn: f64) -> Option<String> {
-        let slack = super::REACHED_POSITION_M + self.tool.translation.vector.norm() * (super::REACHED_ORIENTATION_RAD + turn);
+    fn out_of_reach(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        let tool = self.base_inverse * goal;
+        let centre = (tool * self.tool_inverse).translation.vector;
+        let lever = self.tool.translation.vector.norm();
+        let slack = super::REACHED_POSITION_M + lever * (super::REACHED_ORIENTATION_RAD + turn);
         let d4 = self.d4.abs();
         let radius = centre.x.hypot(centre.y);
         let distance = centre.norm();
@@ -429,7 +435,76 @@ impl UrArm {
                 "closed-form IK: pose out of reach: its wrist centre is {distance:.3} m from the shoulder, and the folded arm comes no closer than {inner:.3} m"
             ))
         } else {
-            None
+            let (nearest, furthest) = cap_distances(&tool.translation.vector, &centre, super::REACHED_ORIENTATION_RAD + turn);
+            let (nearest, furthest) = (nearest - super::REACHED_POSITION_M, furthest + super::REACHED_POSITION_M);
+            if nearest > outer {
+                Some(format!(
+                    "closed-form IK: pose out of reach: a tool within 1 mm and 1 degree of it puts its wrist centre at least {nearest:.4} m from the shoulder, and the stretched arm reaches {outer:.4} m"
+                ))
+            } else if furthest < inner {
+                Some(format!(
+                    "closed-form IK: pose out of reach: a tool within 1 mm and 1 degree of it puts its wrist centre at most {furthest:.4} m from the shoulder, and the folded arm comes no closer than {inner:.4} m"
+                ))
+            } else {
+                None
+            }
+        }
+    }
+}
+
+/// The least and greatest distance from the origin of the points `point + R (centre - point)`
+/// over every rotation `R` by at most `angle`: the sphere of radius `|centre - point|` about
+/// `point`, within `angle` of `centre` as seen from `point` (a cap).
+fn cap_distances(point: &Vector3<f64>, centre: &Vector3<f64>, angle: f64) -> (f64, f64) {
+    let arm = centre - point;
+    let lever = arm.norm();
+    let away = point.norm();
+    if lever == 0.0 || away == 0.0 {
+        return (centre.norm(), centre.norm());
+    }
+    // The angle between the origin's direction from `point` (reversed: `point` itself) and the
+    // cap's; |x|^2 = |p|^2 + L^2 + 2 L (p . w) with w within `angle` of the cap's direction.
+    let between = (point.dot(&arm) / (away * lever)).clamp(-1.0, 1.0).acos();
+    let dot_high = away * (between - angle).max(0.0).cos();
+    let dot_low = away * (between + angle).min(std::f64::consts::PI).cos();
+    let squared = |dot: f64| (away * away + lever * lever + 2.0 * lever * dot).max(0.0).sqrt();
+    (squared(dot_low), squared(dot_high))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Unit};
+    use rand::{Rng, SeedableRng};
+
+    /// The closed-form range against dense points of the cap.
+    #[test]
+    fn cap_distances_bound_dense_points_of_the_cap() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..100 {
+            let point = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let centre = point + Vector3::from_fn(|_, _| rng.random_range(-0.3..0.3));
+            let angle = rng.random_range(0.0..0.2);
+            let (near, far) = cap_distances(&point, &centre, angle);
+            let arm = centre - point;
+            let side = Unit::new_normalize(arm.cross(&Vector3::new(0.3, -0.7, 0.2)));
+            let (mut least, mut most) = (f64::INFINITY, 0.0f64);
+            for i in 0..=40 {
+                let tilted = Rotation3::from_axis_angle(&side, angle * i as f64 / 40.0) * arm;
+                for k in 0..180 {
+                    let x = point + Rotation3::from_axis_angle(&Unit::new_normalize(arm), k as f64 * PI / 90.0) * tilted;
+                    least = least.min(x.norm());
+                    most = most.max(x.norm());
+                }
+            }
+            assert!(
+                near <= least + 1e-12 && far >= most - 1e-12,
+                "[{near}, {far}] misses [{least}, {most}]"
+            );
+            assert!(
+                least - near < 2e-3 && far - most < 2e-3,
+                "[{near}, {far}] loose around [{least}, {most}]"
+            );
         }
     }
 }

@@ -331,7 +331,7 @@ impl<'a> Ik<'a> {
                 let found = method.solve(&pose);
                 // The solve tried the cheap proof; the goal's own may spend more.
                 let out_of_reach = match found.out_of_reach {
-                    None if found.resolved && found.configurations.is_empty() => {
+                    None if found.resolved && found.configurations.is_empty() && self.cap_evaluations() > 0 => {
                         method.out_of_reach_over_turn(&pose, 0.0, self.cap_evaluations())
                     }
                     proof => proof,
