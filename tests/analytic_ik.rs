@@ -421,20 +421,6 @@ fn the_elbow_out_of_reach_proof_holds_against_a_dense_numeric_search() {
     println!("elbow proofs: {claimed} of 400 random poses");
 }
 
-/// A unit vector in a random direction.
-fn random_direction(rng: &mut impl Rng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        if v.norm() > 0.1 && v.norm() <= 1.0 {
-            return v.normalize();
-        }
-    }
-}
-
 /// The closed form's out-of-reach proof (the wrist centre's ball and, inside it, the distance
 /// from the shoulder over the tolerance's cap) is never claimed for a pose within the tolerance
 /// of a reachable one: poses of random configurations (half with the elbow stretched, a quarter
@@ -456,8 +442,8 @@ fn the_out_of_reach_proof_is_never_claimed_within_the_tolerance_of_a_reachable_p
             let turn = if k % 8 < 4 { 0.0 } else { 5f64.to_radians() };
             let spin = UnitQuaternion::from_scaled_axis(Vector3::z() * rng.random_range(-turn..=turn));
             let moved = Isometry3::from_parts(
-                Translation3::from(tool.translation.vector + random_direction(&mut rng) * 0.95e-3),
-                UnitQuaternion::from_scaled_axis(random_direction(&mut rng) * 0.95f64.to_radians()) * tool.rotation * spin,
+                Translation3::from(tool.translation.vector + common::unit(&mut rng) * 0.95e-3),
+                UnitQuaternion::from_scaled_axis(common::unit(&mut rng) * 0.95f64.to_radians()) * tool.rotation * spin,
             );
             let proof = arm.out_of_reach_over_turn(&moved, turn);
             assert!(

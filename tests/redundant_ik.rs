@@ -90,20 +90,6 @@ fn held_joint_solutions_reach_the_pose() {
     }
 }
 
-/// A unit vector in a random direction.
-fn direction(rng: &mut impl Rng) -> nalgebra::Vector3<f64> {
-    loop {
-        let v = nalgebra::Vector3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        if v.norm() > 0.1 && v.norm() <= 1.0 {
-            return v.normalize();
-        }
-    }
-}
-
 /// The out-of-reach proof with joint 7 held (a wrist at the base for both arms) is never
 /// claimed where the tolerance reaches a solution: poses of random configurations (half of them
 /// stretched to the edge of the workspace) moved by 0.95 mm and turned by 0.95 degrees about
@@ -125,8 +111,8 @@ fn held_joint_out_of_reach_is_sound_at_the_workspace_edge() {
             }
             let goal = model.tool_pose(&q);
             let moved = nalgebra::Isometry3::from_parts(
-                nalgebra::Translation3::from(goal.translation.vector + direction(&mut rng) * 0.95e-3),
-                nalgebra::UnitQuaternion::from_scaled_axis(direction(&mut rng) * 0.95f64.to_radians()) * goal.rotation,
+                nalgebra::Translation3::from(goal.translation.vector + common::unit(&mut rng) * 0.95e-3),
+                nalgebra::UnitQuaternion::from_scaled_axis(common::unit(&mut rng) * 0.95f64.to_radians()) * goal.rotation,
             );
             let sample = q[6] + rng.random_range(-half_step..half_step);
             let proof = held

@@ -83,17 +83,8 @@ impl Cap {
     /// out.
     pub(crate) fn lower_bound_above(&self, lines: [&Line; 3], point: &Vector3<f64>, slack: f64, budget: usize) -> Option<f64> {
         let [l1, l2, l3] = lines;
-        // A turn of joint 3 moves the point at its distance from axis 3; of joint 2, at most at
-        // axis 3's point's distance from axis 2 plus the point's from that point.
-        let lipschitz3 = (point - l3.point).cross(&l3.axis).norm();
-        let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (point - l3.point).norm();
-        let half = PI / START as f64;
-        let mut boxes: Vec<(f64, f64, f64)> = Vec::with_capacity(START * START);
-        for i in 0..START {
-            for j in 0..START {
-                boxes.push((-PI + (2 * i + 1) as f64 * half, -PI + (2 * j + 1) as f64 * half, half));
-            }
-        }
+        let [lipschitz2, lipschitz3] = turn_rates(l2, l3, point);
+        let mut boxes = torus_boxes(START);
         let mut bound = f64::INFINITY;
         let mut evaluations = 0;
         while let Some((t2, t3, h)) = boxes.pop() {
@@ -168,6 +159,27 @@ impl Cap {
         }
         Circle::Above(bound)
     }
+}
+
+/// How fast `point`, turned by joint 3 about `l3` and then by joint 2 about `l2`, moves per
+/// radian of each, at most: a turn of joint 3 moves it at its distance from axis 3; of joint 2,
+/// at most at axis 3's point's distance from axis 2 plus the point's from that point.
+pub(super) fn turn_rates(l2: &Line, l3: &Line, point: &Vector3<f64>) -> [f64; 2] {
+    let lipschitz3 = (point - l3.point).cross(&l3.axis).norm();
+    let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (point - l3.point).norm();
+    [lipschitz2, lipschitz3]
+}
+
+/// The torus of two angles as `start x start` boxes: centres and the half width.
+pub(super) fn torus_boxes(start: usize) -> Vec<(f64, f64, f64)> {
+    let half = PI / start as f64;
+    let mut boxes = Vec::with_capacity(start * start);
+    for i in 0..start {
+        for j in 0..start {
+            boxes.push((-PI + (2 * i + 1) as f64 * half, -PI + (2 * j + 1) as f64 * half, half));
+        }
+    }
+    boxes
 }
 
 /// `mean + amplitude cos(t - phase)`.

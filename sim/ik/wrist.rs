@@ -17,7 +17,6 @@ use super::cap::Cap;
 use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, Vector3};
-use std::f64::consts::PI;
 
 /// Lines closer than this (scaled lengths) meet.
 const MEET: f64 = 1e-9;
@@ -186,16 +185,13 @@ impl SphericalWrist {
             let (r, h) = cylindrical(&l2.turn(t2, &l3.turn(t3, &self.centre)));
             (r - target_r).hypot(h - target_h)
         };
-        // A turn of joint 3 moves the centre at its distance from axis 3; of joint 2, at most
-        // at axis 3's point's distance from axis 2 plus the centre's from that point.
-        let lipschitz3 = (self.centre - l3.point).cross(&l3.axis).norm();
-        let lipschitz2 = (l3.point - l2.point).cross(&l2.axis).norm() + (self.centre - l3.point).norm();
+        let rates = super::cap::turn_rates(l2, l3, &self.centre);
         let centre = if self.reversed {
             "the point where axes 1 to 3 meet (a wrist at the base) is never closer than"
         } else {
             "its wrist centre comes no closer than"
         };
-        if let Some(closest) = lower_bound_above(&gap, [lipschitz2, lipschitz3], slack) {
+        if let Some(closest) = lower_bound_above(&gap, rates, slack) {
             return Some(format!(
                 "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
                 closest * scale * 1e3,
@@ -425,14 +421,7 @@ const MAX_BOXES: usize = 200_000;
 /// bound with `f`'s Lipschitz constants per angle; `None` when some box's centre is within
 /// `floor` (the bound fails) or the box budget runs out.
 fn lower_bound_above(f: &dyn Fn(f64, f64) -> f64, lipschitz: [f64; 2], floor: f64) -> Option<f64> {
-    const START: usize = 32;
-    let half = PI / START as f64;
-    let mut boxes: Vec<(f64, f64, f64)> = Vec::with_capacity(START * START);
-    for i in 0..START {
-        for j in 0..START {
-            boxes.push((-PI + (2 * i + 1) as f64 * half, -PI + (2 * j + 1) as f64 * half, half));
-        }
-    }
+    let mut boxes = super::cap::torus_boxes(32);
     let mut bound = f64::INFINITY;
     let mut evaluated = 0;
     while let Some((a, b, h)) = boxes.pop() {
