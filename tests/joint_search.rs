@@ -99,22 +99,14 @@ fn proofs_hold_against_a_dense_numeric_search() {
     let model = pipeline::load_model(&path, &LoadOptions::default())
         .expect("shipped design")
         .placed(&scenario.world_from_base);
-    let dense = IkOptions {
-        seeds: 300,
-        analytic: false,
-        search_boxes: 0,
-        ..IkOptions::default()
-    };
-    let mut ik = Ik::new(&model, dense);
+    let mut ik = Ik::new(&model, common::dense_numeric());
     let mut proven = 0;
     for (index, goal) in scenario.goals.iter().enumerate() {
         let Some(Search::Proven { .. }) = search(&model, goal, 300_000, |_| false) else {
             continue;
         };
         proven += 1;
-        let found = ik.solve(goal, index, None);
-        let reached = found.solutions.iter().find(|s| s.pose_reached);
-        assert!(reached.is_none(), "goal {index} proven, yet reached at {:?}", reached.map(|s| &s.q));
+        common::assert_unreached(&mut ik, goal, index, "proven", "workspace task");
     }
     assert!(proven >= 10, "only {proven} goals proven");
 }
@@ -167,12 +159,7 @@ fn proofs_of_arms_with_coaxial_joints_merged_hold_against_a_dense_numeric_search
         search_boxes: proving_ground::ik::SWEEP_SEARCH_BOXES,
         ..IkOptions::default()
     };
-    let dense = IkOptions {
-        seeds: 300,
-        analytic: false,
-        search_boxes: 0,
-        ..IkOptions::default()
-    };
+    let dense = common::dense_numeric();
     for (joints, rows) in designs {
         let text = format!(r#"{{"name": "coaxial", "mode": "free", "joints": [{}]}}"#, rows.join(","));
         let design = proving_ground::design::parse(&text, std::path::Path::new("coaxial.json")).expect("design");
@@ -189,13 +176,7 @@ fn proofs_of_arms_with_coaxial_joints_merged_hold_against_a_dense_numeric_search
                     continue;
                 };
                 proven += 1;
-                let found = numeric.solve(goal, index, None);
-                let reached = found.solutions.iter().find(|s| s.pose_reached);
-                assert!(
-                    reached.is_none(),
-                    "task {task} goal {index}: {proof}; yet reached at {:?}",
-                    reached.map(|s| &s.q)
-                );
+                common::assert_unreached(&mut numeric, goal, index, proof, &format!("task {task}"));
             }
         }
         assert!(proven >= 3, "joints {joints}: only {proven} goals proven with them merged");

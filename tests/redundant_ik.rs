@@ -217,12 +217,7 @@ fn redundant_proofs_hold_when_joint_7_is_sampled_twenty_times_more_densely() {
 fn out_of_reach_proofs_hold_against_a_dense_numeric_search() {
     use proving_ground::ik::{Ik, IkOptions};
     let model = panda();
-    let dense = IkOptions {
-        seeds: 300,
-        analytic: false,
-        search_boxes: 0,
-        ..IkOptions::default()
-    };
+    let dense = common::dense_numeric();
     let (mut proven, mut by_cap) = (0, 0);
     for task in 0..12 {
         let path = common::repo().join(format!("scenarios/cluttered/task-{task:02}.json"));
@@ -237,13 +232,7 @@ fn out_of_reach_proofs_hold_against_a_dense_numeric_search() {
             };
             proven += 1;
             by_cap += usize::from(proof.contains("the tool's position allows"));
-            let found = numeric.solve(goal, index, None);
-            let reached = found.solutions.iter().find(|s| s.pose_reached);
-            assert!(
-                reached.is_none(),
-                "task {task} goal {index}: {proof}; yet reached at {:?}",
-                reached.map(|s| &s.q)
-            );
+            common::assert_unreached(&mut numeric, goal, index, proof, &format!("task {task}"));
         }
     }
     println!("{proven} goals proven out of reach ({by_cap} by the cap), none reached by 300 numeric starts");

@@ -328,18 +328,11 @@ impl<'a> Ik<'a> {
         let exact = match (&self.analytic, &self.all) {
             (Some(arm), _) if all_solutions => arm.solve(&pose),
             (None, Some((method, mode))) if self.opts.analytic && finite && goal.tolerance == *mode => {
-                let found = method.solve(&pose);
-                // The solve tried the cheap proof; the goal's own may spend more.
-                let out_of_reach = match found.out_of_reach {
-                    None if found.resolved && found.configurations.is_empty() && self.cap_evaluations() > 0 => {
-                        method.out_of_reach_over_turn(&pose, 0.0, self.cap_evaluations())
-                    }
-                    proof => proof,
-                };
+                let found = method.solve_proving(&pose, self.cap_evaluations());
                 AnalyticSolutions {
                     configurations: found.configurations,
                     finite: found.resolved,
-                    out_of_reach,
+                    out_of_reach: found.out_of_reach,
                 }
             }
             (None, Some((method, Tolerance::Pose))) if self.opts.analytic && finite && goal.tolerance == Tolerance::ZSymmetric => {

@@ -66,7 +66,13 @@ impl AllSolutions {
     /// Every configuration reaching world pose `goal`, each once: a double root (two branches
     /// meeting) or a complex pair just off the real line gives one configuration twice.
     pub fn solve(&self, goal: &Isometry3<f64>) -> Solutions {
-        let mut found = self.solve_raw(goal);
+        self.solve_proving(goal, 0)
+    }
+
+    /// [`Self::solve`], a spherical wrist's out-of-reach proof spending up to `evaluations` on
+    /// the tolerance's cap (see [`SphericalWrist::solve_proving`]).
+    pub fn solve_proving(&self, goal: &Isometry3<f64>, evaluations: usize) -> Solutions {
+        let mut found = self.solve_raw(goal, evaluations);
         let mut kept: Vec<[f64; 6]> = Vec::with_capacity(found.configurations.len());
         for q in found.configurations.drain(..) {
             let known = kept
@@ -90,10 +96,10 @@ impl AllSolutions {
         }
     }
 
-    fn solve_raw(&self, goal: &Isometry3<f64>) -> Solutions {
+    fn solve_raw(&self, goal: &Isometry3<f64>, evaluations: usize) -> Solutions {
         match self {
             AllSolutions::Wrist(wrist) => {
-                let found = wrist.solve(goal);
+                let found = wrist.solve_proving(goal, evaluations);
                 Solutions {
                     configurations: found.configurations,
                     resolved: found.resolved,

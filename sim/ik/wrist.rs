@@ -119,14 +119,20 @@ impl SphericalWrist {
         sigma.min() > 1e-10 * sigma.max()
     }
 
-    /// Every configuration whose tool frame is at world pose `goal`, unpolished.
+    /// Every configuration whose tool frame is at world pose `goal`, unpolished; where there is
+    /// none, the wrist centre's ball proof (see [`Self::solve_proving`]).
     pub fn solve(&self, goal: &Isometry3<f64>) -> WristSolutions {
+        self.solve_proving(goal, 0)
+    }
+
+    /// [`Self::solve`], where no solution exists and the ball does not prove it, the cap within it
+    /// at up to `evaluations` distances: a goal's own proof, not poses solved in bulk (a
+    /// self-motion's samples, the nearby poses).
+    pub fn solve_proving(&self, goal: &Isometry3<f64>, evaluations: usize) -> WristSolutions {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.solve_chain(&rotation, &translation);
         if out.resolved && out.configurations.is_empty() {
-            // The ball alone: poses solved in bulk (a self-motion's samples, the nearby poses) do
-            // not read it; a goal's own proof asks [`Self::out_of_reach_over_turn`].
-            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0, 0);
+            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0, evaluations);
         }
         if self.reversed {
             for q in &mut out.configurations {

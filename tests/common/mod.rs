@@ -256,3 +256,31 @@ pub fn chromium(page: &Path, extra: &[&str]) -> (String, String) {
         String::from_utf8_lossy(&output.stderr).into_owned(),
     )
 }
+
+/// The numeric oracle for proofs: 300 random starts, no closed form, no joint-space search.
+pub fn dense_numeric() -> proving_ground::ik::IkOptions {
+    proving_ground::ik::IkOptions {
+        seeds: 300,
+        analytic: false,
+        search_boxes: 0,
+        ..proving_ground::ik::IkOptions::default()
+    }
+}
+
+/// Asserts that `numeric` (see [`dense_numeric`]) reaches goal `index` nowhere within its
+/// tolerance, collisions aside, as `proof` claims; `context` names the case.
+pub fn assert_unreached(
+    numeric: &mut proving_ground::ik::Ik,
+    goal: &proving_ground::scenario::Goal,
+    index: usize,
+    proof: &str,
+    context: &str,
+) {
+    let found = numeric.solve(goal, index, None);
+    let reached = found.solutions.iter().find(|s| s.pose_reached);
+    assert!(
+        reached.is_none(),
+        "{context} goal {index}: {proof}; yet reached at {:?}",
+        reached.map(|s| &s.q)
+    );
+}
