@@ -17,6 +17,7 @@ pub mod general;
 mod lines;
 mod loss;
 pub mod parallel;
+mod prefix;
 mod reach;
 mod reduce;
 mod refine;
@@ -215,6 +216,9 @@ pub struct Ik<'a> {
     collision_queries: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
+    /// Whether the arm's first joints collide wherever they are (see [`prefix`]), once asked:
+    /// the proof every goal that nothing else decides gets.
+    collides_everywhere: Option<Option<String>>,
     ws: KinematicsWorkspace,
 }
 
@@ -284,6 +288,7 @@ impl<'a> Ik<'a> {
             coaxial: methods.coaxial.clone(),
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
+            collides_everywhere: None,
             ws: model.workspace(),
             opts,
         }
@@ -623,6 +628,12 @@ impl<'a> Ik<'a> {
         if result.reached() || result.proof.is_some() || self.opts.search_boxes == 0 {
             return;
         }
+        if let Some(proof) = self.collides_everywhere() {
+            result.complete = true;
+            result.undecided = None;
+            result.proof = Some(proof);
+            return;
+        }
         let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
         if !finite || reach::beyond_reach(self.model, goal).is_some() {
             return;
@@ -774,6 +785,21 @@ impl<'a> Ik<'a> {
                 result.undecided = Some(format!("{miss}a joint-space search of {boxes} boxes (its budget) {what}"));
             }
         }
+    }
+
+    /// The proof that every configuration collides, whatever the goal (see [`prefix`]): found
+    /// once per solver, with the budget of one search (a box is one collision query).
+    fn collides_everywhere(&mut self) -> Option<String> {
+        if self.collides_everywhere.is_none() {
+            let margin = self.margin();
+            let budget = self.opts.search_boxes.min(self.collision_queries);
+            let found = self
+                .checker
+                .as_mut()
+                .and_then(|checker| prefix::first_joints_collide(self.model, checker, &self.bounds, margin, budget));
+            self.collides_everywhere = Some(found.map(|proof| proof.describe()));
+        }
+        self.collides_everywhere.clone().flatten()
     }
 
     /// A proof that no free configuration reaches `goal`, from the first sub-chain whose search

@@ -84,7 +84,7 @@ type JointBox = (Vec<f64>, Vec<f64>);
 /// The joint ranges the search covers: the limits, a revolute joint's at most one turn (FK is
 /// periodic), `[-pi, pi]` without limits; `None` when a prismatic joint has no limits or a
 /// limit is not finite (nothing bounds the box).
-fn ranges(model: &Model) -> Option<JointBox> {
+pub(super) fn ranges(model: &Model) -> Option<JointBox> {
     let mut lower = Vec::with_capacity(model.dof());
     let mut upper = Vec::with_capacity(model.dof());
     for joint in &model.joints {
