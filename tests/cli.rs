@@ -304,6 +304,7 @@ fn rejects_inertia_breaking_triangle_inequality() {
     let stderr = error_for("bad_inertia.urdf", &[]);
     assert!(stderr.contains("link `arm`") && stderr.contains("triangle inequality"), "{stderr}");
     assert!(stderr.contains("short by 96.0 %"), "{stderr}");
+    assert!(stderr.contains("the <inertial> of link `arm` (line 4)"), "{stderr}");
 }
 
 /// A vendor's inertia a few per cent short of the triangle inequality (pybullet_data's xArm 6

@@ -342,3 +342,22 @@ fn an_explicit_tip_keeps_the_old_chain_rules() {
         "{error}"
     );
 }
+
+/// A URDF whose links carry only `<visual>` geometry (the iiwa 14 converted from MuJoCo
+/// Menagerie, for one) is checked against nothing: the model says so, and stops saying so
+/// once one moving link has a `<collision>`.
+#[test]
+fn an_arm_without_collision_geometry_is_named_in_a_warning() {
+    let said = |model: &proving_ground::model::Model| {
+        model
+            .diagnostics
+            .iter()
+            .any(|d| d.message.contains("no link the joints move has <collision> geometry"))
+    };
+    let bare = load(&arm_with(""));
+    assert!(said(&bare), "{:?}", bare.diagnostics);
+    let shape = r#"<collision><geometry><cylinder radius="0.03" length="0.2"/></geometry></collision>"#;
+    let text = arm_with("").replace(r#"<link name="link2">"#, &format!(r#"<link name="link2">{shape}"#));
+    let with = load(&text);
+    assert!(!said(&with), "{:?}", with.diagnostics);
+}

@@ -341,6 +341,14 @@ impl<'a> Builder<'a> {
         for (index, group) in owned.iter().enumerate() {
             model_links.push(self.link(index, group, &links, &joints)?);
         }
+        if model_links.iter().skip(1).all(|link| link.colliders.is_empty()) {
+            // Every configuration then counts as free: a user reading PASS must know why.
+            self.diagnostics.push(Diagnostic {
+                path: self.path.to_path_buf(),
+                element: format!("robot `{}`", robot.name),
+                message: "no link the joints move has <collision> geometry (<visual> is never used for collisions): contacts, clearances and collision proofs have nothing to check, so every configuration counts as free".into(),
+            });
+        }
         // The paper's capsule approximation, as for every robot read from a file.
         super::add_bones(&mut model_links, &joints, &last_from_tool);
         Ok(Model {
@@ -671,11 +679,21 @@ impl<'a> Builder<'a> {
             });
         }
         let joint = &joints[index - 1].name;
+        // Where to fix it: the links whose <inertial> were combined, with their lines.
+        let sources: Vec<String> = group
+            .iter()
+            .filter(|(n, _)| self.facts.link_has_inertial.get(*n).copied().unwrap_or(false))
+            .map(|(n, _)| self.element("link", n))
+            .collect();
         let bad = |problem: String| ModelError::BadInertia {
             path: self.path.to_path_buf(),
             link: chain_name.into(),
             joint: joint.clone(),
-            problem,
+            problem: if sources.is_empty() {
+                problem
+            } else {
+                format!("{problem}; the <inertial> of {}", sources.join(", "))
+            },
         };
         let inertial = Inertial::combine(&masses).ok_or_else(|| {
             bad(

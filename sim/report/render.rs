@@ -233,23 +233,36 @@ pub fn render(report: &Report) -> String {
     out
 }
 
+/// The trajectory's certified clearance in mm, by kind of pair where known.
+fn certified_clearance(t: &super::TrajectoryReport) -> String {
+    if t.certified_clearance_m.is_some_and(f64::is_infinite) {
+        // No pair was measured: a robot without collision geometry.
+        return "none measured (nothing to collide)".into();
+    }
+    let kinds = t.certified_by_kind.map_or(String::new(), |k| {
+        let kinds = [("obstacles", k.obstacles_m), ("self", k.self_m), ("floor", k.floor_m)];
+        let listed: Vec<String> = kinds
+            .iter()
+            .filter(|(_, m)| m.is_some())
+            .map(|(kind, m)| format!("{kind} {}", mm(*m)))
+            .collect();
+        format!(" ({})", listed.join(", "))
+    });
+    format!("{} mm{kinds}", mm(t.certified_clearance_m))
+}
+
 fn trajectory_lines(out: &mut String, t: &super::TrajectoryReport) {
     let goals = t.reached + t.unreachable + t.undecided + t.no_path;
     let detours = t.segments.iter().filter(|s| s.edges > 1).count();
     let _ = writeln!(
         out,
-        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} undecided, {} without a path; certified clearance {} mm{}; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
+        "\ntrajectory: {} of {goals} goals on certified paths ({} edges, {detours} detours), {} unreachable, {} undecided, {} without a path; certified clearance {}; {:.2} rad in joint space ({:.2} before shortcutting), tool path {:.2} m, {:.1} s",
         t.reached,
         t.edges,
         t.unreachable,
         t.undecided,
         t.no_path,
-        mm(t.certified_clearance_m),
-        t.certified_by_kind.map_or(String::new(), |k| {
-            let kinds = [("obstacles", k.obstacles_m), ("self", k.self_m), ("floor", k.floor_m)];
-            let listed: Vec<String> = kinds.iter().filter(|(_, m)| m.is_some()).map(|(kind, m)| format!("{kind} {}", mm(*m))).collect();
-            format!(" ({})", listed.join(", "))
-        }),
+        certified_clearance(t),
         t.joint_length,
         t.joint_length_before_shortcut,
         t.tool_path_m,
