@@ -526,6 +526,24 @@ fn package_uris_resolve_through_ros_package_path_and_relative_meshes_through_the
         .output()
         .expect("runs");
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+
+    // A sweep takes the same roots, and names the missing package without them.
+    let sweep = |extra: &[&std::ffi::OsStr]| {
+        validate_design()
+            .arg("sweep")
+            .arg(&urdf)
+            .args(["--scenarios", "scenarios/cluttered/task-00.json"])
+            .args(extra)
+            .env_remove("ROS_PACKAGE_PATH")
+            .output()
+            .expect("runs")
+    };
+    let output = sweep(&[]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("package `tetra_description`"), "{stderr}");
+    let output = sweep(&["--package-path".as_ref(), packages.path().as_os_str()]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
 }
 
 #[test]

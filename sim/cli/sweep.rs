@@ -22,6 +22,10 @@ pub(crate) struct SweepArgs {
     /// print the tables].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// URDF designs: a root for package://NAME/... mesh URIs (repeatable; searched before
+    /// ROS_PACKAGE_PATH).
+    #[arg(long = "package-path", value_name = "DIR")]
+    package_paths: Vec<PathBuf>,
     /// Replace another sweep's files in --out (only this tool's files; nothing else is touched).
     #[arg(long)]
     force: bool,
@@ -183,7 +187,11 @@ pub(crate) fn sweep_command(args: &SweepArgs) -> Result<ExitCode, Failure> {
         .map(Shard::parse)
         .transpose()
         .map_err(|_| sweep::SweepError::Shard(args.shard.clone().unwrap_or_default()))?;
-    let designs = inputs::resolve_designs(&args.designs, &LoadOptions::default())?;
+    let load = LoadOptions {
+        package_paths: args.package_paths.clone(),
+        ..LoadOptions::default()
+    };
+    let designs = inputs::resolve_designs(&args.designs, &load)?;
     let scenarios = inputs::resolve_scenarios(&args.scenarios)?;
     let opts = SweepOptions {
         mode,
