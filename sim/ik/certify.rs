@@ -374,7 +374,15 @@ pub(super) fn constrained_rows(goal: &Goal) -> nalgebra::Matrix6<f64> {
 /// equivalents for a revolute joint; 0 when within them or unlimited.
 pub(super) fn limit_gap(joint: &crate::model::Joint, value: f64) -> f64 {
     let Some([lower, upper]) = joint.limits else { return 0.0 };
-    let outside = |v: f64| (lower - v).max(v - upper).max(0.0);
+    // Within rounding of a limit is at it (see [`super::LIMIT_ROUNDING`]).
+    let outside = |v: f64| {
+        let gap = (lower - v).max(v - upper);
+        if gap <= super::LIMIT_ROUNDING {
+            0.0
+        } else {
+            gap
+        }
+    };
     if joint.kind == JointKind::Prismatic {
         return outside(value);
     }
@@ -382,4 +390,31 @@ pub(super) fn limit_gap(joint: &crate::model::Joint, value: f64) -> f64 {
     (turns[0] as i64..=turns[1] as i64)
         .map(|k| outside(value + k as f64 * TAU))
         .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sample at a joint's limit that was wrapped into (-pi, pi] and back (the Kinova Gen3's
+    /// joint 7, limits [-1.4915, 4.6315] rad: -1.4915 comes back as -1.4915000000000003) is at
+    /// the limit, not outside it; a value a micro-radian past it is outside.
+    #[test]
+    fn a_value_at_a_limit_stays_at_it_through_a_wrap() {
+        let mut model = super::super::search::tests::preset("ur5e");
+        let (lower, upper) = (-1.4915, 4.6315);
+        model.joints[5].limits = Some([lower, upper]);
+        let ik = Ik::new(&model, Default::default());
+        for limit in [lower, upper] {
+            let wrapped = super::super::wrap_angle(limit);
+            assert_eq!(limit_gap(&model.joints[5], wrapped), 0.0, "{limit} wrapped to {wrapped}");
+            let mut q = vec![0.0, 0.0, 0.0, 0.0, 0.0, wrapped];
+            assert!(ik.shift_into_limits(&mut q, None), "{limit} wrapped to {wrapped}");
+            assert_eq!(q[5], limit);
+        }
+        let past = lower - 1e-6;
+        assert!(limit_gap(&model.joints[5], past) > 0.0);
+        let mut q = vec![0.0, 0.0, 0.0, 0.0, 0.0, past];
+        assert!(!ik.shift_into_limits(&mut q, None));
+    }
 }

@@ -969,8 +969,14 @@ impl<'a> Ik<'a> {
                 return false;
             }
             if joint.kind == JointKind::Prismatic {
-                if joint.limits.is_some_and(|[lower, upper]| *value < lower || *value > upper) {
+                if joint
+                    .limits
+                    .is_some_and(|[lower, upper]| *value < lower - LIMIT_ROUNDING || *value > upper + LIMIT_ROUNDING)
+                {
                     return false;
+                }
+                if let Some([lower, upper]) = joint.limits {
+                    *value = value.clamp(lower, upper);
                 }
                 continue;
             }
@@ -978,13 +984,17 @@ impl<'a> Ik<'a> {
             let target = if target.is_finite() { target } else { 0.0 };
             let mut turns = ((target - *value) / TAU).round();
             if let Some([lower, upper]) = joint.limits {
-                let (fewest, most) = (((lower - *value) / TAU).ceil(), ((upper - *value) / TAU).floor());
+                let fewest = ((lower - LIMIT_ROUNDING - *value) / TAU).ceil();
+                let most = ((upper + LIMIT_ROUNDING - *value) / TAU).floor();
                 if fewest > most {
                     return false;
                 }
                 turns = turns.clamp(fewest, most);
-            }
-            if turns != 0.0 {
+                *value += turns * TAU;
+                // An angle a rounding past a limit (a sample at the limit wrapped into
+                // (-pi, pi] and back) is at the limit.
+                *value = value.clamp(lower, upper);
+            } else if turns != 0.0 {
                 *value += turns * TAU;
             }
         }
@@ -1425,6 +1435,10 @@ fn summary(items: &[String]) -> String {
     }
     text
 }
+
+/// How far (rad or m) past a joint limit a value counts as at it: rounding (an angle wrapped
+/// into (-pi, pi] and back, 2.2e-16 rad off), not a configuration outside the limits.
+pub(super) const LIMIT_ROUNDING: f64 = 1e-12;
 
 /// A configuration within the tolerance further than this (rad, every joint) from each exact
 /// solution is on another branch.
