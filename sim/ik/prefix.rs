@@ -26,28 +26,38 @@ pub(super) struct Collides {
     pub(super) pairs: Vec<String>,
     /// The shallowest certified overlap at a box centre (m, negative), for the message.
     pub(super) shallowest_m: f64,
+    /// The clearance a configuration must keep to count as free (m).
+    pub(super) margin_m: f64,
 }
 
 impl Collides {
     /// The proof as a goal's report states it.
     pub(super) fn describe(&self) -> String {
         let pairs = super::summary(&self.pairs);
+        let (collides, collide) = if self.margin_m > 0.0 {
+            (
+                format!("collides or keeps less than the {} m margin", self.margin_m),
+                format!("collide or keep less than the {} m margin", self.margin_m),
+            )
+        } else {
+            ("collides".to_string(), "collide".to_string())
+        };
         if self.joints == 0 {
             return format!(
-                "every configuration collides: the links no joint moves overlap ({pairs}, by {:.1} mm)",
-                -self.shallowest_m * 1e3
+                "every configuration {collides}: the links no joint moves {collide} ({pairs}, clearance {:.1} mm)",
+                self.shallowest_m * 1e3
             );
         }
-        let joints = if self.joints == 1 {
-            "joint 1 within its limits".to_string()
+        let (joints, move_) = if self.joints == 1 {
+            ("joint 1 within its limits".to_string(), "it moves")
         } else {
-            format!("joints 1 to {} within their limits", self.joints)
+            (format!("joints 1 to {} within their limits", self.joints), "they move")
         };
         format!(
-            "every configuration collides, whatever the goal: at every position of {joints}, the links they move collide ({pairs}; {} {}, each in collision throughout: its centre's overlap, {:.1} mm or deeper, exceeds how far its bodies can move within it)",
+            "every configuration {collides}, whatever the goal: at every position of {joints}, the links {move_} {collide} ({pairs}; {} {}, each throughout: its centre's clearance, {:.1} mm or less, is below the margin by more than its bodies can move within it)",
             self.boxes,
             if self.boxes == 1 { "box" } else { "boxes" },
-            -self.shallowest_m * 1e3
+            self.shallowest_m * 1e3
         )
     }
 }
@@ -75,6 +85,7 @@ pub(super) fn first_joints_collide(
             boxes: 0,
             pairs: Vec::new(),
             shallowest_m: f64::NEG_INFINITY,
+            margin_m: margin,
         };
         let mut queue: VecDeque<(Vec<f64>, Vec<f64>)> = VecDeque::from([(lower[..joints].to_vec(), upper[..joints].to_vec())]);
         let mut covered = true;
