@@ -4,39 +4,19 @@
 
 mod common;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use proving_ground::collide::{clear, Distances};
 use proving_ground::ik::{solve_goals, IkOptions};
-use proving_ground::model::{Model, Shape};
+use proving_ground::model::Model;
 use proving_ground::pipeline::{collision_world, load_model, LoadOptions};
-use proving_ground::scenario::{Goal, Obstacle, Scenario, Tolerance};
+use proving_ground::scenario::Scenario;
 use rand::{Rng, SeedableRng};
 
 const CLAIM: &str = "every configuration collides";
 
 /// A scenario of one sphere and one goal (the tool's pose at `q`).
 fn scenario(model: &Model, centre: Vector3<f64>, radius: f64, q: &[f64]) -> Scenario {
-    let tool = model.tool_pose(q);
-    Scenario {
-        name: "shoulder".into(),
-        world_from_base: Isometry3::identity(),
-        floor: None,
-        obstacles: vec![Obstacle {
-            name: "sphere".into(),
-            world_from_shape: Isometry3::from_parts(Translation3::from(centre), UnitQuaternion::identity()),
-            shape: Shape::Sphere { radius },
-        }],
-        goals: vec![Goal {
-            name: "goal".into(),
-            position: tool.translation.vector,
-            rotation: tool.rotation,
-            tolerance: Tolerance::Pose,
-            task: None,
-        }],
-        home: None,
-        provenance: None,
-        notes: Vec::new(),
-    }
+    common::sphere_and_goal(centre, radius, &model.tool_pose(q))
 }
 
 /// Whether each of `count` random configurations within the limits collides; the first free

@@ -79,8 +79,6 @@ fn other_designs_and_tolerance_modes_reach_fk_goals() {
 #[test]
 fn collision_aware_ik_never_calls_a_colliding_solution_reached() {
     use proving_ground::collide::{self, CollideOptions, Distances, QueryOptions};
-    use proving_ground::model::Shape;
-    use proving_ground::scenario::{Obstacle, Scenario};
 
     // UR20: its wrist links are long enough not to overlap by construction (see README).
     let model = load_model(&common::repo().join("designs/ur20.json"), &LoadOptions::default()).expect("loads");
@@ -97,26 +95,7 @@ fn collision_aware_ik_never_calls_a_colliding_solution_reached() {
             continue;
         }
         tried += 1;
-        let scenario = Scenario {
-            name: "elbow".into(),
-            world_from_base: nalgebra::Isometry3::identity(),
-            floor: None,
-            obstacles: vec![Obstacle {
-                name: "ball".into(),
-                world_from_shape: nalgebra::Isometry3::translation(elbow.x, elbow.y, elbow.z),
-                shape: Shape::Sphere { radius: 0.08 },
-            }],
-            goals: vec![Goal {
-                name: "g".into(),
-                position: tool.translation.vector,
-                rotation: tool.rotation,
-                tolerance: Tolerance::Pose,
-                task: None,
-            }],
-            home: None,
-            provenance: None,
-            notes: Vec::new(),
-        };
+        let scenario = common::sphere_and_goal(elbow, 0.08, &tool);
         let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("world builds");
         let mut ik = Ik::with_collisions(&model, &world, IkOptions::default());
         let result = ik.solve(&scenario.goals[0], index, Some(&q));
@@ -155,8 +134,6 @@ fn collision_aware_ik_never_calls_a_colliding_solution_reached() {
 #[test]
 fn a_clearance_margin_makes_ik_call_a_solution_closer_than_it_not_reached() {
     use proving_ground::collide::{self, CollideOptions};
-    use proving_ground::model::Shape;
-    use proving_ground::scenario::{Obstacle, Scenario};
 
     let model = load_model(&common::repo().join("designs/ur20.json"), &LoadOptions::default()).expect("loads");
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -164,26 +141,7 @@ fn a_clearance_margin_makes_ik_call_a_solution_closer_than_it_not_reached() {
     for index in 0..20 {
         let q = model.random_configuration(&mut rng);
         let tool = model.tool_pose(&q);
-        let scenario = Scenario {
-            name: "margin".into(),
-            world_from_base: nalgebra::Isometry3::identity(),
-            floor: None,
-            obstacles: vec![Obstacle {
-                name: "ball".into(),
-                world_from_shape: nalgebra::Isometry3::translation(0.0, 0.0, 3.0),
-                shape: Shape::Sphere { radius: 0.1 },
-            }],
-            goals: vec![Goal {
-                name: "g".into(),
-                position: tool.translation.vector,
-                rotation: tool.rotation,
-                tolerance: Tolerance::Pose,
-                task: None,
-            }],
-            home: None,
-            provenance: None,
-            notes: Vec::new(),
-        };
+        let scenario = common::sphere_and_goal(nalgebra::Vector3::new(0.0, 0.0, 3.0), 0.1, &tool);
         let world = collide::world(&model, &scenario, &CollideOptions::default()).expect("world builds");
         let plain = Ik::with_collisions(&model, &world, IkOptions::default()).solve(&scenario.goals[0], index, None);
         let margin = 0.05;

@@ -284,3 +284,28 @@ pub fn assert_unreached(
         reached.map(|s| &s.q)
     );
 }
+
+/// A scenario of one sphere (`radius` m at `centre`) and one `pose` goal at `tool`, no floor.
+pub fn sphere_and_goal(centre: nalgebra::Vector3<f64>, radius: f64, tool: &nalgebra::Isometry3<f64>) -> Scenario {
+    use proving_ground::scenario::{Goal, Obstacle, Tolerance};
+    Scenario {
+        name: "sphere".into(),
+        world_from_base: nalgebra::Isometry3::identity(),
+        floor: None,
+        obstacles: vec![Obstacle {
+            name: "sphere".into(),
+            world_from_shape: nalgebra::Isometry3::translation(centre.x, centre.y, centre.z),
+            shape: proving_ground::model::Shape::Sphere { radius },
+        }],
+        goals: vec![Goal {
+            name: "goal".into(),
+            position: tool.translation.vector,
+            rotation: tool.rotation,
+            tolerance: Tolerance::Pose,
+            task: None,
+        }],
+        home: None,
+        provenance: None,
+        notes: Vec::new(),
+    }
+}
