@@ -628,14 +628,14 @@ impl<'a> Ik<'a> {
         if result.reached() || result.proof.is_some() || self.opts.search_boxes == 0 {
             return;
         }
+        let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
+        if !finite || reach::beyond_reach(self.model, goal).is_some() {
+            return;
+        }
         if let Some(proof) = self.collides_everywhere() {
             result.complete = true;
             result.undecided = None;
             result.proof = Some(proof);
-            return;
-        }
-        let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
-        if !finite || reach::beyond_reach(self.model, goal).is_some() {
             return;
         }
         let mut posed = result.solutions.iter().any(|s| s.pose_reached);
@@ -976,7 +976,8 @@ impl<'a> Ik<'a> {
                     return false;
                 }
                 if let Some([lower, upper]) = joint.limits {
-                    *value = value.clamp(lower, upper);
+                    // max then min: no panic on limits a loader would have refused.
+                    *value = value.max(lower).min(upper);
                 }
                 continue;
             }
@@ -993,7 +994,7 @@ impl<'a> Ik<'a> {
                 *value += turns * TAU;
                 // An angle a rounding past a limit (a sample at the limit wrapped into
                 // (-pi, pi] and back) is at the limit.
-                *value = value.clamp(lower, upper);
+                *value = value.max(lower).min(upper);
             } else if turns != 0.0 {
                 *value += turns * TAU;
             }
