@@ -969,13 +969,10 @@ impl<'a> Ik<'a> {
                 return false;
             }
             if joint.kind == JointKind::Prismatic {
-                if joint
-                    .limits
-                    .is_some_and(|[lower, upper]| *value < lower - LIMIT_ROUNDING || *value > upper + LIMIT_ROUNDING)
-                {
-                    return false;
-                }
                 if let Some([lower, upper]) = joint.limits {
+                    if *value < lower - LIMIT_ROUNDING || *value > upper + LIMIT_ROUNDING {
+                        return false;
+                    }
                     // max then min: no panic on limits a loader would have refused.
                     *value = value.max(lower).min(upper);
                 }

@@ -9,6 +9,7 @@
 //! deeper than its bodies can move within it (the certificate the joint-space search uses).
 
 use super::refine::Checker;
+use super::search::Clear;
 use crate::collide::MotionBounds;
 use crate::model::Model;
 use std::collections::VecDeque;
@@ -77,6 +78,7 @@ pub(super) fn first_joints_collide(
     // Joints beyond the prefix move none of its links: they stay mid-range.
     let mut q: Vec<f64> = lower.iter().zip(&upper).map(|(lo, hi)| 0.5 * (lo + hi)).collect();
     let mut half = vec![0.0; dof];
+    let mut single = vec![0.0; dof];
     let mut left = budget;
     for joints in 0..=dof.min(MOST_JOINTS) {
         let levels = checker.pairs_up_to(joints);
@@ -100,25 +102,25 @@ pub(super) fn first_joints_collide(
                 half[j] = 0.5 * (high[j] - low[j]);
             }
             let clearance = checker.clearance_among(&q, &levels, true);
+            // The joint-space search's certificate, on these pairs alone.
+            let certified = super::judge_box(checker, bounds, model.links.len(), &half, clearance, margin);
             let pair = checker.closest_pair();
-            let Some(pair) = pair.filter(|_| clearance <= margin) else {
-                // A free centre (or nothing to collide): this prefix proves nothing.
-                covered = false;
-                break;
-            };
-            if clearance + bounds.relative_motion(pair.bodies[0], pair.bodies[1], &half) <= margin {
-                if !proof.pairs.contains(&pair.name) {
-                    proof.pairs.push(pair.name);
+            let pair = match (certified, pair) {
+                (Clear::Colliding, Some(pair)) => {
+                    if !proof.pairs.contains(&pair.name) {
+                        proof.pairs.push(pair.name);
+                    }
+                    proof.shallowest_m = proof.shallowest_m.max(clearance);
+                    continue;
                 }
-                proof.shallowest_m = proof.shallowest_m.max(clearance);
-                continue;
-            }
-            if joints == 0 {
-                covered = false;
-                break;
-            }
+                (Clear::Unknown, Some(pair)) if joints > 0 => pair,
+                // A free centre, nothing to collide, or no joint to split: nothing proven.
+                _ => {
+                    covered = false;
+                    break;
+                }
+            };
             // The joint that moves the pair furthest within the box is halved.
-            let mut single = vec![0.0; dof];
             let motions: Vec<f64> = (0..joints)
                 .map(|j| {
                     single[j] = half[j];
