@@ -21,6 +21,7 @@ mod prefix;
 mod reach;
 mod reduce;
 mod refine;
+mod sampled;
 pub mod search;
 mod selfmotion;
 mod separate;
@@ -698,6 +699,9 @@ impl<'a> Ik<'a> {
         if posed && self.opts.search_boxes < search::FIRST_ORDER_BUDGET {
             // A sweep's few boxes never get small enough to be certified in collision (the
             // brute force on task 00: the same records without them, 51.0 s against 52.9 s).
+            return;
+        }
+        if self.opts.search_boxes >= search::FIRST_ORDER_BUDGET && self.reach_by_sampling(goal, result) {
             return;
         }
         let mut rng = self.rng(goal_index);
