@@ -17,6 +17,11 @@
 //! and measured exactly. A configuration found is a witness, checked as every solution is: its
 //! pose error by FK against the goal, its clearance by the exact geometry. Finding none proves
 //! nothing; the goal stays open with the clearest configuration seen named.
+//!
+//! Where the solutions form curves the sample has one more coordinate, the self-motion's
+//! parameter (as [`super::selfmotion`] sweeps it): a 6R arm on a `z_symmetric` goal solves a
+//! `pose` goal turned about tool z by a sampled angle; a 7R arm on a `pose` goal holds joint 7
+//! at a sampled angle of its range and solves the six others. A climb keeps that coordinate.
 
 use super::{add_found, GoalSolutions, Ik, IkSolution, EXACT, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use crate::scenario::{Goal, Tolerance};
@@ -113,30 +118,52 @@ fn halton(mut index: usize, base: usize) -> f64 {
 
 /// Offsets filling the tolerance evenly: Halton points of the cube (position then rotation),
 /// those with both parts within the unit ball kept and scaled by [`REACH`]; the first is zero.
-fn offsets(goal: &Goal) -> impl Iterator<Item = Offset> + '_ {
+fn offsets(goal: &Goal) -> impl Iterator<Item = (usize, Offset)> + '_ {
     const BASES: [usize; 6] = [2, 3, 5, 7, 11, 13];
     let (x, y) = (goal.rotation * Vector3::x(), goal.rotation * Vector3::y());
     let zero = Offset {
         position: Vector3::zeros(),
         rotation: Vector3::zeros(),
     };
-    std::iter::once(zero).chain((1..).filter_map(move |index| {
+    std::iter::once((0, zero)).chain((1..).filter_map(move |index| {
         let u: [f64; 6] = std::array::from_fn(|k| 2.0 * halton(index, BASES[k]) - 1.0);
         let position = Vector3::new(u[0], u[1], u[2]);
         let rotation = match goal.tolerance {
             Tolerance::ZSymmetric => x * u[3] + y * u[4],
             _ => Vector3::new(u[3], u[4], u[5]),
         };
-        (position.norm() <= 1.0 && rotation.norm() <= 1.0).then(|| Offset {
-            position: position * REACH,
-            rotation: rotation * REACH,
+        (position.norm() <= 1.0 && rotation.norm() <= 1.0).then(|| {
+            (
+                index,
+                Offset {
+                    position: position * REACH,
+                    rotation: rotation * REACH,
+                },
+            )
         })
     }))
+}
+
+/// How a sampled pose is solved exactly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Family {
+    /// As many joints as the goal constrains (6R on `pose`, 5R on `z_symmetric`).
+    Exact,
+    /// A 6R arm on a `z_symmetric` goal: a `pose` goal turned about tool z by the parameter.
+    Turn,
+    /// A 7R arm on a `pose` goal: joint 7 held at the parameter.
+    Held,
+}
+
+/// The parameter's `k`-th sampled value (Halton, base 17) in `range`.
+fn parameter(index: usize, [lower, upper]: [f64; 2]) -> f64 {
+    lower + (upper - lower) * halton(index, 17)
 }
 
 /// A solution met at a sampled pose, kept to climb from.
 struct Start {
     offset: Offset,
+    value: f64,
     q: Vec<f64>,
     clearance: f64,
 }
@@ -144,12 +171,48 @@ struct Start {
 impl Ik<'_> {
     /// Looks for a free configuration within `goal`'s tolerance by solving poses sampled within
     /// it exactly and climbing from the clearest colliding solutions; `None` where no exact
-    /// method lists every solution of a pose for the goal's mode, or the budget is a sweep's.
+    /// method lists every solution of a pose (or of a self-motion's sample) for the goal's mode,
+    /// or the budget is a sweep's.
     pub(super) fn sample_tolerance(&mut self, goal: &Goal) -> Option<Sampled> {
         let poses = (self.opts.search_boxes / BOXES_PER_POSE).min(MOST_POSES);
-        if poses == 0 || self.solutions_of(goal).is_none() {
+        let (family, range) = self.family(goal)?;
+        if poses == 0 {
             return None;
         }
+        // Newton steps and gradients keep joint 7 where its sample put it.
+        let held = self.held;
+        if family == Family::Held {
+            self.held = Some(self.model.dof() - 1);
+        }
+        let sampled = self.sample_family(goal, family, range, poses);
+        self.held = held;
+        Some(sampled)
+    }
+
+    /// How `goal`'s sampled poses are solved, and the range of the self-motion's parameter.
+    fn family(&self, goal: &Goal) -> Option<(Family, [f64; 2])> {
+        let whole = [-std::f64::consts::PI, std::f64::consts::PI];
+        // What [`Ik::exact_pose`] solves with.
+        let six = self.analytic.is_some() || matches!(self.all, Some((_, Tolerance::Pose)));
+        match (goal.tolerance, &self.all) {
+            (Tolerance::Pose, _) if six => Some((Family::Exact, whole)),
+            (Tolerance::ZSymmetric, Some((_, Tolerance::ZSymmetric))) => Some((Family::Exact, whole)),
+            (Tolerance::ZSymmetric, _) if six => Some((Family::Turn, whole)),
+            (Tolerance::Pose, _) if self.model.dof() == 7 && self.redundant.is_some() => {
+                let range = match self.model.joints[6].limits {
+                    Some([lower, upper]) if lower.is_finite() && upper.is_finite() && upper > lower => {
+                        [lower, upper.min(lower + std::f64::consts::TAU)]
+                    }
+                    _ => whole,
+                };
+                Some((Family::Held, range))
+            }
+            _ => None,
+        }
+    }
+
+    /// [`Self::sample_tolerance`] for a family whose method applies.
+    fn sample_family(&mut self, goal: &Goal, family: Family, range: [f64; 2], poses: usize) -> Sampled {
         let margin = self.margin();
         // A solution measured is a collision query: meshes make them costly.
         let mut queries = self.collision_queries;
@@ -160,14 +223,14 @@ impl Ik<'_> {
             clearest: None,
         };
         let mut starts: Vec<Start> = Vec::with_capacity(CLIMBS + 1);
-        for offset in offsets(goal).take(poses) {
+        for (index, offset) in offsets(goal).take(poses) {
             if queries == 0 {
                 break;
             }
-            let at = offset.goal(goal);
-            let configurations = self.solutions_of(&at)?;
+            let value = parameter(index, range);
+            let at = self.problem(goal, family, &offset, value);
             sampled.poses += 1;
-            for mut q in configurations {
+            for mut q in self.solutions_of(&at, family, value) {
                 let (_, size, _) = self.polish(&at, &mut q);
                 if size > EXACT || !self.shift_into_limits(&mut q, None) {
                     continue;
@@ -177,7 +240,7 @@ impl Ik<'_> {
                 let solution = self.judge(goal, q, None, margin);
                 if solution.reached {
                     sampled.found = Some(solution);
-                    return Some(sampled);
+                    return sampled;
                 }
                 let Some(clearance) = solution.clearance.map(|c| c.exact_m) else {
                     // No collision world: a solution within the tolerance would have reached it.
@@ -189,50 +252,77 @@ impl Ik<'_> {
                 sampled.clearest = Some(sampled.clearest.map_or(clearance, |c: f64| c.max(clearance)));
                 let at = starts.partition_point(|s| s.clearance >= clearance);
                 if at < CLIMBS {
-                    starts.insert(
-                        at,
-                        Start {
-                            offset,
-                            q: solution.q,
-                            clearance,
-                        },
-                    );
+                    let start = Start {
+                        offset,
+                        value,
+                        q: solution.q,
+                        clearance,
+                    };
+                    starts.insert(at, start);
                     starts.truncate(CLIMBS);
                 }
             }
         }
         for start in starts {
-            if let Some(found) = self.climb(goal, start, margin, &mut queries, &mut sampled.clearest) {
+            if let Some(found) = self.climb(goal, family, start, margin, &mut queries, &mut sampled.clearest) {
                 sampled.found = Some(found);
                 break;
             }
         }
-        Some(sampled)
+        sampled
     }
 
-    /// Every solution of `goal`'s own pose by the exact method for its mode (a 6R arm on a
-    /// `pose` goal, a 5R arm on a `z_symmetric` one), as many joints as the model has.
-    fn solutions_of(&self, goal: &Goal) -> Option<Vec<Vec<f64>>> {
-        let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
+    /// The goal a sample solves: `goal` moved by `offset`, a `pose` goal turned about tool z by
+    /// `value` for [`Family::Turn`].
+    fn problem(&self, goal: &Goal, family: Family, offset: &Offset, value: f64) -> Goal {
+        let moved = offset.goal(goal);
+        match family {
+            Family::Turn => Goal {
+                rotation: moved.rotation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), value),
+                tolerance: Tolerance::Pose,
+                ..moved
+            },
+            Family::Exact | Family::Held => moved,
+        }
+    }
+
+    /// Every solution of the sample's goal `at` (joint 7 at `value` for [`Family::Held`]), as
+    /// many joints as the model has.
+    fn solutions_of(&self, at: &Goal, family: Family, value: f64) -> Vec<Vec<f64>> {
+        let pose = Isometry3::from_parts(Translation3::from(at.position), at.rotation);
         let dof = self.model.dof();
-        let configurations = match (goal.tolerance, &self.all) {
-            (Tolerance::Pose, _) => self.exact_pose(&pose)?.configurations,
-            (Tolerance::ZSymmetric, Some((method, Tolerance::ZSymmetric))) => method.solve(&pose).configurations,
-            _ => return None,
+        let configurations = match (family, &self.all, &self.redundant) {
+            (Family::Held, _, Some(held)) => {
+                let six = held.method.solve(&held.pose_of_six(&pose, value)).configurations;
+                return six.iter().map(|q| q.iter().copied().chain([value]).collect()).collect();
+            }
+            (Family::Exact, Some((method, Tolerance::ZSymmetric)), _) if at.tolerance == Tolerance::ZSymmetric => {
+                method.solve(&pose).configurations
+            }
+            _ => self.exact_pose(&pose).map(|e| e.configurations).unwrap_or_default(),
         };
-        Some(configurations.iter().map(|q| q[..dof].to_vec()).collect())
+        configurations.iter().map(|q| q[..dof].to_vec()).collect()
     }
 
     /// Climbs from a colliding solution within the tolerance along the closest pair's distance
     /// gradient (task space), each step's pose kept within [`REACH`] of the tolerance and
-    /// solved by Newton from the last configuration; the free configuration reached, if any.
-    fn climb(&mut self, goal: &Goal, start: Start, margin: f64, queries: &mut usize, clearest: &mut Option<f64>) -> Option<IkSolution> {
+    /// solved by Newton from the last configuration (the self-motion's parameter kept); the
+    /// free configuration reached, if any.
+    fn climb(
+        &mut self,
+        goal: &Goal,
+        family: Family,
+        start: Start,
+        margin: f64,
+        queries: &mut usize,
+        clearest: &mut Option<f64>,
+    ) -> Option<IkSolution> {
         let Start {
             mut offset,
+            value,
             mut q,
             mut clearance,
         } = start;
-        let (x, y) = (goal.rotation * Vector3::x(), goal.rotation * Vector3::y());
         let mut step = FIRST_STEP;
         for _ in 0..CLIMB_STEPS {
             if step < SMALLEST_STEP || *queries < 2 {
@@ -243,12 +333,12 @@ impl Ik<'_> {
                 checker.clearance(&q, true);
                 checker.closest_pair()
             })?;
-            let at = offset.goal(goal);
+            let at = self.problem(goal, family, &offset, value);
             let (h, _) = self.distance_gradient(&at, &q, &pair)?;
             // Per unit of the tolerance: the distance's rate along each offset.
             let position = h.fixed_rows::<3>(0) * REACHED_POSITION_M;
-            let rotation = match goal.tolerance {
-                Tolerance::ZSymmetric => x * h[3] + y * h[4],
+            let rotation = match at.tolerance {
+                Tolerance::ZSymmetric => at.rotation * Vector3::x() * h[3] + at.rotation * Vector3::y() * h[4],
                 _ => h.fixed_rows::<3>(3).into_owned(),
             } * REACHED_ORIENTATION_RAD;
             let norm = (position.norm_squared() + rotation.norm_squared()).sqrt();
@@ -261,7 +351,7 @@ impl Ik<'_> {
             }
             .within();
             let mut moved = q.clone();
-            let (_, size, _) = self.polish(&next.goal(goal), &mut moved);
+            let (_, size, _) = self.polish(&self.problem(goal, family, &next, value), &mut moved);
             if size > EXACT || !self.shift_into_limits(&mut moved, Some(&q)) {
                 step /= 2.0;
                 continue;
@@ -317,7 +407,7 @@ mod tests {
             task: None,
         };
         let z = goal.rotation * Vector3::z();
-        for offset in offsets(&goal).take(2000) {
+        for (_, offset) in offsets(&goal).take(2000) {
             assert!(offset.position.norm() <= REACH + 1e-12 && offset.rotation.norm() <= REACH + 1e-12);
             assert!(offset.rotation.dot(&z).abs() < 1e-12);
             let moved = offset.goal(&goal);
