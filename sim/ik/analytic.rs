@@ -410,12 +410,18 @@ impl UrArm {
     /// against the cap's).
     ///
     /// With `turn` > 0 the pose may also turn that much about tool z (a sample of a
-    /// `z_symmetric` goal's free turn): the centre moves by at most `L * turn` more.
+    /// `z_symmetric` goal's free turn): the centre moves by at most `r * turn` more, `r` its
+    /// distance from the tool's z axis (none where the flange's axis is the tool's), or its
+    /// cap widens by `turn`, whichever bounds it closer.
     fn out_of_reach(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
         let tool = self.base_inverse * goal;
         let centre = (tool * self.tool_inverse).translation.vector;
         let lever = self.tool.translation.vector.norm();
-        let slack = super::REACHED_POSITION_M + lever * (super::REACHED_ORIENTATION_RAD + turn);
+        let z = tool.rotation * Vector3::z();
+        let arm = centre - tool.translation.vector;
+        let off_axis = (arm - z * arm.dot(&z)).norm();
+        let spun = off_axis.min(lever) * turn;
+        let slack = super::REACHED_POSITION_M + lever * super::REACHED_ORIENTATION_RAD + spun;
         let d4 = self.d4.abs();
         let radius = centre.x.hypot(centre.y);
         let distance = centre.norm();
@@ -435,7 +441,10 @@ impl UrArm {
                 "closed-form IK: pose out of reach: its wrist centre is {distance:.3} m from the shoulder, and the folded arm comes no closer than {inner:.3} m"
             ))
         } else {
-            let (nearest, furthest) = cap_distances(&tool.translation.vector, &centre, super::REACHED_ORIENTATION_RAD + turn);
+            let point = &tool.translation.vector;
+            let (wide_near, wide_far) = cap_distances(point, &centre, super::REACHED_ORIENTATION_RAD + turn);
+            let (near, far) = cap_distances(point, &centre, super::REACHED_ORIENTATION_RAD);
+            let (nearest, furthest) = (wide_near.max(near - spun), wide_far.min(far + spun));
             let (nearest, furthest) = (nearest - super::REACHED_POSITION_M, furthest + super::REACHED_POSITION_M);
             if nearest > outer {
                 Some(format!(

@@ -160,7 +160,8 @@ impl SphericalWrist {
     /// proves it larger than the slack, or gives up (`None`).
     ///
     /// With `turn` > 0 the pose may also turn that much about tool z: the centre moves by at
-    /// most `L * turn` more.
+    /// most `r * turn` more, `r` its distance from the tool's z axis (`L` on the reversed
+    /// chain).
     ///
     /// A wrist at the base is the same on the reversed chain: its centre (where axes 1 to 3
     /// meet) is fixed in the world, and must be where joints 6 to 4 put it in the tool frame;
@@ -178,8 +179,17 @@ impl SphericalWrist {
         } else {
             (self.centre - chain.home_translation).norm()
         } * scale;
+        // Where the turn about tool z moves the centre from: at most its distance from that
+        // axis times the turn (a held joint's chain has the joint's axis as its tool's z).
+        let off_axis = if self.reversed {
+            lever
+        } else {
+            let local = chain.home_rotation.transpose() * (self.centre - chain.home_translation);
+            local.x.hypot(local.y) * scale
+        };
+        let spun = off_axis.min(lever) * turn;
         // The real tool may sit off the chain's tool (a held joint): the angle acts over both.
-        let slack = (super::REACHED_POSITION_M + (lever + self.arm.tool_lever) * super::REACHED_ORIENTATION_RAD + lever * turn) / scale;
+        let slack = (super::REACHED_POSITION_M + (lever + self.arm.tool_lever) * super::REACHED_ORIENTATION_RAD + spun) / scale;
         let [l1, l2, l3, ..] = &chain.lines;
         let cylindrical = |p: &Vector3<f64>| {
             let v = p - l1.point;
@@ -212,12 +222,16 @@ impl SphericalWrist {
         // the position's share of the slack of a cap of it.
         let origin = if self.reversed { Vector3::zeros() } else { *translation };
         let arm = target - origin;
-        let position = (super::REACHED_POSITION_M + self.arm.tool_lever * super::REACHED_ORIENTATION_RAD) / scale;
+        // The turn widens the cap, or, for a centre near the tool's z axis, adds its motion to
+        // the position's share.
+        let near_axis = 2.0 * off_axis <= lever;
+        let (widened, spun) = if near_axis { (0.0, spun) } else { (turn, 0.0) };
+        let position = (super::REACHED_POSITION_M + self.arm.tool_lever * super::REACHED_ORIENTATION_RAD + spun) / scale;
         let cap = Cap {
             centre: origin,
             axis: arm.try_normalize(0.0)?,
             radius: arm.norm(),
-            angle: super::REACHED_ORIENTATION_RAD + turn,
+            angle: super::REACHED_ORIENTATION_RAD + widened,
         };
         let closest = cap.lower_bound_above([l1, l2, l3], &self.centre, position, evaluations)?;
         Some(format!(
