@@ -212,7 +212,7 @@ impl UrArm {
         let mut out = AnalyticSolutions {
             configurations: Vec::with_capacity(8),
             finite: true,
-            out_of_reach: self.out_of_reach(goal, 0.0),
+            out_of_reach: self.out_of_reach(goal, super::search::Radii::REACHED, 0.0),
         };
         let rotation = flange.rotation.to_rotation_matrix();
         let (x6, y6, z6) = (
@@ -337,6 +337,12 @@ impl UrArm {
     /// differences in the six world directions, and the turn about tool z), times 1 mm and
     /// 1 degree (and the turn), doubled for the curvature like the other certificates.
     pub fn elbow_out_of_reach(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+        self.elbow_out_of_reach_within(goal, super::search::Radii::REACHED, turn)
+    }
+
+    /// [`Self::elbow_out_of_reach`] for the poses within `radii` of `goal` (a part of the
+    /// tolerance).
+    fn elbow_out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         let (sine1, cosines) = self.branch_cosines(goal)?;
         if cosines.iter().any(|c| c.abs() <= 1.0) {
             return None;
@@ -379,9 +385,8 @@ impl UrArm {
                 }
             }
         }
-        let change = |i: usize| {
-            2.0 * (position[i].sqrt() * super::REACHED_POSITION_M + rotation[i].sqrt() * super::REACHED_ORIENTATION_RAD + along[i] * turn)
-        };
+        let change =
+            |i: usize| 2.0 * (position[i].sqrt() * radii.position_m + rotation[i].sqrt() * radii.orientation_rad + along[i] * turn);
         let branches_stay = 1.0 - sine1.abs() > change(0);
         let every_elbow_out = (0..4).all(|b| cosines[b].abs() - 1.0 > change(b + 1));
         (branches_stay && every_elbow_out).then(|| {
@@ -395,7 +400,14 @@ impl UrArm {
     /// Why no configuration reaches `goal`, turned by up to `turn` about tool z, within 1 mm and
     /// 1 degree: the wrist-centre proof of [`UrArm::solve`] with the turn added to the slack.
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
-        self.out_of_reach(goal, turn).or_else(|| self.elbow_out_of_reach(goal, turn))
+        self.out_of_reach_within(goal, super::search::Radii::REACHED, turn)
+    }
+
+    /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` instead of the
+    /// whole tolerance (a part of it, see [`super::parts`]).
+    pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
+        self.out_of_reach(goal, radii, turn)
+            .or_else(|| self.elbow_out_of_reach_within(goal, radii, turn))
     }
 
     /// Why no configuration reaches `goal` within 1 mm and 1 degree, from the wrist centre
@@ -413,7 +425,7 @@ impl UrArm {
     /// `z_symmetric` goal's free turn): the centre moves by at most `r * turn` more, `r` its
     /// distance from the tool's z axis (none where the flange's axis is the tool's), or its
     /// cap widens by `turn`, whichever bounds it closer.
-    fn out_of_reach(&self, goal: &Isometry3<f64>, turn: f64) -> Option<String> {
+    fn out_of_reach(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         let tool = self.base_inverse * goal;
         let centre = (tool * self.tool_inverse).translation.vector;
         let lever = self.tool.translation.vector.norm();
@@ -421,7 +433,8 @@ impl UrArm {
         let arm = centre - tool.translation.vector;
         let off_axis = (arm - z * arm.dot(&z)).norm();
         let spun = off_axis.min(lever) * turn;
-        let slack = super::REACHED_POSITION_M + lever * super::REACHED_ORIENTATION_RAD + spun;
+        let slack = radii.position_m + lever * radii.orientation_rad + spun;
+        let within = radii.words();
         let d4 = self.d4.abs();
         let radius = centre.x.hypot(centre.y);
         let distance = centre.norm();
@@ -442,17 +455,17 @@ impl UrArm {
             ))
         } else {
             let point = &tool.translation.vector;
-            let (wide_near, wide_far) = cap_distances(point, &centre, super::REACHED_ORIENTATION_RAD + turn);
-            let (near, far) = cap_distances(point, &centre, super::REACHED_ORIENTATION_RAD);
+            let (wide_near, wide_far) = cap_distances(point, &centre, radii.orientation_rad + turn);
+            let (near, far) = cap_distances(point, &centre, radii.orientation_rad);
             let (nearest, furthest) = (wide_near.max(near - spun), wide_far.min(far + spun));
-            let (nearest, furthest) = (nearest - super::REACHED_POSITION_M, furthest + super::REACHED_POSITION_M);
+            let (nearest, furthest) = (nearest - radii.position_m, furthest + radii.position_m);
             if nearest > outer {
                 Some(format!(
-                    "closed-form IK: pose out of reach: a tool within 1 mm and 1 degree of it puts its wrist centre at least {nearest:.4} m from the shoulder, and the stretched arm reaches {outer:.4} m"
+                    "closed-form IK: pose out of reach: a tool within {within} of it puts its wrist centre at least {nearest:.4} m from the shoulder, and the stretched arm reaches {outer:.4} m"
                 ))
             } else if furthest < inner {
                 Some(format!(
-                    "closed-form IK: pose out of reach: a tool within 1 mm and 1 degree of it puts its wrist centre at most {furthest:.4} m from the shoulder, and the folded arm comes no closer than {inner:.4} m"
+                    "closed-form IK: pose out of reach: a tool within {within} of it puts its wrist centre at most {furthest:.4} m from the shoulder, and the folded arm comes no closer than {inner:.4} m"
                 ))
             } else {
                 None

@@ -17,6 +17,7 @@ pub mod general;
 mod lines;
 mod loss;
 pub mod parallel;
+mod parts;
 mod prefix;
 mod reach;
 mod reduce;
@@ -205,6 +206,9 @@ pub struct Ik<'a> {
     held: Option<usize>,
     /// Parts of tolerances the goal being solved may still cut (see [`cells`]).
     parts_left: usize,
+    /// Parts of its tolerance the goal being solved may still prove out of reach (see
+    /// [`parts`]).
+    reach_parts_left: usize,
     /// The goal being solved's closest distinct misses from the numeric solver, best first:
     /// starts for aiming at its tolerance (see [`toward`]).
     misses: Vec<IkSolution>,
@@ -284,6 +288,7 @@ impl<'a> Ik<'a> {
             redundant: methods.redundant.clone(),
             held: None,
             parts_left: cells::PARTS_PER_GOAL,
+            reach_parts_left: parts::PARTS_PER_GOAL,
             misses: Vec::new(),
             sub_chains: methods.sub_chains.clone(),
             coaxial: methods.coaxial.clone(),
@@ -319,6 +324,7 @@ impl<'a> Ik<'a> {
     /// tolerance, or finds one.
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
         self.parts_left = cells::PARTS_PER_GOAL;
+        self.reach_parts_left = parts::PARTS_PER_GOAL;
         self.misses.clear();
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
@@ -899,11 +905,12 @@ impl<'a> Ik<'a> {
     }
 
     /// Why no configuration reaches pose `pose`, turned by up to `turn` about tool z, within
-    /// the tolerance, when the closed form or the all-solutions method proves it.
-    fn exact_out_of_reach(&self, pose: &Isometry3<f64>, turn: f64) -> Option<String> {
+    /// `radii` (the tolerance, or a part of it), when the closed form or the all-solutions
+    /// method proves it (a spherical wrist's within `evaluations` of its cap).
+    fn exact_out_of_reach_within(&self, pose: &Isometry3<f64>, radii: search::Radii, turn: f64, evaluations: usize) -> Option<String> {
         match (&self.analytic, &self.all) {
-            (Some(arm), _) => arm.out_of_reach_over_turn(pose, turn),
-            (None, Some((method, Tolerance::Pose))) => method.out_of_reach_over_turn(pose, turn, self.cap_evaluations()),
+            (Some(arm), _) => arm.out_of_reach_within(pose, radii, turn),
+            (None, Some((method, Tolerance::Pose))) => method.out_of_reach_within(pose, radii, turn, evaluations),
             _ => None,
         }
     }

@@ -72,6 +72,15 @@ impl Radii {
         orientation_rad: REACHED_ORIENTATION_RAD,
     };
 
+    /// The radii in words: "1 mm and 1 degree" for the harness's own.
+    pub(super) fn words(&self) -> String {
+        if *self == Self::REACHED {
+            "1 mm and 1 degree".to_string()
+        } else {
+            format!("{:.3} mm and {:.3} deg", self.position_m * 1e3, self.orientation_rad.to_degrees())
+        }
+    }
+
     /// Whether `error` is within these radii.
     pub(super) fn holds(&self, error: &super::GoalError) -> bool {
         error.position_m < self.position_m && error.orientation_rad < self.orientation_rad

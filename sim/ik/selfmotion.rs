@@ -154,19 +154,52 @@ impl Ik<'_> {
     }
 
     /// Why no configuration reaches the goal with the parameter within `slack` of `value`,
-    /// when the method proves it.
-    fn sample_out_of_reach(&self, goal: &Goal, parameter: Parameter, value: f64, slack: f64) -> Option<String> {
+    /// when the method proves it; with `cut` (no shorter interval follows) a proof that fails
+    /// over the whole tolerance is tried part by part ([`super::parts`]).
+    fn sample_out_of_reach(&mut self, goal: &Goal, parameter: Parameter, value: f64, slack: f64, cut: bool) -> Option<String> {
+        let whole = self.part_out_of_reach(goal, parameter, value, slack, super::search::Radii::REACHED, self.cap_evaluations());
+        // The closed form's proofs cost a microsecond; a spherical wrist's bound of its centre's
+        // approach (a search over joints 2 and 3) a thousand times that, per part: on the
+        // golden matrix its parts took the run from 3 minutes past 10.
+        let cheap = parameter == Parameter::Turn && self.analytic.is_some();
+        if whole.is_some() || !cut || !cheap || self.opts.search_boxes < super::search::FIRST_ORDER_BUDGET {
+            return whole;
+        }
+        let mut budget = self.reach_parts_left;
+        let proof = super::parts::out_of_reach_by_parts(
+            goal,
+            &mut budget,
+            // The ball bounds alone: a cap's evaluations per part would cost seconds a goal.
+            |part, radii| self.part_out_of_reach(part, parameter, value, slack, radii, 0),
+            |part| self.sample(part, parameter, value).is_some_and(|(_, found, _)| !found.is_empty()),
+        );
+        self.reach_parts_left = budget;
+        proof
+    }
+
+    /// Why no configuration reaches `goal`'s pose within `radii`, the parameter within `slack`
+    /// of `value`, when the method proves it (a spherical wrist's within `evaluations` of its
+    /// cap).
+    fn part_out_of_reach(
+        &self,
+        goal: &Goal,
+        parameter: Parameter,
+        value: f64,
+        slack: f64,
+        radii: super::search::Radii,
+        evaluations: usize,
+    ) -> Option<String> {
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
         match parameter {
             Parameter::Turn => {
                 let turned = pose * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), value);
-                self.exact_out_of_reach(&turned, slack)
+                self.exact_out_of_reach_within(&turned, radii, slack, evaluations)
             }
             Parameter::Held => {
                 let held = self.redundant.as_ref()?;
                 // Joint 7 turns the six's virtual tool about its own z.
                 held.method
-                    .out_of_reach_over_turn(&held.pose_of_six(&pose, value), slack, self.cap_evaluations())
+                    .out_of_reach_within(&held.pose_of_six(&pose, value), radii, slack, evaluations)
             }
         }
     }
@@ -296,7 +329,7 @@ impl Ik<'_> {
                 // interval added to their slack.
                 for (value, key) in [a, b].into_iter().zip(keys) {
                     if let Entry::Vacant(slot) = proofs.entry(key) {
-                        slot.insert(self.sample_out_of_reach(goal, parameter, value, half));
+                        slot.insert(self.sample_out_of_reach(goal, parameter, value, half, half <= shortest));
                     }
                     match &proofs[&key] {
                         Some(proof) => {

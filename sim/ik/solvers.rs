@@ -96,6 +96,15 @@ impl AllSolutions {
         }
     }
 
+    /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` (a part of the
+    /// tolerance).
+    pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, evaluations: usize) -> Option<String> {
+        match self {
+            AllSolutions::Wrist(wrist) => wrist.out_of_reach_within(goal, radii, turn, evaluations),
+            AllSolutions::General(_) | AllSolutions::Parallel(_) => None,
+        }
+    }
+
     fn solve_raw(&self, goal: &Isometry3<f64>, evaluations: usize) -> Solutions {
         match self {
             AllSolutions::Wrist(wrist) => {

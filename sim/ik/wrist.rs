@@ -132,7 +132,7 @@ impl SphericalWrist {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let mut out = self.solve_chain(&rotation, &translation);
         if out.resolved && out.configurations.is_empty() {
-            out.out_of_reach = self.out_of_reach(&rotation, &translation, 0.0, evaluations);
+            out.out_of_reach = self.out_of_reach(&rotation, &translation, super::search::Radii::REACHED, 0.0, evaluations);
         }
         if self.reversed {
             for q in &mut out.configurations {
@@ -147,8 +147,14 @@ impl SphericalWrist {
     /// the cap within it, at up to `evaluations` distances (about 30 ns each; none: the ball
     /// alone).
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64, evaluations: usize) -> Option<String> {
+        self.out_of_reach_within(goal, super::search::Radii::REACHED, turn, evaluations)
+    }
+
+    /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` instead of the
+    /// whole tolerance (a part of it, see [`super::parts`]).
+    pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, evaluations: usize) -> Option<String> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
-        self.out_of_reach(&rotation, &translation, turn, evaluations)
+        self.out_of_reach(&rotation, &translation, radii, turn, evaluations)
     }
 
     /// Why no configuration reaches the pose within the tolerance, from the wrist centre alone:
@@ -168,7 +174,14 @@ impl SphericalWrist {
     /// the tolerance moves that target by the same `1 mm + L * 1 deg`.
     ///
     /// Where the ball fails, the cap within it ([`Cap`]) within `evaluations`.
-    fn out_of_reach(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, turn: f64, evaluations: usize) -> Option<String> {
+    fn out_of_reach(
+        &self,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        radii: super::search::Radii,
+        turn: f64,
+        evaluations: usize,
+    ) -> Option<String> {
         let chain = self.arm.chain(self.reversed);
         let scale = self.arm.scale();
         let target = self.target(chain, rotation, translation);
@@ -189,7 +202,8 @@ impl SphericalWrist {
         };
         let spun = off_axis.min(lever) * turn;
         // The real tool may sit off the chain's tool (a held joint): the angle acts over both.
-        let slack = (super::REACHED_POSITION_M + (lever + self.arm.tool_lever) * super::REACHED_ORIENTATION_RAD + spun) / scale;
+        let slack = (radii.position_m + (lever + self.arm.tool_lever) * radii.orientation_rad + spun) / scale;
+        let within = radii.words();
         let [l1, l2, l3, ..] = &chain.lines;
         let cylindrical = |p: &Vector3<f64>| {
             let v = p - l1.point;
@@ -209,7 +223,7 @@ impl SphericalWrist {
         };
         if let Some(closest) = lower_bound_above(&gap, rates, slack) {
             return Some(format!(
-                "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within 1 mm and 1 degree would put it within {:.1} mm",
+                "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where the pose needs it, and a tool within {within} would put it within {:.1} mm",
                 closest * scale * 1e3,
                 slack * scale * 1e3
             ));
@@ -226,16 +240,16 @@ impl SphericalWrist {
         // the position's share.
         let near_axis = 2.0 * off_axis <= lever;
         let (widened, spun) = if near_axis { (0.0, spun) } else { (turn, 0.0) };
-        let position = (super::REACHED_POSITION_M + self.arm.tool_lever * super::REACHED_ORIENTATION_RAD + spun) / scale;
+        let position = (radii.position_m + self.arm.tool_lever * radii.orientation_rad + spun) / scale;
         let cap = Cap {
             centre: origin,
             axis: arm.try_normalize(0.0)?,
             radius: arm.norm(),
-            angle: super::REACHED_ORIENTATION_RAD + widened,
+            angle: radii.orientation_rad + widened,
         };
         let closest = cap.lower_bound_above([l1, l2, l3], &self.centre, position, evaluations)?;
         Some(format!(
-            "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where a tool within 1 mm and 1 degree would need it ({:.0} mm from the tool, turned up to {:.2} deg), more than the {:.1} mm the tool's position allows",
+            "all-solutions IK (spherical wrist): pose out of reach: {centre} {:.1} mm to where a tool within {within} would need it ({:.0} mm from the tool, turned up to {:.2} deg), more than the {:.1} mm the tool's position allows",
             closest * scale * 1e3,
             cap.radius * scale * 1e3,
             cap.angle.to_degrees(),
