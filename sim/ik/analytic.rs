@@ -404,7 +404,7 @@ impl UrArm {
     }
 
     /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` instead of the
-    /// whole tolerance (a part of it, see [`super::parts`]).
+    /// whole tolerance (a part of it: the out-of-reach proof cut into parts).
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         self.out_of_reach(goal, radii, turn)
             .or_else(|| self.elbow_out_of_reach_within(goal, radii, turn))

@@ -151,7 +151,7 @@ impl SphericalWrist {
     }
 
     /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` instead of the
-    /// whole tolerance (a part of it, see [`super::parts`]).
+    /// whole tolerance (a part of it: the out-of-reach proof cut into parts).
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, evaluations: usize) -> Option<String> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         self.out_of_reach(&rotation, &translation, radii, turn, evaluations)
