@@ -25,15 +25,24 @@ fn a_goal_just_beyond_reach_is_proven_by_parts_and_no_pose_within_its_tolerance_
     let world = collision_world(&model, &scenario, &[]).expect("world builds");
     let solved = solve_goals(&model, &scenario, Some(&world), &IkOptions::default());
     let proof = solved[0].proof.clone().unwrap_or_default();
-    assert!(proof.contains("out of reach"), "undecided: {:?}", solved[0].undecided);
+    assert!(
+        proof.contains("out of reach") && proof.contains("cut into parts"),
+        "not proven by parts: {proof:?}, undecided: {:?}",
+        solved[0].undecided
+    );
 
     let arm = UrArm::detect(&model).expect("UR-type");
     let (x, y) = (goal.rotation * Vector3::x(), goal.rotation * Vector3::y());
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(69);
     for _ in 0..20_000 {
         let shift = common::in_ball(&mut rng, 0.999 * REACHED_POSITION_M);
-        let tilt = common::in_ball(&mut rng, 0.999 * REACHED_ORIENTATION_RAD);
-        let across = x * tilt.x + y * tilt.y;
+        // Uniform over the disc of tilts (its rim, where a goal just beyond reach is closest,
+        // as often as its area).
+        let (radius, angle) = (
+            0.999 * REACHED_ORIENTATION_RAD * rng.random::<f64>().sqrt(),
+            rng.random_range(0.0..std::f64::consts::TAU),
+        );
+        let across = (x * angle.cos() + y * angle.sin()) * radius;
         let turn = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
         let rotation = UnitQuaternion::from_scaled_axis(across) * goal.rotation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn);
         let pose = Isometry3::from_parts(Translation3::from(goal.position + shift), rotation);

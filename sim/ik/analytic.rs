@@ -404,7 +404,10 @@ impl UrArm {
     }
 
     /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` instead of the
-    /// whole tolerance (a part of it: the out-of-reach proof cut into parts).
+    /// whole tolerance (a part of it: the out-of-reach proof cut into parts). The elbow's
+    /// certificate is first order, doubled, as over the whole tolerance; over a part of radius
+    /// `r` its neglected remainder shrinks as `r^2` and the doubling's margin as `r`, so a part
+    /// holds it with more room than the whole.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         self.out_of_reach(goal, radii, turn)
             .or_else(|| self.elbow_out_of_reach_within(goal, radii, turn))

@@ -156,14 +156,15 @@ impl Ik<'_> {
     /// Why no configuration reaches the goal with the parameter within `slack` of `value`,
     /// when the method proves it; with `cut` (no shorter interval follows) a proof that fails
     /// over the whole tolerance is tried part by part ([`super::parts`]).
-    fn sample_out_of_reach(&mut self, goal: &Goal, parameter: Parameter, value: f64, slack: f64, cut: bool) -> Option<String> {
+    /// The proof comes with whether the tolerance was cut for it.
+    fn sample_out_of_reach(&mut self, goal: &Goal, parameter: Parameter, value: f64, slack: f64, cut: bool) -> (Option<String>, bool) {
         let whole = self.part_out_of_reach(goal, parameter, value, slack, super::search::Radii::REACHED, self.cap_evaluations());
         // The closed form's proofs cost a microsecond; a spherical wrist's bound of its centre's
         // approach (a search over joints 2 and 3) a thousand times that, per part: on the
         // golden matrix its parts took the run from 3 minutes past 10.
         let cheap = parameter == Parameter::Turn && self.analytic.is_some();
         if whole.is_some() || !cut || !cheap || self.opts.search_boxes < super::search::FIRST_ORDER_BUDGET {
-            return whole;
+            return (whole, false);
         }
         let mut budget = self.reach_parts_left;
         let proof = super::parts::out_of_reach_by_parts(
@@ -174,7 +175,8 @@ impl Ik<'_> {
             |part| self.sample(part, parameter, value).is_some_and(|(_, found, _)| !found.is_empty()),
         );
         self.reach_parts_left = budget;
-        proof
+        let cut = proof.is_some();
+        (proof, cut)
     }
 
     /// Why no configuration reaches `goal`'s pose within `radii`, the parameter within `slack`
@@ -280,6 +282,8 @@ impl Ik<'_> {
         let budget = REFINEMENT_BUDGET * samples.values.len();
         let mut judged: HashMap<(u64, u64), Judged> = HashMap::new();
         let mut proofs: HashMap<(u64, u64), Option<String>> = HashMap::new();
+        // Samples whose proof needed the tolerance cut into parts.
+        let mut cut_samples = 0;
         let mut seen: Vec<f64> = Vec::new();
         let mut finest = samples.step;
         let mut collisions: Vec<String> = Vec::new();
@@ -329,7 +333,9 @@ impl Ik<'_> {
                 // interval added to their slack.
                 for (value, key) in [a, b].into_iter().zip(keys) {
                     if let Entry::Vacant(slot) = proofs.entry(key) {
-                        slot.insert(self.sample_out_of_reach(goal, parameter, value, half, half <= shortest));
+                        let (proof, cut) = self.sample_out_of_reach(goal, parameter, value, half, half <= shortest);
+                        cut_samples += usize::from(cut);
+                        slot.insert(proof);
                     }
                     match &proofs[&key] {
                         Some(proof) => {
@@ -386,7 +392,12 @@ impl Ik<'_> {
                 result.complete = true;
                 result.undecided = None;
                 result.proof = Some(if let Some(proof) = out_of_reach {
-                    format!("{method} {over}: every one of the {n} {sampled} is out of reach, each with half a sample step {of_step} added to its slack (the first: {proof})")
+                    let cut = if cut_samples > 0 {
+                        format!(", {cut_samples} of them with the goal's tolerance cut into parts")
+                    } else {
+                        String::new()
+                    };
+                    format!("{method} {over}: every one of the {n} {sampled} is out of reach, each with half a sample step {of_step} added to its slack{cut} (the first: {proof})")
                 } else if collisions.is_empty() {
                     format!("{method} {over}: every solution of the {n} {sampled} ({each} each) is outside the joint limits, certified between samples")
                 } else {
