@@ -67,18 +67,40 @@ fn unit(k: usize) -> f64 {
     }
 }
 
+/// Whether some offset of the box `centre` +- `half` (units of the tolerance, as [`Cell`]'s) is
+/// within the tolerance: both parts' nearest points within the unit ball.
+pub(super) fn touches_tolerance(centre: &[f64; 6], half: &[f64; 6]) -> bool {
+    [0, 3].into_iter().all(|first| {
+        let nearest = Vector3::from_fn(|k, _| (centre[first + k].abs() - half[first + k]).max(0.0));
+        nearest.norm() <= 1.0
+    })
+}
+
+/// `goal` moved by the offsets `centre` (units of the tolerance, as [`Cell`]'s: a
+/// `z_symmetric` goal's rotation offsets about its own x and y).
+pub(super) fn offset_goal(goal: &Goal, centre: &[f64; 6]) -> Goal {
+    let part = |first: usize| Vector3::new(centre[first], centre[first + 1], centre[first + 2]);
+    let turn = part(3) * REACHED_ORIENTATION_RAD;
+    let turn = match goal.tolerance {
+        Tolerance::ZSymmetric => goal.rotation * turn,
+        _ => turn,
+    };
+    Goal {
+        position: goal.position + part(0) * REACHED_POSITION_M,
+        rotation: UnitQuaternion::from_scaled_axis(turn) * goal.rotation,
+        ..goal.clone()
+    }
+}
+
 impl Cell {
     /// The position part (`0`) or the rotation part (`3`) of the centre.
     fn part(&self, first: usize) -> Vector3<f64> {
         Vector3::new(self.centre[first], self.centre[first + 1], self.centre[first + 2])
     }
 
-    /// Whether some pose of the box is within the tolerance (both parts within the unit ball).
+    /// Whether some pose of the box is within the tolerance.
     fn touches_tolerance(&self) -> bool {
-        [0, 3].into_iter().all(|first| {
-            let nearest = Vector3::from_fn(|k, _| (self.centre[first + k].abs() - self.half[first + k]).max(0.0));
-            nearest.norm() <= 1.0
-        })
+        touches_tolerance(&self.centre, &self.half)
     }
 
     /// Whether the centre is far enough inside the tolerance to stand for the goal.
@@ -93,16 +115,7 @@ impl Cell {
 
     /// The centre as a goal.
     fn goal(&self, goal: &Goal) -> Goal {
-        let turn = self.part(3) * REACHED_ORIENTATION_RAD;
-        let turn = match goal.tolerance {
-            Tolerance::ZSymmetric => goal.rotation * turn,
-            _ => turn,
-        };
-        Goal {
-            position: goal.position + self.part(0) * REACHED_POSITION_M,
-            rotation: UnitQuaternion::from_scaled_axis(turn) * goal.rotation,
-            ..goal.clone()
-        }
+        offset_goal(goal, &self.centre)
     }
 
     /// The offset to halve across: the one the pair's distance `gradient` (task space) changes

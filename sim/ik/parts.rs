@@ -30,7 +30,6 @@
 use super::search::Radii;
 use super::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use crate::scenario::{Goal, Tolerance};
-use nalgebra::{UnitQuaternion, Vector3};
 
 /// Boxes proven or split at most per goal (its self-motion's samples share them): about a
 /// second of the closed form's proofs where none succeeds.
@@ -59,14 +58,6 @@ impl Part {
         values.iter().map(|v| v * v).sum::<f64>().sqrt()
     }
 
-    /// Whether some offset of the box is within the tolerance (both parts within the unit ball).
-    fn touches_tolerance(&self) -> bool {
-        [0, 3].into_iter().all(|first| {
-            let nearest: Vec<f64> = (first..first + 3).map(|k| (self.centre[k].abs() - self.half[k]).max(0.0)).collect();
-            Self::norm(&nearest) <= 1.0
-        })
-    }
-
     /// Whether the centre's pose is within the tolerance.
     fn is_within(&self) -> bool {
         Self::norm(&self.centre[..3]) <= 1.0 && Self::norm(&self.centre[3..]) <= 1.0
@@ -77,20 +68,6 @@ impl Part {
         Radii {
             position_m: Self::norm(&self.half[..3]) * REACHED_POSITION_M,
             orientation_rad: Self::norm(&self.half[3..]) * REACHED_ORIENTATION_RAD,
-        }
-    }
-
-    /// The centre's pose, as a goal of `goal`'s mode.
-    fn goal(&self, goal: &Goal) -> Goal {
-        let position = Vector3::new(self.centre[0], self.centre[1], self.centre[2]) * REACHED_POSITION_M;
-        let rotation = match goal.tolerance {
-            Tolerance::ZSymmetric => goal.rotation * Vector3::new(self.centre[3], self.centre[4], 0.0),
-            _ => Vector3::new(self.centre[3], self.centre[4], self.centre[5]),
-        } * REACHED_ORIENTATION_RAD;
-        Goal {
-            position: goal.position + position,
-            rotation: UnitQuaternion::from_scaled_axis(rotation) * goal.rotation,
-            ..goal.clone()
         }
     }
 
@@ -140,11 +117,11 @@ pub(super) fn out_of_reach_by_parts(
     let mut proven = 0;
     let mut first: Option<String> = None;
     while let Some(part) = stack.pop() {
-        if !part.touches_tolerance() {
+        if !super::cells::touches_tolerance(&part.centre, &part.half) {
             continue;
         }
         *budget = budget.checked_sub(1)?;
-        let centre = part.goal(goal);
+        let centre = super::cells::offset_goal(goal, &part.centre);
         match prove(&centre, part.radii()) {
             Some(proof) => {
                 proven += 1;
@@ -168,6 +145,7 @@ pub(super) fn out_of_reach_by_parts(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{UnitQuaternion, Vector3};
 
     fn goal(tolerance: Tolerance) -> Goal {
         Goal {

@@ -175,8 +175,8 @@ impl Ik<'_> {
             |part| self.sample(part, parameter, value).is_some_and(|(_, found, _)| !found.is_empty()),
         );
         self.reach_parts_left = budget;
-        let cut = proof.is_some();
-        (proof, cut)
+        let proven = proof.is_some();
+        (proof, proven)
     }
 
     /// Why no configuration reaches `goal`'s pose within `radii`, the parameter within `slack`

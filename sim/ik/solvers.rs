@@ -90,10 +90,7 @@ impl AllSolutions {
     /// tolerance, when the method proves it (within `evaluations`, see
     /// [`SphericalWrist::out_of_reach_over_turn`]).
     pub fn out_of_reach_over_turn(&self, goal: &Isometry3<f64>, turn: f64, evaluations: usize) -> Option<String> {
-        match self {
-            AllSolutions::Wrist(wrist) => wrist.out_of_reach_over_turn(goal, turn, evaluations),
-            AllSolutions::General(_) | AllSolutions::Parallel(_) => None,
-        }
+        self.out_of_reach_within(goal, super::search::Radii::REACHED, turn, evaluations)
     }
 
     /// [`Self::out_of_reach_over_turn`] for the poses within `radii` of `goal` (a part of the
