@@ -108,7 +108,7 @@ fn eight_designs(c: &mut Criterion) {
     group.finish();
 }
 
-/// The same on a CUDA GPU (issue 25's target on one H100 or H200: 4 096 designs x 8 goals x 4
+/// The same on a CUDA GPU, the fused kernel (issue 25's target on one H100 or H200: 4 096 designs x 8 goals x 4
 /// starts x 200 steps in at most 10 s, and faster than the CPU from 8 designs up), where the
 /// crate is built with `--features cuda` and a GPU is present; elsewhere it says why it skips.
 /// `scripts/gpu-check.sh` builds and runs it.
@@ -125,9 +125,7 @@ fn gpu(c: &mut Criterion) {
     let mut group = c.benchmark_group("optimize/loss+gradient, batch 4096");
     group.sample_size(10);
     group.throughput(Throughput::Elements(size as u64));
-    group.bench_function("candle tensors (cuda)", |b| {
-        b.iter(|| cuda.evaluate(&batch, &params).expect("cuda"))
-    });
+    group.bench_function("fused kernel (cuda)", |b| b.iter(|| cuda.evaluate(&batch, &params).expect("cuda")));
     group.finish();
     let (_, scenario) = inputs();
     let opts = OptimizeOptions::default();
@@ -136,7 +134,7 @@ fn gpu(c: &mut Criterion) {
         let (batch, start) = optimize::starts_of(&designs, &scenario, &opts).expect("starts");
         let mut group = c.benchmark_group(format!("optimize/{count} designs x 8 goals x 4 starts x 200 steps"));
         group.sample_size(10);
-        group.bench_function("candle tensors (cuda)", |b| {
+        group.bench_function("fused kernel (cuda)", |b| {
             b.iter(|| optimize::optimize(&mut cuda, &batch, &designs, start.clone(), &opts).expect("optimize"))
         });
         group.finish();

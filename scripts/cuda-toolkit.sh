@@ -22,3 +22,39 @@ cuda_root=$("$cuda_venv/bin/python" -c 'import os, nvidia; print(os.path.join(li
 export PATH="$cuda_root/bin:$PATH" CUDA_PATH="$cuda_root" CUDA_ROOT="$cuda_root"
 # candle's kernels are compiled for this compute capability (9.0: H100, H200) unless set.
 export CUDA_COMPUTE_CAP="${CUDA_COMPUTE_CAP:-90}"
+
+# CUDA_LIBRARIES=1: what the linker and the loader need for a `cuda` binary. The linker wants
+# unversioned names (PyPI ships libcublas.so.13 and the like), linked under .cuda/lib. libcuda is
+# the driver's: where there is one (ldconfig knows libcuda.so.1) it is linked there too; where
+# there is none (a build machine without a GPU) the linker gets a stub of the driver's entry
+# points (.cuda/stub, never on LD_LIBRARY_PATH, named libcuda.so.1 inside), so the binary links
+# here and binds the real driver on the GPU machine it is copied to, as NVIDIA's own stubs do.
+if [ "${CUDA_LIBRARIES:-0}" = 1 ]; then
+  cuda_links=$PWD/.cuda/lib
+  mkdir -p "$cuda_links"
+  for lib in nvrtc curand cublas cublasLt cudart; do
+    found=$(ls "$cuda_root/lib/lib$lib.so."* 2>/dev/null | grep -v alt | head -1 || true)
+    [ -n "$found" ] || { echo "cuda-toolkit: lib$lib not in $cuda_root/lib" >&2; return 1; }
+    ln -sf "$found" "$cuda_links/lib$lib.so"
+  done
+  cuda_driver=$(ldconfig -p 2>/dev/null | awk '/libcuda\.so\.1 .*x86-64/ {print $NF; exit}')
+  cuda_link_path=$cuda_links
+  if [ -n "$cuda_driver" ]; then
+    ln -sf "$cuda_driver" "$cuda_links/libcuda.so"
+  else
+    rm -f "$cuda_links/libcuda.so"
+    cuda_stub=$PWD/.cuda/stub
+    if [ ! -e "$cuda_stub/libcuda.so" ]; then
+      mkdir -p "$cuda_stub"
+      # Every driver entry point cudarc declares, as an empty function: the linker only checks names.
+      cudarc_src=$(cargo metadata --format-version 1 --locked --features cuda 2>/dev/null \
+        | python3 -c 'import json, sys; print(next(p["manifest_path"] for p in json.load(sys.stdin)["packages"] if p["name"] == "cudarc").rsplit("/", 1)[0])')
+      grep -ho 'fn cu[A-Za-z0-9_]*(' "$cudarc_src/src/driver/sys/mod.rs" | sed 's/^fn \(.*\)($/int \1(void) { return 999; }/' \
+        | sort -u >"$cuda_stub/libcuda.c"
+      cc -shared -fPIC -Wl,-soname,libcuda.so.1 -o "$cuda_stub/libcuda.so" "$cuda_stub/libcuda.c"
+    fi
+    cuda_link_path=$cuda_links:$cuda_stub
+  fi
+  export LIBRARY_PATH="$cuda_link_path${LIBRARY_PATH:+:$LIBRARY_PATH}"
+  export LD_LIBRARY_PATH="$cuda_links:$cuda_root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+fi

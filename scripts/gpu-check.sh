@@ -25,23 +25,7 @@ capability=$(nvidia-smi --query-gpu=compute_cap --format=csv,noheader | head -1 
 export CUDA_COMPUTE_CAP="$capability" CUDA_LIBRARIES=1
 # shellcheck source=scripts/cuda-toolkit.sh
 source scripts/cuda-toolkit.sh
-cuda=$cuda_root
-
-# The linker wants unversioned names; PyPI ships libcublas.so.13 and the like, the driver
-# libcuda.so.1. A folder of links gives them.
-links=$PWD/.cuda/lib
-mkdir -p "$links"
-for lib in nvrtc curand cublas cublasLt; do
-  found=$(ls "$cuda/lib/lib$lib.so."* 2>/dev/null | grep -v alt | head -1 || true)
-  [ -n "$found" ] || { echo "gpu-check: lib$lib not in $cuda/lib" >&2; exit 1; }
-  ln -sf "$found" "$links/lib$lib.so"
-done
-driver=$(ldconfig -p | awk '/libcuda\.so\.1 .*x86-64/ {print $NF; exit}')
-[ -n "$driver" ] || { echo "gpu-check: the driver's libcuda.so.1 is not in ldconfig's cache" >&2; exit 2; }
-ln -sf "$driver" "$links/libcuda.so"
-
-export LIBRARY_PATH="$links${LIBRARY_PATH:+:$LIBRARY_PATH}"
-export LD_LIBRARY_PATH="$links:$cuda/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+[ -n "$cuda_driver" ] || { echo "gpu-check: the driver's libcuda.so.1 is not in ldconfig's cache" >&2; exit 2; }
 export CARGO_TARGET_DIR=target/cuda
 echo "gpu-check: CUDA toolkit $(nvcc --version | sed -n 's/.*release \([0-9.]*\).*/\1/p'), compute capability $capability"
 

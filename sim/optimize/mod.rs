@@ -13,6 +13,8 @@
 //! never scores worse than the start.
 
 pub mod analytic;
+#[cfg(any(feature = "cuda", test))]
+mod fused;
 mod gaps;
 pub mod problem;
 pub mod tensor;
@@ -29,6 +31,7 @@ use crate::design::{Design, DesignMode};
 use crate::ik::HARDWARE_WEIGHT;
 use crate::scenario::Scenario;
 use rand::SeedableRng;
+use rayon::prelude::*;
 
 /// One way to evaluate the objective and its gradients over a batch.
 pub trait Objective {
@@ -157,11 +160,13 @@ pub struct Optimized {
 /// sample whether it is its goal's best start (the lowest index among equals).
 pub fn design_objective(batch: &Batch, params: &Params, evaluation: &Evaluation) -> (Vec<f64>, Vec<bool>) {
     let designs = batch.designs.len();
-    let mut best: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    let goals = batch.targets.len();
+    // Per (design, goal), in that order: the sums below run in it, whatever the sample order.
+    let mut best: Vec<Option<usize>> = vec![None; designs * goals];
     for (b, sample) in batch.samples.iter().enumerate() {
-        let slot = best.entry((sample.design, sample.goal)).or_insert(b);
-        if evaluation.loss(b) < evaluation.loss(*slot) {
-            *slot = b;
+        let slot = &mut best[sample.design * goals + sample.goal];
+        if slot.is_none_or(|kept| evaluation.loss(b) < evaluation.loss(kept)) {
+            *slot = Some(b);
         }
     }
     let mut objective: Vec<f64> = (0..designs)
@@ -171,9 +176,11 @@ pub fn design_objective(batch: &Batch, params: &Params, evaluation: &Evaluation)
         })
         .collect();
     let mut chosen = vec![false; batch.samples.len()];
-    for (&(design, _), &b) in &best {
-        objective[design] += evaluation.loss(b);
-        chosen[b] = true;
+    for (slot, b) in best.into_iter().enumerate() {
+        if let Some(b) = b {
+            objective[slot / goals] += evaluation.loss(b);
+            chosen[b] = true;
+        }
     }
     (objective, chosen)
 }
@@ -199,6 +206,10 @@ pub fn optimize(
     let mut adam_d = Adam::new(opts.design_rate, start.d.len());
     let mut adam_a = Adam::new(opts.design_rate, start.a.len());
 
+    let mut samples_of = vec![Vec::new(); designs.len()];
+    for (b, sample) in batch.samples.iter().enumerate() {
+        samples_of[sample.design].push(b);
+    }
     let mut params = start;
     let mut evaluation = objective.evaluate(batch, &params)?;
     let (initial, mut chosen) = design_objective(batch, &params, &evaluation);
@@ -235,7 +246,7 @@ pub fn optimize(
         evaluation = objective.evaluate(batch, &params)?;
         let (value, now_chosen) = design_objective(batch, &params, &evaluation);
         chosen = now_chosen;
-        best.keep(batch, &params, &evaluation, &value, step);
+        best.keep(batch, &samples_of, &params, &evaluation, &value, step);
     }
     Ok(Optimized {
         params: best.params,
@@ -255,7 +266,8 @@ struct Best {
 
 impl Best {
     /// Takes the rows of every design whose objective `value` beats its best.
-    fn keep(&mut self, batch: &Batch, params: &Params, evaluation: &Evaluation, value: &[f64], step: usize) {
+    /// `samples_of` lists each design's samples.
+    fn keep(&mut self, batch: &Batch, samples_of: &[Vec<usize>], params: &Params, evaluation: &Evaluation, value: &[f64], step: usize) {
         let n = batch.dof;
         for (design, &v) in value.iter().enumerate() {
             // A NaN objective (a diverged step) never replaces a number; a number replaces a NaN.
@@ -269,10 +281,7 @@ impl Best {
             let rows = design * n..(design + 1) * n;
             self.params.d[rows.clone()].copy_from_slice(&params.d[rows.clone()]);
             self.params.a[rows.clone()].copy_from_slice(&params.a[rows]);
-            for (b, sample) in batch.samples.iter().enumerate() {
-                if sample.design != design {
-                    continue;
-                }
+            for &b in &samples_of[design] {
                 let rows = b * n..(b + 1) * n;
                 self.params.q[rows.clone()].copy_from_slice(&params.q[rows.clone()]);
                 for (to, from) in [
@@ -336,23 +345,30 @@ pub fn starts_of(designs: &[Design], scenario: &Scenario, opts: &OptimizeOptions
         search_boxes: 0,
         ..Default::default()
     };
-    let mut q = Vec::new();
-    let mut samples = Vec::new();
-    for (index, design) in designs.iter().enumerate() {
-        let model = crate::model::from_design(design).placed(&scenario.world_from_base);
-        let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
-        let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
-        for (goal, found) in solutions.iter().enumerate() {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);
-            for k in 0..opts.seeds {
-                match found.solutions.get(k) {
-                    Some(solution) => q.extend_from_slice(&solution.q),
-                    None => q.extend(model.random_configuration(&mut rng)),
+    // Each design's starts depend on it alone: solved in parallel, joined in design order.
+    let per_design = designs
+        .par_iter()
+        .map(|design| -> Result<Vec<f64>, OptimizeError> {
+            let model = crate::model::from_design(design).placed(&scenario.world_from_base);
+            let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
+            let solutions = crate::ik::solve_goals(&model, scenario, Some(&world), &ik);
+            let mut q = Vec::new();
+            for (goal, found) in solutions.iter().enumerate() {
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ goal as u64);
+                for k in 0..opts.seeds {
+                    match found.solutions.get(k) {
+                        Some(solution) => q.extend_from_slice(&solution.q),
+                        None => q.extend(model.random_configuration(&mut rng)),
+                    }
                 }
-                samples.push(Sample { design: index, goal });
             }
-        }
-    }
+            Ok(q)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let q = per_design.concat();
+    let samples = (0..designs.len())
+        .flat_map(|design| (0..scenario.goals.len()).flat_map(move |goal| (0..opts.seeds).map(move |_| Sample { design, goal })))
+        .collect();
     let batch = Batch::new(designs, scenario, samples)?;
     let params = Params {
         q,

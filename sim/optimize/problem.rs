@@ -7,6 +7,7 @@ use crate::collide::{self, CapsuleModel, CapsuleOther, CollisionWorld};
 use crate::design::Design;
 use crate::scenario::{Scenario, Tolerance};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Vector3};
+use rayon::prelude::*;
 
 /// Where a capsule's segment lies on its link, as a function of the link's DH row `(d, a)`
 /// (see `model::from_design`).
@@ -132,26 +133,33 @@ impl Batch {
         let world = crate::pipeline::collision_world(&model, scenario, &[]).map_err(Box::new)?;
         let capsule_model = collide::capsule_model(&world);
         let capsules = capsule_kinds(first, &capsule_model)?;
-        for design in designs {
-            if design.dof() != first.dof() {
-                return Err(OptimizeError::Batch(format!(
-                    "design `{}` has {} joints, `{}` {}: a batch holds one dof count",
-                    design.name,
-                    design.dof(),
-                    first.name,
-                    first.dof()
-                )));
-            }
-            let other = crate::model::from_design(design).placed(&scenario.world_from_base);
-            let other_world = crate::pipeline::collision_world(&other, scenario, &[]).map_err(Box::new)?;
-            let other_model = collide::capsule_model(&other_world);
-            if capsule_kinds(design, &other_model)? != capsules || !same_pairs(&other_model, &capsule_model) {
-                return Err(OptimizeError::Batch(format!(
-                    "design `{}` has another capsule structure than `{}` (zero offsets or checked pairs differ)",
-                    design.name, first.name
-                )));
-            }
-        }
+        // Each design's structure is checked on its own (in parallel); the first misfit in
+        // design order is reported, whatever the thread count.
+        let checks: Vec<Result<(), OptimizeError>> = designs
+            .par_iter()
+            .map(|design| {
+                if design.dof() != first.dof() {
+                    return Err(OptimizeError::Batch(format!(
+                        "design `{}` has {} joints, `{}` {}: a batch holds one dof count",
+                        design.name,
+                        design.dof(),
+                        first.name,
+                        first.dof()
+                    )));
+                }
+                let other = crate::model::from_design(design).placed(&scenario.world_from_base);
+                let other_world = crate::pipeline::collision_world(&other, scenario, &[]).map_err(Box::new)?;
+                let other_model = collide::capsule_model(&other_world);
+                if capsule_kinds(design, &other_model)? != capsules || !same_pairs(&other_model, &capsule_model) {
+                    return Err(OptimizeError::Batch(format!(
+                        "design `{}` has another capsule structure than `{}` (zero offsets or checked pairs differ)",
+                        design.name, first.name
+                    )));
+                }
+                Ok(())
+            })
+            .collect();
+        checks.into_iter().collect::<Result<(), _>>()?;
         if let Some(bad) = samples.iter().find(|s| s.design >= designs.len() || s.goal >= scenario.goals.len()) {
             return Err(OptimizeError::Batch(format!("sample {bad:?} names no design or goal")));
         }

@@ -18,10 +18,11 @@ use crate::model::PAPER_CAPSULE_RADIUS_M;
 use crate::scenario::Tolerance;
 use candle_core::{CpuStorage, CustomOp2, DType, Device, Layout, Shape, Tensor, Var};
 use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 
 /// Added under every square root so that a zero gradient through it stays 0, not NaN; it moves
 /// a value by at most 1e-15 m.
-const SQRT_FLOOR: f64 = 1e-30;
+pub(super) const SQRT_FLOOR: f64 = 1e-30;
 /// Distance (m) of a pair without candidates: far beyond the collision threshold.
 const FAR_M: f64 = 1e3;
 
@@ -46,8 +47,9 @@ impl Default for Tensors {
 }
 
 impl Tensors {
-    /// The backend on `device`: on the CPU a batch is evaluated 512 samples per graph, on a GPU
-    /// whole.
+    /// The backend on `device`: on the CPU a batch is evaluated 512 samples per graph; on a CUDA
+    /// GPU by one fused kernel (`fused.cu`: the same objective and gradient, a thread per sample),
+    /// or as one candle graph where the kernel's limits (16 joints, 64 capsules) are exceeded.
     pub fn on(device: Device) -> Self {
         let chunk = if device.is_cpu() { CPU_CHUNK } else { usize::MAX };
         Self { device, chunk }
@@ -76,10 +78,35 @@ impl Tensors {
 
 impl Objective for Tensors {
     fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError> {
+        #[cfg(feature = "cuda")]
+        if let (Device::Cuda(gpu), true) = (&self.device, super::fused::fits(batch)) {
+            return super::fused::evaluate(gpu, batch, params);
+        }
         if batch.samples.len() <= self.chunk {
             return self.evaluate_graph(batch, params);
         }
         let n = batch.dof;
+        // Chunks are independent graphs: evaluated in parallel, joined in sample order, so the
+        // answer is the same on any number of threads.
+        let parts: Vec<Result<Evaluation, OptimizeError>> = batch
+            .samples
+            .par_chunks(self.chunk)
+            .enumerate()
+            .map_init(
+                || batch.clone(),
+                |part, (k, samples)| {
+                    part.samples.clear();
+                    part.samples.extend_from_slice(samples);
+                    let first = k * self.chunk;
+                    let rows = Params {
+                        q: params.q[first * n..(first + samples.len()) * n].to_vec(),
+                        d: params.d.clone(),
+                        a: params.a.clone(),
+                    };
+                    self.evaluate_graph(part, &rows)
+                },
+            )
+            .collect();
         let mut out = Evaluation {
             distance: Vec::with_capacity(batch.samples.len()),
             collision: Vec::with_capacity(batch.samples.len()),
@@ -87,17 +114,8 @@ impl Objective for Tensors {
             grad_d: Vec::with_capacity(batch.samples.len() * n),
             grad_a: Vec::with_capacity(batch.samples.len() * n),
         };
-        let mut part = batch.clone();
-        for (k, samples) in batch.samples.chunks(self.chunk).enumerate() {
-            part.samples.clear();
-            part.samples.extend_from_slice(samples);
-            let first = k * self.chunk;
-            let rows = Params {
-                q: params.q[first * n..(first + samples.len()) * n].to_vec(),
-                d: params.d.clone(),
-                a: params.a.clone(),
-            };
-            let e = self.evaluate_graph(&part, &rows)?;
+        for e in parts {
+            let e = e?;
             out.distance.extend(e.distance);
             out.collision.extend(e.collision);
             out.grad_q.extend(e.grad_q);

@@ -1,0 +1,401 @@
+// The paper's objective and its gradient, one GPU thread per sample (design, goal, start): what
+// sim/optimize/tensor.rs computes with candle ops, fused, so that a step is one launch instead of
+// hundreds of small kernels and host round trips. Compiled at run time by NVRTC with
+// --fmad=false (no contracted multiply-adds: the CPU rounds every product and sum on its own).
+//
+// The arithmetic follows tensor.rs operation by operation where the order of a sum matters
+// (forward kinematics, the capsule ends, the closest points of gaps.rs, the pair sums of the
+// collision cost); the gradient is the chain rule written out, with the closest points held on
+// their segments (the envelope theorem, as gaps.rs and analytic.rs take it). Constants come in as
+// arguments from the Rust side, their one home.
+
+#define MAX_DOF 16
+#define MAX_CAPSULES 64
+
+struct Constants {
+    double distance_weight;
+    double rotation_weight;
+    double collision_weight;
+    double threshold;
+    double dead_zone;
+    double sqrt_floor;
+    double point_segment_m2;
+    double meet;
+};
+
+__device__ static inline double dot3(const double* a, const double* b) {
+    return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+}
+
+// `x` beyond the dead zone, else 0 (with no gradient).
+__device__ static inline double beyond(double x, double dead_zone) {
+    return x > dead_zone ? x : 0.0;
+}
+
+// Closest-point parameters (s, t) of segments p1-q1 and p2-q2: frames::closest_parameters_of_segments.
+__device__ static void closest_parameters(const double* p1, const double* q1, const double* p2, const double* q2,
+                                          double point_m2, double* s_out, double* t_out) {
+    double d1[3], d2[3], r[3];
+    for (int i = 0; i < 3; ++i) {
+        d1[i] = q1[i] - p1[i];
+        d2[i] = q2[i] - p2[i];
+        r[i] = p1[i] - p2[i];
+    }
+    double a = dot3(d1, d1), e = dot3(d2, d2), f = dot3(d2, r);
+    double s, t;
+    if (a <= point_m2 && e <= point_m2) {
+        s = 0.0;
+        t = 0.0;
+    } else if (a <= point_m2) {
+        s = 0.0;
+        t = fmin(fmax(f / e, 0.0), 1.0);
+    } else {
+        double c = dot3(d1, r);
+        if (e <= point_m2) {
+            s = fmin(fmax(-c / a, 0.0), 1.0);
+            t = 0.0;
+        } else {
+            double b = dot3(d1, d2);
+            double denominator = a * e - b * b;
+            s = denominator > 0.0 ? fmin(fmax((b * f - c * e) / denominator, 0.0), 1.0) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0.0) {
+                s = fmin(fmax(-c / a, 0.0), 1.0);
+                t = 0.0;
+            } else if (t > 1.0) {
+                s = fmin(fmax((b - c) / a, 0.0), 1.0);
+                t = 1.0;
+            }
+        }
+    }
+    *s_out = s;
+    *t_out = t;
+}
+
+// Adds w . dP/d(variable) for every variable, P the world end `end` (0 start, 1 end) of capsule
+// `c`: every joint up to its link turns it, every earlier row's d and a move it along that row's
+// z and x, and its own row stretches it as its kind says (0 along d, 1 along a, 2 a point).
+__device__ static void add_end(const double* w, int link, int kind, int end, const double* point,
+                               const double (*rot)[9], const double (*org)[3],
+                               double* gq, double* gd, double* ga) {
+    for (int j = 1; j <= link; ++j) {
+        const double* R = rot[j];
+        double z[3] = {R[2], R[5], R[8]};
+        double v[3] = {point[0] - org[j][0], point[1] - org[j][1], point[2] - org[j][2]};
+        double zxv[3] = {z[1] * v[2] - z[2] * v[1], z[2] * v[0] - z[0] * v[2], z[0] * v[1] - z[1] * v[0]};
+        gq[j - 1] += dot3(w, zxv);
+    }
+    for (int m = 1; m < link; ++m) {
+        const double* R = rot[m];
+        double z[3] = {R[2], R[5], R[8]};
+        double x[3] = {R[0], R[3], R[6]};
+        gd[m - 1] += dot3(w, z);
+        ga[m - 1] += dot3(w, x);
+    }
+    const double* R = rot[link];
+    double z[3] = {R[2], R[5], R[8]};
+    double x[3] = {R[0], R[3], R[6]};
+    if (kind == 0 && end == 1) {
+        gd[link - 1] += dot3(w, z);
+    } else if (kind == 1) {
+        gd[link - 1] += dot3(w, z);
+        if (end == 1) {
+            ga[link - 1] += dot3(w, x);
+        }
+    }
+}
+
+// Per sample: out[b] = distance, collision, then d loss / dq (n), d (n), a (n).
+//
+// design_static, per design: cos alpha (n), sin alpha (n), the base's rotation (9, row-major)
+// and translation (3), the tool's rotation from the last link frame (9) and offset (3).
+// goal_static, per goal: position (3), rotation (9, row-major), tolerance (0 pose, 1
+// z-symmetric, 2 position). capsules: link and kind per capsule. candidates, grouped by checked
+// pair (the model's order kept within a pair): pair, capsule, kind (0 capsule, 1 fixed segment,
+// 2 floor, 3 shape), other (the capsule or the shape column); reals: the fixed segment's ends (6)
+// or the floor's height (first), and the radii taken off the axis distance. witness, per sample
+// and shape column: distance, along, normal (3), centre (3).
+extern "C" __global__ void paper_objective(
+    int samples, int n, int capsule_count, int candidate_count, int pair_count, int shape_count,
+    Constants k,
+    const double* q, const double* d_rows, const double* a_rows,
+    const int* sample_design, const int* sample_goal,
+    const double* design_static, const double* goal_static,
+    const int* capsule_link, const int* capsule_kind,
+    const int* candidate_int, const double* candidate_real,
+    const double* witness,
+    double* out) {
+    int b = blockIdx.x * blockDim.x + threadIdx.x;
+    if (b >= samples || n > MAX_DOF || capsule_count > MAX_CAPSULES) {
+        return;
+    }
+    int design = sample_design[b];
+    const double* qs = q + (long long)b * n;
+    const double* dr = d_rows + (long long)design * n;
+    const double* ar = a_rows + (long long)design * n;
+    const double* ds = design_static + (long long)design * (2 * n + 24);
+    const double* cos_alpha = ds;
+    const double* sin_alpha = ds + n;
+    const double* base = ds + 2 * n;
+    const double* tool = ds + 2 * n + 12;
+    double* o = out + (long long)b * (2 + 3 * n);
+    double* gq = o + 2;
+    double* gd = gq + n;
+    double* ga = gd + n;
+    for (int i = 0; i < 3 * n; ++i) {
+        gq[i] = 0.0;
+    }
+
+    // Link frames 0..n as rotation columns x, y, z (kept row-major in rot) and origins, as
+    // tensor.rs's Frame::along, twist and turn compute them.
+    double rot[MAX_DOF + 1][9];
+    double org[MAX_DOF + 1][3];
+    double fx[3] = {base[0], base[3], base[6]};
+    double fy[3] = {base[1], base[4], base[7]};
+    double fz[3] = {base[2], base[5], base[8]};
+    double fo[3] = {base[9], base[10], base[11]};
+    for (int i = 0; i < 9; ++i) {
+        rot[0][i] = base[i];
+    }
+    for (int i = 0; i < 3; ++i) {
+        org[0][i] = fo[i];
+    }
+    for (int j = 0; j < n; ++j) {
+        if (j > 0) {
+            for (int i = 0; i < 3; ++i) {
+                fo[i] = (fo[i] + fx[i] * ar[j - 1]) + fz[i] * dr[j - 1];
+            }
+            double c = cos_alpha[j - 1], s = sin_alpha[j - 1];
+            for (int i = 0; i < 3; ++i) {
+                double y = fy[i] * c + fz[i] * s;
+                double z = fz[i] * c - fy[i] * s;
+                fy[i] = y;
+                fz[i] = z;
+            }
+        }
+        double c = cos(qs[j]), s = sin(qs[j]);
+        for (int i = 0; i < 3; ++i) {
+            double x = fx[i] * c + fy[i] * s;
+            double y = fy[i] * c - fx[i] * s;
+            fx[i] = x;
+            fy[i] = y;
+        }
+        for (int i = 0; i < 3; ++i) {
+            rot[j + 1][3 * i] = fx[i];
+            rot[j + 1][3 * i + 1] = fy[i];
+            rot[j + 1][3 * i + 2] = fz[i];
+            org[j + 1][i] = fo[i];
+        }
+    }
+    double last[3], tool_rot[9], tool_pos[3];
+    for (int i = 0; i < 3; ++i) {
+        last[i] = (fo[i] + fx[i] * ar[n - 1]) + fz[i] * dr[n - 1];
+    }
+    // tool rotation = [x y z] * M and position = last + [x y z] * v, each entry a sum over the
+    // inner index in order, as mat_mul and mat_vec sum.
+    for (int i = 0; i < 3; ++i) {
+        double row[3] = {fx[i], fy[i], fz[i]};
+        for (int c = 0; c < 3; ++c) {
+            tool_rot[3 * i + c] = (row[0] * tool[c] + row[1] * tool[3 + c]) + row[2] * tool[6 + c];
+        }
+        tool_pos[i] = last[i] + ((row[0] * tool[9] + row[1] * tool[10]) + row[2] * tool[11]);
+    }
+
+    // Pose distance.
+    const double* g = goal_static + (long long)sample_goal[b] * 13;
+    double error[3] = {tool_pos[0] - g[0], tool_pos[1] - g[1], tool_pos[2] - g[2]};
+    double error_norm = sqrt(dot3(error, error) + k.sqrt_floor);
+    double position = beyond(error_norm, k.dead_zone);
+    if (position > 0.0) {
+        double w[3];
+        for (int i = 0; i < 3; ++i) {
+            w[i] = k.distance_weight * error[i] / error_norm;
+        }
+        // The tool point moves with every joint and every row's d and a.
+        for (int j = 1; j <= n; ++j) {
+            const double* R = rot[j];
+            double z[3] = {R[2], R[5], R[8]};
+            double v[3] = {tool_pos[0] - org[j][0], tool_pos[1] - org[j][1], tool_pos[2] - org[j][2]};
+            double zxv[3] = {z[1] * v[2] - z[2] * v[1], z[2] * v[0] - z[0] * v[2], z[0] * v[1] - z[1] * v[0]};
+            double x[3] = {R[0], R[3], R[6]};
+            gq[j - 1] += dot3(w, zxv);
+            gd[j - 1] += dot3(w, z);
+            ga[j - 1] += dot3(w, x);
+        }
+    }
+    const double* gr = g + 3;
+    int mode = (int)g[12];
+    double rotation = 0.0;
+    double turn[3] = {0.0, 0.0, 0.0};
+    if (mode == 0) {
+        // error = goal^T tool; angle = atan2(|skew| / 2, (trace - 1) / 2).
+        double m[9];
+        for (int i = 0; i < 3; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                m[3 * i + c] = (gr[i] * tool_rot[c] + gr[3 + i] * tool_rot[3 + c]) + gr[6 + i] * tool_rot[6 + c];
+            }
+        }
+        double trace = (m[0] + m[4]) + m[8];
+        double v[3] = {m[7] - m[5], m[2] - m[6], m[3] - m[1]};
+        double length = sqrt(dot3(v, v) + k.sqrt_floor);
+        double angle = beyond(atan2(length * 0.5, (trace - 1.0) * 0.5), k.dead_zone);
+        rotation = angle;
+        if (angle > 0.0) {
+            // d angle = axis . omega, the axis of tool goal^T in the world: goal v / |v|.
+            for (int i = 0; i < 3; ++i) {
+                turn[i] = ((gr[3 * i] * v[0] + gr[3 * i + 1] * v[1]) + gr[3 * i + 2] * v[2]) / length;
+            }
+        }
+    } else if (mode == 1) {
+        double tz[3] = {tool_rot[2], tool_rot[5], tool_rot[8]};
+        double gz[3] = {gr[2], gr[5], gr[8]};
+        rotation = (1.0 - dot3(gz, tz)) * 0.5;
+        double cross[3] = {tz[1] * gz[2] - tz[2] * gz[1], tz[2] * gz[0] - tz[0] * gz[2], tz[0] * gz[1] - tz[1] * gz[0]};
+        for (int i = 0; i < 3; ++i) {
+            turn[i] = -0.5 * cross[i];
+        }
+    }
+    double rotation_scale = k.distance_weight * k.rotation_weight;
+    for (int j = 1; j <= n; ++j) {
+        const double* R = rot[j];
+        double z[3] = {R[2], R[5], R[8]};
+        gq[j - 1] += rotation_scale * dot3(turn, z);
+    }
+    o[0] = position + rotation * k.rotation_weight;
+
+    // Capsule ends in the world, as tensor.rs's collision() builds them.
+    double ends[MAX_CAPSULES][6];
+    for (int c = 0; c < capsule_count; ++c) {
+        int link = capsule_link[c];
+        const double* R = rot[link];
+        double zd[3], xa[3];
+        for (int i = 0; i < 3; ++i) {
+            zd[i] = R[3 * i + 2] * dr[link - 1];
+            xa[i] = R[3 * i] * ar[link - 1];
+        }
+        for (int i = 0; i < 3; ++i) {
+            double start, end;
+            if (capsule_kind[c] == 0) {
+                start = org[link][i];
+                end = org[link][i] + zd[i];
+            } else if (capsule_kind[c] == 1) {
+                start = org[link][i] + zd[i];
+                end = start + xa[i];
+            } else {
+                start = org[link][i];
+                end = org[link][i];
+            }
+            ends[c][i] = start;
+            ends[c][3 + i] = end;
+        }
+    }
+
+    // The closest candidate of each pair (the first strictly smallest), its cost and gradient.
+    const double e1 = exp(-1.0);
+    const double scale = 1.0 / (1.0 - e1);
+    double collision = 0.0;
+    int next = 0;
+    for (int pair = 0; pair < pair_count; ++pair) {
+        int best = -1;
+        double best_gap = 0.0, best_s = 0.0, best_t = 0.0;
+        double best_normal[3] = {0.0, 0.0, 0.0};
+        bool best_has_normal = false;
+        for (; next < candidate_count && candidate_int[4 * next] == pair; ++next) {
+            const int* ci = candidate_int + 4 * next;
+            const double* cr = candidate_real + 7 * next;
+            const double* p1 = ends[ci[1]];
+            const double* q1 = ends[ci[1]] + 3;
+            double gap, s = 0.0, t = 0.0, normal[3] = {0.0, 0.0, 0.0};
+            bool has_normal = false;
+            if (ci[2] == 2) {
+                gap = (fmin(p1[2], q1[2]) - cr[6]) - cr[0];
+            } else if (ci[2] == 3) {
+                const double* w = witness + ((long long)b * shape_count + ci[3]) * 8;
+                double point[3], offset[3];
+                for (int i = 0; i < 3; ++i) {
+                    point[i] = p1[i] + (q1[i] - p1[i]) * w[1];
+                    offset[i] = point[i] - w[5 + i];
+                }
+                gap = w[0] - dot3(w + 2, offset);
+                s = w[1];
+                for (int i = 0; i < 3; ++i) {
+                    normal[i] = w[2 + i];
+                }
+                has_normal = true;
+            } else {
+                const double* p2 = ci[2] == 0 ? ends[ci[3]] : cr;
+                const double* q2 = ci[2] == 0 ? ends[ci[3]] + 3 : cr + 3;
+                closest_parameters(p1, q1, p2, q2, k.point_segment_m2, &s, &t);
+                double between[3];
+                for (int i = 0; i < 3; ++i) {
+                    between[i] = (p2[i] + (q2[i] - p2[i]) * t) - (p1[i] + (q1[i] - p1[i]) * s);
+                }
+                double distance = sqrt(dot3(between, between));
+                if (distance >= k.meet) {
+                    for (int i = 0; i < 3; ++i) {
+                        normal[i] = between[i] / distance;
+                    }
+                    has_normal = true;
+                }
+                gap = distance - cr[6];
+            }
+            if (best < 0 || gap < best_gap) {
+                best = next;
+                best_gap = gap;
+                best_s = s;
+                best_t = t;
+                best_has_normal = has_normal;
+                for (int i = 0; i < 3; ++i) {
+                    best_normal[i] = normal[i];
+                }
+            }
+        }
+        if (best < 0) {
+            continue;
+        }
+        double exp_gap = exp(best_gap * (-1.0 / k.threshold));
+        double cost = exp_gap - e1;
+        if (!(cost > 0.0)) {
+            continue;
+        }
+        collision += cost;
+        // d loss / d gap.
+        double slope = k.collision_weight * scale * exp_gap * (-1.0 / k.threshold);
+        const int* ci = candidate_int + 4 * best;
+        int capsule = ci[1];
+        int link = capsule_link[capsule], kind = capsule_kind[capsule];
+        if (ci[2] == 2) {
+            int lower = ends[capsule][5] < ends[capsule][2] ? 1 : 0;
+            double w[3] = {0.0, 0.0, slope};
+            add_end(w, link, kind, lower, ends[capsule] + 3 * lower, rot, org, gq, gd, ga);
+            continue;
+        }
+        if (!best_has_normal) {
+            continue;
+        }
+        // The gap moves by -(1 - s) n, -s n with the first capsule's ends, (1 - t) n, t n with
+        // the other's.
+        double w[3];
+        for (int i = 0; i < 3; ++i) {
+            w[i] = -slope * (1.0 - best_s) * best_normal[i];
+        }
+        add_end(w, link, kind, 0, ends[capsule], rot, org, gq, gd, ga);
+        for (int i = 0; i < 3; ++i) {
+            w[i] = -slope * best_s * best_normal[i];
+        }
+        add_end(w, link, kind, 1, ends[capsule] + 3, rot, org, gq, gd, ga);
+        if (ci[2] == 0) {
+            int other = ci[3];
+            int link_b = capsule_link[other], kind_b = capsule_kind[other];
+            for (int i = 0; i < 3; ++i) {
+                w[i] = slope * (1.0 - best_t) * best_normal[i];
+            }
+            add_end(w, link_b, kind_b, 0, ends[other], rot, org, gq, gd, ga);
+            for (int i = 0; i < 3; ++i) {
+                w[i] = slope * best_t * best_normal[i];
+            }
+            add_end(w, link_b, kind_b, 1, ends[other] + 3, rot, org, gq, gd, ga);
+        }
+    }
+    o[1] = collision * scale;
+}
