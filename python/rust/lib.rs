@@ -271,7 +271,7 @@ fn loss_and_grad<'py>(
         a: designs.iter().flat_map(|d| d.joints.iter().map(|j| j.a)).collect(),
     };
     let evaluation = py
-        .detach(|| proving_ground::optimize::Analytic.evaluate(&batch, &params))
+        .detach(|| proving_ground::optimize::Fused::cpu().evaluate(&batch, &params))
         .map_err(error)?;
     let count = batch.samples.len();
     let (objective, chosen) = proving_ground::optimize::design_objective(&batch, &params, &evaluation);

@@ -3,7 +3,7 @@
 use super::Failure;
 use proving_ground::design::Design;
 use proving_ground::error::Error;
-use proving_ground::optimize::{self, OptimizeError, OptimizeOptions, Tensors};
+use proving_ground::optimize::{self, Fused, OptimizeError, OptimizeOptions};
 use proving_ground::pipeline::{self, Engines, LoadOptions, ValidateOptions};
 use proving_ground::report::Report;
 use proving_ground::run::Outcome;
@@ -97,8 +97,8 @@ pub(crate) fn optimize_command(args: &OptimizeArgs) -> Result<ExitCode, Failure>
                 .into(),
         )
         .into()),
-        "cuda" => Tensors::cuda(0)?,
-        _ => Tensors::default(),
+        "cuda" => Fused::cuda(0)?,
+        _ => Fused::cpu(),
     };
     // Only free and economic designs have lengths to tune; the others are validated as they are.
     let tunable: Vec<usize> = (0..inputs.len())

@@ -27,6 +27,175 @@ __device__ static inline double dot3(const double* a, const double* b) {
     return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
 }
 
+// sin, cos, exp and atan2 from IEEE additions, multiplications, divisions and exact bit
+// operations alone, in the order of sim/optimize/portable.rs (musl's algorithms), so that the
+// GPU rounds as the CPU does: libdevice's and libm's last bits differ, and 200 Adam steps through
+// the objective's kinks grow one ulp into another design.
+__device__ static inline double pg_f(unsigned long long bits) {
+    return __longlong_as_double((long long)bits);
+}
+
+__device__ static void pg_rem_pio2(double x, long long* n_out, double* y0, double* y1) {
+    const unsigned long long parts[3][2] = {
+        {0x3FF921FB54400000ULL, 0x3DD0B4611A626331ULL},
+        {0x3DD0B4611A600000ULL, 0x3BA3198A2E037073ULL},
+        {0x3BA3198A2E000000ULL, 0x397B839A252049C1ULL},
+    };
+    double n = round(x * pg_f(0x3FE45F306DC9C883ULL));
+    double r = x - n * pg_f(parts[0][0]);
+    double w = n * pg_f(parts[0][1]);
+    for (int i = 1; i < 3; ++i) {
+        double t = r;
+        w = n * pg_f(parts[i][0]);
+        r = t - w;
+        w = n * pg_f(parts[i][1]) - ((t - r) - w);
+    }
+    *y0 = r - w;
+    *y1 = (r - *y0) - w;
+    *n_out = (long long)n;
+}
+
+__device__ static double pg_kernel_sin(double x, double y) {
+    double z = x * x;
+    double w = z * z;
+    double r = (pg_f(0x3F8111111110F8A6ULL) + z * (pg_f(0xBF2A01A019C161D5ULL) + z * pg_f(0x3EC71DE357B1FE7DULL))) +
+               (z * w) * (pg_f(0xBE5AE5E68A2B9CEBULL) + z * pg_f(0x3DE5D93A5ACFD57CULL));
+    double v = z * x;
+    return x - ((z * (0.5 * y - v * r) - y) - v * pg_f(0xBFC5555555555549ULL));
+}
+
+__device__ static double pg_kernel_cos(double x, double y) {
+    double z = x * x;
+    double w = z * z;
+    double r = z * (pg_f(0x3FA555555555554CULL) + z * (pg_f(0xBF56C16C16C15177ULL) + z * pg_f(0x3EFA01A019CB1590ULL))) +
+               (w * w) * (pg_f(0xBE927E4F809C52ADULL) + z * (pg_f(0x3E21EE9EBDB4B1C4ULL) + z * pg_f(0xBDA8FAE9BE8838D4ULL)));
+    double hz = 0.5 * z;
+    double v = 1.0 - hz;
+    return v + (((1.0 - v) - hz) + (z * r - x * y));
+}
+
+__device__ static double pg_sin(double x) {
+    long long n;
+    double y0, y1;
+    pg_rem_pio2(x, &n, &y0, &y1);
+    switch (n & 3) {
+        case 0: return pg_kernel_sin(y0, y1);
+        case 1: return pg_kernel_cos(y0, y1);
+        case 2: return -pg_kernel_sin(y0, y1);
+        default: return -pg_kernel_cos(y0, y1);
+    }
+}
+
+__device__ static double pg_cos(double x) {
+    long long n;
+    double y0, y1;
+    pg_rem_pio2(x, &n, &y0, &y1);
+    switch (n & 3) {
+        case 0: return pg_kernel_cos(y0, y1);
+        case 1: return -pg_kernel_sin(y0, y1);
+        case 2: return -pg_kernel_cos(y0, y1);
+        default: return pg_kernel_sin(y0, y1);
+    }
+}
+
+__device__ static double pg_scale(double y, long long n) {
+    double up = pg_f(0x7FE0000000000000ULL), down = pg_f(0x0360000000000000ULL);
+    if (n > 1023) {
+        y *= up;
+        n -= 1023;
+        if (n > 1023) {
+            y *= up;
+            n = n - 1023 < 1023 ? n - 1023 : 1023;
+        }
+    } else if (n < -1022) {
+        y *= down;
+        n += 1022 - 53;
+        if (n < -1022) {
+            y *= down;
+            n = n + 1022 - 53 > -1022 ? n + 1022 - 53 : -1022;
+        }
+    }
+    return y * pg_f((unsigned long long)(0x3FF + n) << 52);
+}
+
+__device__ static double pg_exp(double x) {
+    if (x != x) {
+        return x;
+    }
+    if (x > 709.782712893384) {
+        return pg_f(0x7FF0000000000000ULL);
+    }
+    if (x < -745.1332191019411) {
+        return 0.0;
+    }
+    double k = round(x * pg_f(0x3FF71547652B82FEULL));
+    double hi = x - k * pg_f(0x3FE62E42FEE00000ULL);
+    double lo = k * pg_f(0x3DEA39EF35793C76ULL);
+    double r = hi - lo;
+    double rr = r * r;
+    double c = r - rr * (pg_f(0x3FC555555555553EULL) +
+                         rr * (pg_f(0xBF66C16C16BEBD93ULL) +
+                               rr * (pg_f(0x3F11566AAF25DE2CULL) + rr * (pg_f(0xBEBBBD41C5D26BF1ULL) + rr * pg_f(0x3E66376972BEA4D0ULL)))));
+    double y = 1.0 + (((r * c) / (2.0 - c) - lo) + hi);
+    return pg_scale(y, (long long)k);
+}
+
+__device__ static double pg_atan_of_positive(double x) {
+    const unsigned long long hi[4] = {0x3FDDAC670561BB4FULL, 0x3FE921FB54442D18ULL, 0x3FEF730BD281F69BULL, 0x3FF921FB54442D18ULL};
+    const unsigned long long lo[4] = {0x3C7A2B7F222F65E2ULL, 0x3C81A62633145C07ULL, 0x3C7007887AF0CBBDULL, 0x3C91A62633145C07ULL};
+    const unsigned long long at[11] = {
+        0x3FD555555555550DULL, 0xBFC999999998EBC4ULL, 0x3FC24924920083FFULL, 0xBFBC71C6FE231671ULL,
+        0x3FB745CDC54C206EULL, 0xBFB3B0F2AF749A6DULL, 0x3FB10D66A0D03D51ULL, 0xBFADDE2D52DEFD9AULL,
+        0x3FA97B4B24760DEBULL, 0xBFA2B4442C6A6C2FULL, 0x3F90AD3AE322DA11ULL,
+    };
+    if (x >= pg_f(0x4410000000000000ULL)) {
+        return pg_f(hi[3]);
+    }
+    int id;
+    if (x < 0.4375) {
+        id = -1;
+    } else if (x < 0.6875) {
+        id = 0;
+        x = (2.0 * x - 1.0) / (2.0 + x);
+    } else if (x < 1.1875) {
+        id = 1;
+        x = (x - 1.0) / (x + 1.0);
+    } else if (x < 2.4375) {
+        id = 2;
+        x = (x - 1.5) / (1.0 + 1.5 * x);
+    } else {
+        id = 3;
+        x = -1.0 / x;
+    }
+    double z = x * x;
+    double w = z * z;
+    double s1 = z * (pg_f(at[0]) + w * (pg_f(at[2]) + w * (pg_f(at[4]) + w * (pg_f(at[6]) + w * (pg_f(at[8]) + w * pg_f(at[10]))))));
+    double s2 = w * (pg_f(at[1]) + w * (pg_f(at[3]) + w * (pg_f(at[5]) + w * (pg_f(at[7]) + w * pg_f(at[9])))));
+    if (id < 0) {
+        return x - x * (s1 + s2);
+    }
+    return pg_f(hi[id]) - ((x * (s1 + s2) - pg_f(lo[id])) - x);
+}
+
+__device__ static double pg_atan2(double y, double x) {
+    if (x != x || y != y) {
+        return x + y;
+    }
+    double sign = 1.0;
+    if (y < 0.0) {
+        y = -y;
+        sign = -1.0;
+    }
+    if (x == 0.0) {
+        return sign * (y == 0.0 ? 0.0 : pg_f(0x3FF921FB54442D18ULL));
+    }
+    double z = pg_atan_of_positive(fabs(y / x));
+    if (x > 0.0) {
+        return sign * z;
+    }
+    return sign * (pg_f(0x400921FB54442D18ULL) - (z - pg_f(0x3CA1A62633145C07ULL)));
+}
+
 // `x` beyond the dead zone, else 0 (with no gradient).
 __device__ static inline double beyond(double x, double dead_zone) {
     return x > dead_zone ? x : 0.0;
@@ -173,7 +342,7 @@ extern "C" __global__ void paper_objective(
                 fz[i] = z;
             }
         }
-        double c = cos(qs[j]), s = sin(qs[j]);
+        double c = pg_cos(qs[j]), s = pg_sin(qs[j]);
         for (int i = 0; i < 3; ++i) {
             double x = fx[i] * c + fy[i] * s;
             double y = fy[i] * c - fx[i] * s;
@@ -238,7 +407,7 @@ extern "C" __global__ void paper_objective(
         double trace = (m[0] + m[4]) + m[8];
         double v[3] = {m[7] - m[5], m[2] - m[6], m[3] - m[1]};
         double length = sqrt(dot3(v, v) + k.sqrt_floor);
-        double angle = beyond(atan2(length * 0.5, (trace - 1.0) * 0.5), k.dead_zone);
+        double angle = beyond(pg_atan2(length * 0.5, (trace - 1.0) * 0.5), k.dead_zone);
         rotation = angle;
         if (angle > 0.0) {
             // d angle = axis . omega, the axis of tool goal^T in the world: goal v / |v|.
@@ -291,7 +460,7 @@ extern "C" __global__ void paper_objective(
     }
 
     // The closest candidate of each pair (the first strictly smallest), its cost and gradient.
-    const double e1 = exp(-1.0);
+    const double e1 = pg_exp(-1.0);
     const double scale = 1.0 / (1.0 - e1);
     double collision = 0.0;
     int next = 0;
@@ -353,7 +522,7 @@ extern "C" __global__ void paper_objective(
         if (best < 0) {
             continue;
         }
-        double exp_gap = exp(best_gap * (-1.0 / k.threshold));
+        double exp_gap = pg_exp(best_gap * (-1.0 / k.threshold));
         double cost = exp_gap - e1;
         if (!(cost > 0.0)) {
             continue;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 struct Index {
@@ -14,6 +15,11 @@ struct Index {
 static Index blockIdx, threadIdx, blockDim;
 #define __global__
 #define __device__
+static double __longlong_as_double(long long bits) {
+    double x;
+    std::memcpy(&x, &bits, sizeof x);
+    return x;
+}
 
 #include "fused.cu"
 

@@ -13,14 +13,16 @@
 //! never scores worse than the start.
 
 pub mod analytic;
-#[cfg(any(feature = "cuda", test))]
 mod fused;
+mod fused_cpu;
 mod gaps;
+mod portable;
 pub mod problem;
 pub mod tensor;
 mod tune;
 
 pub use analytic::Analytic;
+pub use fused::Fused;
 pub use problem::{Batch, Evaluation, Params, Sample};
 pub use tensor::Tensors;
 pub use tune::{

@@ -47,9 +47,8 @@ impl Default for Tensors {
 }
 
 impl Tensors {
-    /// The backend on `device`: on the CPU a batch is evaluated 512 samples per graph; on a CUDA
-    /// GPU by one fused kernel (`fused.cu`: the same objective and gradient, a thread per sample),
-    /// or as one candle graph where the kernel's limits (16 joints, 64 capsules) are exceeded.
+    /// The backend on `device`: on the CPU a batch is evaluated 512 samples per graph (chunks in
+    /// parallel), on a GPU whole. [`super::Fused`] is the fast path on either.
     pub fn on(device: Device) -> Self {
         let chunk = if device.is_cpu() { CPU_CHUNK } else { usize::MAX };
         Self { device, chunk }
@@ -78,10 +77,6 @@ impl Tensors {
 
 impl Objective for Tensors {
     fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError> {
-        #[cfg(feature = "cuda")]
-        if let (Device::Cuda(gpu), true) = (&self.device, super::fused::fits(batch)) {
-            return super::fused::evaluate(gpu, batch, params);
-        }
         if batch.samples.len() <= self.chunk {
             return self.evaluate_graph(batch, params);
         }

@@ -9,7 +9,7 @@ mod summary;
 pub use summary::summary_html;
 
 use crate::error::Error as RunError;
-use crate::optimize::{self, OptimizeOptions, Tensors};
+use crate::optimize::{self, Fused, OptimizeOptions};
 use crate::pipeline::{Loaded, ValidateOptions};
 use crate::progress::Progress;
 use crate::report::Report;
@@ -283,7 +283,7 @@ fn refine(
             seed: opts.seed,
             ..Default::default()
         };
-        let tuned = optimize::tune(std::slice::from_ref(design), scenario, &optimize_opts, &mut Tensors::default())?;
+        let tuned = optimize::tune(std::slice::from_ref(design), scenario, &optimize_opts, &mut Fused::cpu())?;
         let Some(t) = tuned.into_iter().next() else {
             return Ok(unchanged("the optimizer returned nothing"));
         };
