@@ -37,7 +37,8 @@ if [ "${CUDA_LIBRARIES:-0}" = 1 ]; then
     [ -n "$found" ] || { echo "cuda-toolkit: lib$lib not in $cuda_root/lib" >&2; return 1; }
     ln -sf "$found" "$cuda_links/lib$lib.so"
   done
-  cuda_driver=$(ldconfig -p 2>/dev/null | awk '/libcuda\.so\.1 .*x86-64/ {print $NF; exit}')
+  # Read to the end (no early exit): under `set -o pipefail` a cut-off ldconfig would fail the line.
+  cuda_driver=$( (ldconfig -p 2>/dev/null || true) | awk '/libcuda\.so\.1 .*x86-64/ && !found {print $NF; found = 1}')
   cuda_link_path=$cuda_links
   if [ -n "$cuda_driver" ]; then
     ln -sf "$cuda_driver" "$cuda_links/libcuda.so"

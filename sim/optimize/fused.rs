@@ -50,7 +50,7 @@ pub(super) struct Constants {
 unsafe impl candle_core::cuda_backend::cudarc::driver::DeviceRepr for Constants {}
 
 /// Whether the GPU kernel takes `batch` (its arrays are sized for at most 16 joints and 64
-/// capsules; beyond that the candle graph evaluates it there).
+/// capsules; beyond that the CPU evaluates it).
 #[cfg(feature = "cuda")]
 fn fits(batch: &Batch) -> bool {
     batch.dof <= MAX_DOF && batch.capsules.len() <= MAX_CAPSULES
@@ -278,11 +278,9 @@ impl Fused {
 
 impl super::Objective for Fused {
     fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError> {
+        // Beyond the kernel's limits the CPU evaluates it: the same bits, only slower.
         #[cfg(feature = "cuda")]
-        if let Some(gpu) = &self.gpu {
-            if !fits(batch) {
-                return super::Tensors::on(candle_core::Device::Cuda(gpu.clone())).evaluate(batch, params);
-            }
+        if let (Some(gpu), true) = (&self.gpu, fits(batch)) {
             return evaluate(gpu, batch, params);
         }
         let inputs = Inputs::new(batch, params)?;
