@@ -26,41 +26,11 @@ fn cross(a: &[f64], b: &[f64]) -> V3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-/// `fused.cu`'s `closest_parameters` (that is `frames::closest_parameters_of_segments`).
-fn closest_parameters(p1: &[f64], q1: &[f64], p2: &[f64], q2: &[f64], point_m2: f64) -> (f64, f64) {
-    let d1 = [q1[0] - p1[0], q1[1] - p1[1], q1[2] - p1[2]];
-    let d2 = [q2[0] - p2[0], q2[1] - p2[1], q2[2] - p2[2]];
-    let r = [p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2]];
-    let (a, e, f) = (dot3(&d1, &d1), dot3(&d2, &d2), dot3(&d2, &r));
-    // fmax then fmin, as the kernel: a NaN becomes 0 (`clamp` would keep it).
-    #[allow(clippy::manual_clamp)]
-    let clamp = |x: f64| x.max(0.0).min(1.0);
-    if a <= point_m2 && e <= point_m2 {
-        (0.0, 0.0)
-    } else if a <= point_m2 {
-        (0.0, clamp(f / e))
-    } else {
-        let c = dot3(&d1, &r);
-        if e <= point_m2 {
-            (clamp(-c / a), 0.0)
-        } else {
-            let b = dot3(&d1, &d2);
-            let denominator = a * e - b * b;
-            let s = if denominator > 0.0 {
-                clamp((b * f - c * e) / denominator)
-            } else {
-                0.0
-            };
-            let t = (b * s + f) / e;
-            if t < 0.0 {
-                (clamp(-c / a), 0.0)
-            } else if t > 1.0 {
-                (clamp((b - c) / a), 1.0)
-            } else {
-                (s, t)
-            }
-        }
-    }
+/// `fused.cu`'s `closest_parameters`: `frames::closest_parameters_of_segments`, whose operations
+/// the kernel's copy repeats in order (the tests hold the two to the bit).
+fn closest_parameters(p1: &[f64], q1: &[f64], p2: &[f64], q2: &[f64]) -> (f64, f64) {
+    let v = |p: &[f64]| nalgebra::Vector3::new(p[0], p[1], p[2]);
+    crate::frames::closest_parameters_of_segments(v(p1), v(q1), v(p2), v(q2))
 }
 
 /// The link frames of one sample: row-major rotations and origins, 0 the base.
@@ -297,7 +267,7 @@ pub(super) fn sample(inp: &Inputs, b: usize, o: &mut [f64]) {
                     } else {
                         (&cr[..3], &cr[3..6])
                     };
-                    (s, t) = closest_parameters(p1, q1, p2, q2, k.point_segment_m2);
+                    (s, t) = closest_parameters(p1, q1, p2, q2);
                     let between: V3 = std::array::from_fn(|i| (p2[i] + (q2[i] - p2[i]) * t) - (p1[i] + (q1[i] - p1[i]) * s));
                     let distance = dot3(&between, &between).sqrt();
                     if distance >= k.meet {
