@@ -568,3 +568,155 @@ extern "C" __global__ void paper_objective(
     }
     o[1] = collision * scale;
 }
+
+// The rest of optimize()'s step on the device, so that a run keeps every step there (one launch
+// each, no copy until the end): the same operations in the same order as sim/optimize/mod.rs
+// (`Adam::step`, `project`, `design_objective`, `Best::keep`), so the run is the CPU's, bit for bit.
+// Rows of `out` are the objective kernel's: distance, collision, then d loss / dq, dd, da (n each).
+
+struct Step {
+    int n, samples, designs, goals;
+    double beta1, beta2, epsilon, joint_rate, design_rate;
+    double bias1, bias2;          // 1 - beta^step, computed on the host as the CPU computes them
+    double hardware_weight, distance_weight, collision_weight;
+    double max_length, economic_lower, economic_upper;
+};
+
+__device__ static inline double pg_clamp(double v, double lower, double upper) {
+    return v < lower ? lower : (v > upper ? upper : v);
+}
+
+__device__ static inline double pg_signum(double v) {
+    return v != v ? v : copysign(1.0, v);
+}
+
+__device__ static inline void pg_adam(double* value, double* first, double* second, double g, double rate, const Step& s) {
+    *first = s.beta1 * *first + (1.0 - s.beta1) * g;
+    *second = s.beta2 * *second + (1.0 - s.beta2) * g * g;
+    double m = *first / s.bias1, v = *second / s.bias2;
+    *value -= rate * m / (sqrt(v) + s.epsilon);
+}
+
+// Per sample: Adam on its joints, then each into its joint's limits.
+extern "C" __global__ void joint_step(Step s, double* q, double* first, double* second, const double* out,
+                                      const int* sample_design, const double* limits) {
+    int b = blockIdx.x * blockDim.x + threadIdx.x;
+    if (b >= s.samples) {
+        return;
+    }
+    const double* grad_q = out + (long long)b * (2 + 3 * s.n) + 2;
+    const double* lim = limits + (long long)sample_design[b] * s.n * 2;
+    for (int j = 0; j < s.n; ++j) {
+        long long i = (long long)b * s.n + j;
+        pg_adam(&q[i], &first[i], &second[i], grad_q[j], s.joint_rate, s);
+        q[i] = pg_clamp(q[i], lim[2 * j], lim[2 * j + 1]);
+    }
+}
+
+// Per design: the gradient of its objective (its goals' chosen samples, in sample order, and the
+// hardware cost's signs), Adam on its free d and a, then the projection by its mode.
+extern "C" __global__ void design_step(Step s, double* d, double* a, double* first_d, double* second_d,
+                                       double* first_a, double* second_a, const double* out, const int* chosen,
+                                       const int* design_offsets, const int* design_samples, const int* free_d,
+                                       const int* free_a, const int* economic) {
+    int k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= s.designs) {
+        return;
+    }
+    int width = 2 + 3 * s.n;
+    for (int j = 0; j < s.n; ++j) {
+        double gd = 0.0, ga = 0.0;
+        for (int at = design_offsets[k]; at < design_offsets[k + 1]; ++at) {
+            int b = design_samples[at];
+            if (chosen[b]) {
+                gd += out[(long long)b * width + 2 + s.n + j];
+                ga += out[(long long)b * width + 2 + 2 * s.n + j];
+            }
+        }
+        long long i = (long long)k * s.n + j;
+        gd += s.hardware_weight * pg_signum(d[i]);
+        ga += s.hardware_weight * pg_signum(a[i]);
+        if (free_d[i]) {
+            pg_adam(&d[i], &first_d[i], &second_d[i], gd, s.design_rate, s);
+        }
+        if (free_a[i]) {
+            pg_adam(&a[i], &first_a[i], &second_a[i], ga, s.design_rate, s);
+        }
+        double* values[2] = {&d[i], &a[i]};
+        for (int v = 0; v < 2; ++v) {
+            double x = *values[v];
+            *values[v] = economic[k] && x != 0.0 ? pg_signum(x) * pg_clamp(fabs(x), s.economic_lower, s.economic_upper)
+                                                 : pg_clamp(x, -s.max_length, s.max_length);
+        }
+    }
+}
+
+// Per design: its objective (the hardware cost, then each goal's best start in goal order, the
+// lowest index among equals) and which samples are chosen.
+extern "C" __global__ void choose(Step s, const double* d, const double* a, const double* out, int* chosen,
+                                  double* objective, const int* slot_offsets, const int* slot_samples) {
+    int k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= s.designs) {
+        return;
+    }
+    int width = 2 + 3 * s.n;
+    double hardware = -0.0;
+    for (int j = 0; j < s.n; ++j) {
+        hardware += fabs(d[(long long)k * s.n + j]);
+    }
+    for (int j = 0; j < s.n; ++j) {
+        hardware += fabs(a[(long long)k * s.n + j]);
+    }
+    double value = s.hardware_weight * hardware;
+    for (int g = 0; g < s.goals; ++g) {
+        int slot = k * s.goals + g;
+        int best = -1;
+        double best_loss = 0.0;
+        for (int at = slot_offsets[slot]; at < slot_offsets[slot + 1]; ++at) {
+            int b = slot_samples[at];
+            chosen[b] = 0;
+            double loss = s.distance_weight * out[(long long)b * width] + s.collision_weight * out[(long long)b * width + 1];
+            if (best < 0 || loss < best_loss) {
+                best = b;
+                best_loss = loss;
+            }
+        }
+        if (best >= 0) {
+            chosen[best] = 1;
+            value += best_loss;
+        }
+    }
+    objective[k] = value;
+}
+
+// Per design: its rows kept where its objective beats its best (a number beats a NaN).
+extern "C" __global__ void keep(Step s, int step, const double* objective, double* best_objective, int* best_step,
+                                const double* q, const double* d, const double* a, const double* out, double* best_q,
+                                double* best_d, double* best_a, double* best_out, const int* design_offsets,
+                                const int* design_samples) {
+    int k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= s.designs) {
+        return;
+    }
+    double v = objective[k], kept = best_objective[k];
+    bool better = v < kept || (kept != kept && v == v);
+    if (!better) {
+        return;
+    }
+    best_objective[k] = v;
+    best_step[k] = step;
+    for (int j = 0; j < s.n; ++j) {
+        best_d[(long long)k * s.n + j] = d[(long long)k * s.n + j];
+        best_a[(long long)k * s.n + j] = a[(long long)k * s.n + j];
+    }
+    int width = 2 + 3 * s.n;
+    for (int at = design_offsets[k]; at < design_offsets[k + 1]; ++at) {
+        long long b = design_samples[at];
+        for (int j = 0; j < s.n; ++j) {
+            best_q[b * s.n + j] = q[b * s.n + j];
+        }
+        for (int i = 0; i < width; ++i) {
+            best_out[b * width + i] = out[b * width + i];
+        }
+    }
+}

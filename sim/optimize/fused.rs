@@ -290,6 +290,285 @@ impl super::Objective for Fused {
             .for_each(|(b, row)| super::fused_cpu::sample(&inputs, b, row));
         Ok(unpack(&out, batch.dof))
     }
+
+    /// On a GPU, where no obstacle needs parry's witnesses from the host: every step on the
+    /// device (see `device_loop`).
+    fn optimize_whole(
+        &mut self,
+        batch: &Batch,
+        designs: &[crate::design::Design],
+        start: &Params,
+        opts: &super::OptimizeOptions,
+    ) -> Option<Result<super::Optimized, OptimizeError>> {
+        #[cfg(feature = "cuda")]
+        if let Some(gpu) = &self.gpu {
+            let shapes = batch.model.candidates.iter().any(|c| matches!(c.2, CapsuleOther::Shape(_)));
+            if fits(batch) && !shapes && !batch.samples.is_empty() {
+                return Some(device_loop(gpu, batch, designs, start, opts));
+            }
+        }
+        let _ = (batch, designs, start, opts);
+        None
+    }
+}
+
+/// `fused.cu`'s `struct Step`: the constants of one step of the optimizer.
+#[cfg(feature = "cuda")]
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+struct Step {
+    n: i32,
+    samples: i32,
+    designs: i32,
+    goals: i32,
+    beta1: f64,
+    beta2: f64,
+    epsilon: f64,
+    joint_rate: f64,
+    design_rate: f64,
+    bias1: f64,
+    bias2: f64,
+    hardware_weight: f64,
+    distance_weight: f64,
+    collision_weight: f64,
+    max_length: f64,
+    economic_lower: f64,
+    economic_upper: f64,
+}
+
+// SAFETY: four i32 then f64 fields, `repr(C)`, the layout the kernels declare.
+#[cfg(feature = "cuda")]
+unsafe impl candle_core::cuda_backend::cudarc::driver::DeviceRepr for Step {}
+
+/// Offsets and members of `groups` lists of samples, each in sample order.
+#[cfg(feature = "cuda")]
+fn compressed(groups: usize, of: impl Fn(usize) -> usize, samples: usize) -> (Vec<i32>, Vec<i32>) {
+    let mut members = vec![Vec::new(); groups];
+    for b in 0..samples {
+        members[of(b)].push(b as i32);
+    }
+    let mut offsets = vec![0i32];
+    for m in &members {
+        offsets.push(offsets[offsets.len() - 1] + m.len() as i32);
+    }
+    (offsets, members.concat())
+}
+
+/// [`super::optimize`] with every step on `gpu`: the objective kernel, then `fused.cu`'s
+/// `choose`, `keep`, `joint_step` and `design_step`, the same operations in the same order as
+/// the CPU's loop, so the result is the CPU's, bit for bit (the CUDA test compares them).
+/// Nothing crosses to the host until the end.
+#[cfg(feature = "cuda")]
+fn device_loop(
+    gpu: &candle_core::CudaDevice,
+    batch: &Batch,
+    designs: &[crate::design::Design],
+    start: &Params,
+    opts: &super::OptimizeOptions,
+) -> Result<super::Optimized, OptimizeError> {
+    use candle_core::cuda_backend::cudarc::driver::{LaunchConfig, PushKernelArg};
+    let n = batch.dof;
+    let count = batch.samples.len();
+    let goals = batch.targets.len();
+    let inputs = Inputs::new(batch, start)?;
+    let width = inputs.width();
+    let index = |i: usize| i32::try_from(i).map_err(|_| OptimizeError::Batch(format!("{i} does not fit the GPU kernel's indices")));
+    let (free_d, free_a) = super::free_lengths(designs, n, start);
+    let flags = |v: &[bool]| v.iter().map(|&f| i32::from(f)).collect::<Vec<i32>>();
+    let economic: Vec<i32> = designs
+        .iter()
+        .map(|d| i32::from(d.mode == crate::design::DesignMode::Economic))
+        .collect();
+    let limits: Vec<f64> = designs
+        .iter()
+        .flat_map(|d| d.joints.iter().flat_map(|j| [j.limits[0], j.limits[1]]))
+        .collect();
+    let (design_offsets, design_samples) = compressed(designs.len(), |b| batch.samples[b].design, count);
+    let (slot_offsets, slot_samples) = compressed(
+        designs.len() * goals,
+        |b| batch.samples[b].design * goals + batch.samples[b].goal,
+        count,
+    );
+
+    let up = |v: &[f64]| gpu.clone_htod(if v.is_empty() { &[0.0][..] } else { v });
+    let up_i = |v: &[i32]| gpu.clone_htod(if v.is_empty() { &[0][..] } else { v });
+    let (mut q, mut d, mut a) = (up(&start.q)?, up(&start.d)?, up(&start.a)?);
+    let (sample_design, sample_goal) = (up_i(&inputs.sample_design)?, up_i(&inputs.sample_goal)?);
+    let (design_static, goal_static) = (up(&inputs.design_static)?, up(&inputs.goal_static)?);
+    let (capsule_link, capsule_kind) = (up_i(&inputs.capsule_link)?, up_i(&inputs.capsule_kind)?);
+    let (candidate_int, candidate_real) = (up_i(&inputs.candidate_int)?, up(&inputs.candidate_real)?);
+    let witness = up(&[])?;
+    let (free_d, free_a, economic, limits) = (up_i(&flags(&free_d))?, up_i(&flags(&free_a))?, up_i(&economic)?, up(&limits)?);
+    let (design_offsets, design_samples) = (up_i(&design_offsets)?, up_i(&design_samples)?);
+    let (slot_offsets, slot_samples) = (up_i(&slot_offsets)?, up_i(&slot_samples)?);
+    let mut out = gpu.alloc_zeros::<f64>(count * width)?;
+    let (mut first_q, mut second_q) = (gpu.alloc_zeros::<f64>(start.q.len())?, gpu.alloc_zeros::<f64>(start.q.len())?);
+    let rows = start.d.len().max(1);
+    let (mut first_d, mut second_d) = (gpu.alloc_zeros::<f64>(rows)?, gpu.alloc_zeros::<f64>(rows)?);
+    let (mut first_a, mut second_a) = (gpu.alloc_zeros::<f64>(rows)?, gpu.alloc_zeros::<f64>(rows)?);
+    let mut chosen = gpu.alloc_zeros::<i32>(count)?;
+    let mut objective = gpu.alloc_zeros::<f64>(designs.len().max(1))?;
+
+    let function = |name: &str| {
+        gpu.get_or_load_custom_func(name, "proving_ground_fused_objective", ptx()?)
+            .map_err(OptimizeError::from)
+    };
+    let (objective_kernel, choose, keep, joint_step, design_step) = (
+        function("paper_objective")?,
+        function("choose")?,
+        function("keep")?,
+        function("joint_step")?,
+        function("design_step")?,
+    );
+    let grid = |threads: usize| -> Result<LaunchConfig, OptimizeError> {
+        let blocks =
+            u32::try_from(threads.div_ceil(BLOCK as usize)).map_err(|_| OptimizeError::Batch(format!("{threads} threads are too many")))?;
+        Ok(LaunchConfig {
+            grid_dim: (blocks.max(1), 1, 1),
+            block_dim: (BLOCK, 1, 1),
+            shared_mem_bytes: 0,
+        })
+    };
+    let failed = |what: &str, e: candle_core::cuda_backend::cudarc::driver::DriverError| {
+        OptimizeError::Tensor(candle_core::Error::msg(format!("launching {what}: {e:?}")))
+    };
+    let (lower, upper) = super::ECONOMIC_RANGE_M;
+    let mut step_constants = Step {
+        n: index(n)?,
+        samples: index(count)?,
+        designs: index(designs.len())?,
+        goals: index(goals)?,
+        beta1: super::BETA1,
+        beta2: super::BETA2,
+        epsilon: super::EPSILON,
+        joint_rate: opts.joint_rate,
+        design_rate: opts.design_rate,
+        bias1: 1.0,
+        bias2: 1.0,
+        hardware_weight: crate::ik::HARDWARE_WEIGHT,
+        distance_weight: DISTANCE_WEIGHT,
+        collision_weight: COLLISION_WEIGHT,
+        max_length: crate::limits::MAX_LENGTH_M,
+        economic_lower: lower,
+        economic_upper: upper,
+    };
+
+    // SAFETY (every launch below): the arguments are in each kernel's order and types, and every
+    // buffer holds what the kernel reads or writes for `count` samples and the batch's designs.
+    let evaluate = |q: &_, d: &_, a: &_, out: &mut _| -> Result<(), OptimizeError> {
+        let mut launch = objective_kernel.builder();
+        for scalar in &inputs.scalars {
+            launch.arg(scalar);
+        }
+        launch
+            .arg(&inputs.constants)
+            .arg(q)
+            .arg(d)
+            .arg(a)
+            .arg(&sample_design)
+            .arg(&sample_goal)
+            .arg(&design_static)
+            .arg(&goal_static)
+            .arg(&capsule_link)
+            .arg(&capsule_kind)
+            .arg(&candidate_int)
+            .arg(&candidate_real)
+            .arg(&witness)
+            .arg(out);
+        unsafe { launch.launch(grid(count)?) }.map_err(|e| failed("the fused objective", e))?;
+        Ok(())
+    };
+    let choose_now = |d: &_, a: &_, out: &_, chosen: &mut _, objective: &mut _, s: &Step| -> Result<(), OptimizeError> {
+        let mut launch = choose.builder();
+        launch
+            .arg(s)
+            .arg(d)
+            .arg(a)
+            .arg(out)
+            .arg(chosen)
+            .arg(objective)
+            .arg(&slot_offsets)
+            .arg(&slot_samples);
+        unsafe { launch.launch(grid(designs.len())?) }.map_err(|e| failed("choose", e))?;
+        Ok(())
+    };
+
+    evaluate(&q, &d, &a, &mut out)?;
+    choose_now(&d, &a, &out, &mut chosen, &mut objective, &step_constants)?;
+    let initial = gpu.clone_dtoh(&objective)?;
+    let (mut best_q, mut best_d, mut best_a) = (up(&start.q)?, up(&start.d)?, up(&start.a)?);
+    let mut best_out = gpu.alloc_zeros::<f64>(count * width)?;
+    gpu.memcpy_dtod(&out, &mut best_out)?;
+    let mut best_objective = up(&initial)?;
+    let mut best_step = gpu.alloc_zeros::<i32>(designs.len().max(1))?;
+
+    for step in 1..=opts.steps {
+        step_constants.bias1 = 1.0 - super::BETA1.powi(step as i32);
+        step_constants.bias2 = 1.0 - super::BETA2.powi(step as i32);
+        let s = step_constants;
+        let mut launch = design_step.builder();
+        launch
+            .arg(&s)
+            .arg(&mut d)
+            .arg(&mut a)
+            .arg(&mut first_d)
+            .arg(&mut second_d)
+            .arg(&mut first_a)
+            .arg(&mut second_a)
+            .arg(&out)
+            .arg(&chosen)
+            .arg(&design_offsets)
+            .arg(&design_samples)
+            .arg(&free_d)
+            .arg(&free_a)
+            .arg(&economic);
+        unsafe { launch.launch(grid(designs.len())?) }.map_err(|e| failed("design_step", e))?;
+        let mut launch = joint_step.builder();
+        launch
+            .arg(&s)
+            .arg(&mut q)
+            .arg(&mut first_q)
+            .arg(&mut second_q)
+            .arg(&out)
+            .arg(&sample_design)
+            .arg(&limits);
+        unsafe { launch.launch(grid(count)?) }.map_err(|e| failed("joint_step", e))?;
+        evaluate(&q, &d, &a, &mut out)?;
+        choose_now(&d, &a, &out, &mut chosen, &mut objective, &s)?;
+        let step_index = index(step)?;
+        let mut launch = keep.builder();
+        launch
+            .arg(&s)
+            .arg(&step_index)
+            .arg(&objective)
+            .arg(&mut best_objective)
+            .arg(&mut best_step)
+            .arg(&q)
+            .arg(&d)
+            .arg(&a)
+            .arg(&out)
+            .arg(&mut best_q)
+            .arg(&mut best_d)
+            .arg(&mut best_a)
+            .arg(&mut best_out)
+            .arg(&design_offsets)
+            .arg(&design_samples);
+        unsafe { launch.launch(grid(designs.len())?) }.map_err(|e| failed("keep", e))?;
+    }
+    let designs_count = designs.len();
+    Ok(super::Optimized {
+        params: Params {
+            q: gpu.clone_dtoh(&best_q)?,
+            d: gpu.clone_dtoh(&best_d)?[..start.d.len()].to_vec(),
+            a: gpu.clone_dtoh(&best_a)?[..start.a.len()].to_vec(),
+        },
+        objective: (
+            initial[..designs_count].to_vec(),
+            gpu.clone_dtoh(&best_objective)?[..designs_count].to_vec(),
+        ),
+        evaluation: unpack(&gpu.clone_dtoh(&best_out)?, n),
+        best_step: gpu.clone_dtoh(&best_step)?[..designs_count].iter().map(|&s| s as usize).collect(),
+    })
 }
 
 /// `batch` at `params` on `device` (see the module's documentation).

@@ -42,6 +42,21 @@ pub trait Objective {
     /// # Errors
     /// [`OptimizeError::Tensor`] when a backend's operation fails.
     fn evaluate(&mut self, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError>;
+
+    /// The whole of [`optimize`], where the backend runs it itself, with the same result (a GPU
+    /// keeps every step on the device); `None` where [`optimize`] steps it.
+    ///
+    /// # Errors
+    /// The backend's errors.
+    fn optimize_whole(
+        &mut self,
+        _batch: &Batch,
+        _designs: &[Design],
+        _start: &Params,
+        _opts: &OptimizeOptions,
+    ) -> Option<Result<Optimized, OptimizeError>> {
+        None
+    }
 }
 
 /// Why an optimization could not run.
@@ -107,11 +122,23 @@ pub(crate) fn beyond_dead_zone(distance: f64) -> f64 {
     }
 }
 
+/// The range of an economic design's non-zero `d` and `|a|` (m).
+pub(crate) const ECONOMIC_RANGE_M: (f64, f64) = (0.1, 0.4);
+
+/// Which `d` and `a` entries Adam moves: a free or economic design's non-zero ones (a zero
+/// decides the capsule structure and stays).
+pub(crate) fn free_lengths(designs: &[Design], n: usize, start: &Params) -> (Vec<bool>, Vec<bool>) {
+    let movable = |design: &Design, value: f64| matches!(design.mode, DesignMode::Free | DesignMode::Economic) && value != 0.0;
+    let free_d = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.d[i])).collect();
+    let free_a = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.a[i])).collect();
+    (free_d, free_a)
+}
+
 /// Adam's moment decay rates and denominator floor (Kingma and Ba's defaults, as the paper's
 /// PyTorch optimizer).
-const BETA1: f64 = 0.9;
-const BETA2: f64 = 0.999;
-const EPSILON: f64 = 1e-8;
+pub(crate) const BETA1: f64 = 0.9;
+pub(crate) const BETA2: f64 = 0.999;
+pub(crate) const EPSILON: f64 = 1e-8;
 
 /// Adam's state for one flat parameter vector.
 #[derive(Debug, Clone)]
@@ -199,10 +226,11 @@ pub fn optimize(
     start: Params,
     opts: &OptimizeOptions,
 ) -> Result<Optimized, OptimizeError> {
+    if let Some(done) = objective.optimize_whole(batch, designs, &start, opts) {
+        return done;
+    }
     let n = batch.dof;
-    let movable = |design: &Design, value: f64| matches!(design.mode, DesignMode::Free | DesignMode::Economic) && value != 0.0;
-    let free_d: Vec<bool> = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.d[i])).collect();
-    let free_a: Vec<bool> = (0..designs.len() * n).map(|i| movable(&designs[i / n], start.a[i])).collect();
+    let (free_d, free_a) = free_lengths(designs, n, &start);
     let free_q = vec![true; start.q.len()];
     let mut adam_q = Adam::new(opts.joint_rate, start.q.len());
     let mut adam_d = Adam::new(opts.design_rate, start.d.len());
@@ -310,7 +338,7 @@ fn project(batch: &Batch, designs: &[Design], params: &mut Params) {
             *q = q.clamp(joint.limits[0], joint.limits[1]);
         }
     }
-    let (lower, upper) = (0.1, 0.4);
+    let (lower, upper) = ECONOMIC_RANGE_M;
     for (design_index, design) in designs.iter().enumerate() {
         for j in 0..n {
             for value in [&mut params.d[design_index * n + j], &mut params.a[design_index * n + j]] {
