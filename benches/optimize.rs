@@ -122,7 +122,7 @@ fn eight_designs(c: &mut Criterion) {
 /// `scripts/gpu-check.sh` builds and runs it.
 fn gpu(c: &mut Criterion) {
     let mut cuda = match Fused::cuda(0) {
-        Ok(cuda) => cuda,
+        Ok(cuda) => cuda.gpu_always(),
         Err(why) => {
             eprintln!("optimize/cuda: skipped, no CUDA device ({why})");
             return;

@@ -22,8 +22,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let design = proving_ground::design::load(&root.join("designs/free-offset-6dof.json"))?;
     let scenario = proving_ground::scenario::load(&root.join("scenarios/cluttered/task-03.json"))?;
     let opts = OptimizeOptions::default();
+    // The kernels themselves, however small the batch (`optimize --device cuda` runs a batch of
+    // fewer than 64 samples per CPU thread on the CPU, where it is done sooner).
     let mut cuda = match Fused::cuda(0) {
-        Ok(cuda) => Some(cuda),
+        Ok(cuda) => Some(cuda.gpu_always()),
         Err(why) => {
             eprintln!("no CUDA device ({why}): the CPU alone is timed");
             None

@@ -822,7 +822,7 @@ fn fused_is_the_same_on_any_number_of_threads() {
 #[test]
 fn cuda_computes_what_the_cpu_computes() {
     let mut cuda = match Fused::cuda(0) {
-        Ok(cuda) => cuda,
+        Ok(cuda) => cuda.gpu_always(),
         Err(why) => {
             eprintln!("skipped: no CUDA device to compare with the CPU ({why})");
             return;

@@ -282,7 +282,8 @@ __device__ static void add_end(const double* w, int link, int kind, int end, con
 // z-symmetric, 2 position). capsules: link and kind per capsule. candidates, grouped by checked
 // pair (the model's order kept within a pair): pair, capsule, kind (0 capsule, 1 fixed segment,
 // 2 floor, 3 shape), other (the capsule or the shape column); reals: the fixed segment's ends (6)
-// or the floor's height (first), and the radii taken off the axis distance. witness, per sample
+// or the floor's height (first), the radii taken off the axis distance, then a rounded
+// obstacle's axis centre (3) and half length (11 in all). witness, per sample
 // and shape column: distance, along, normal (3), centre (3).
 extern "C" __global__ void paper_objective(
     int samples, int n, int capsule_count, int candidate_count, int pair_count, int shape_count,
@@ -459,19 +460,55 @@ extern "C" __global__ void paper_objective(
         }
     }
 
+    // Each capsule's centre and half length: a pair whose candidates are all capsules or rounded
+    // obstacles farther apart than the collision threshold (centres apart by more than the
+    // threshold, the margin, both half lengths and the radii) costs nothing and is skipped.
+    double mid[MAX_CAPSULES][4];
+    for (int c = 0; c < capsule_count; ++c) {
+        double axis[3];
+        for (int i = 0; i < 3; ++i) {
+            mid[c][i] = (ends[c][i] + ends[c][3 + i]) * 0.5;
+            axis[i] = ends[c][3 + i] - ends[c][i];
+        }
+        mid[c][3] = sqrt(dot3(axis, axis)) * 0.5;
+    }
+    const double far_margin = 1e-9;
+
     // The closest candidate of each pair (the first strictly smallest), its cost and gradient.
     const double e1 = pg_exp(-1.0);
     const double scale = 1.0 / (1.0 - e1);
     double collision = 0.0;
     int next = 0;
     for (int pair = 0; pair < pair_count; ++pair) {
+        int last = next;
+        while (last < candidate_count && candidate_int[4 * last] == pair) {
+            ++last;
+        }
+        bool far = true;
+        for (int c = next; c < last && far; ++c) {
+            const int* ci = candidate_int + 4 * c;
+            const double* cr = candidate_real + 11 * c;
+            if (ci[2] > 1) {
+                far = false;
+                break;
+            }
+            const double* m1 = mid[ci[1]];
+            const double* m2 = ci[2] == 0 ? mid[ci[3]] : cr + 7;
+            double apart[3] = {m1[0] - m2[0], m1[1] - m2[1], m1[2] - m2[2]};
+            double reach = (((k.threshold + far_margin) + m1[3]) + m2[3]) + cr[6];
+            far = dot3(apart, apart) >= reach * reach;
+        }
+        if (far) {
+            next = last;
+            continue;
+        }
         int best = -1;
         double best_gap = 0.0, best_s = 0.0, best_t = 0.0;
         double best_normal[3] = {0.0, 0.0, 0.0};
         bool best_has_normal = false;
         for (; next < candidate_count && candidate_int[4 * next] == pair; ++next) {
             const int* ci = candidate_int + 4 * next;
-            const double* cr = candidate_real + 7 * next;
+            const double* cr = candidate_real + 11 * next;
             const double* p1 = ends[ci[1]];
             const double* q1 = ends[ci[1]] + 3;
             double gap, s = 0.0, t = 0.0, normal[3] = {0.0, 0.0, 0.0};

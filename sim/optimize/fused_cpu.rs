@@ -231,6 +231,21 @@ pub(super) fn sample(inp: &Inputs, b: usize, o: &mut [f64]) {
         }
     }
 
+    // Centres and half lengths: far pairs are skipped, as in the kernel.
+    let mid: Vec<[f64; 4]> = ends
+        .iter()
+        .map(|e| {
+            let axis = [e[3] - e[0], e[4] - e[1], e[5] - e[2]];
+            [
+                (e[0] + e[3]) * 0.5,
+                (e[1] + e[4]) * 0.5,
+                (e[2] + e[5]) * 0.5,
+                dot3(&axis, &axis).sqrt() * 0.5,
+            ]
+        })
+        .collect();
+    let far_margin = 1e-9;
+
     // Each pair's closest candidate, its cost and gradient.
     let e1 = portable::exp(-1.0);
     let scale = 1.0 / (1.0 - e1);
@@ -238,13 +253,33 @@ pub(super) fn sample(inp: &Inputs, b: usize, o: &mut [f64]) {
     let (candidate_count, pair_count, shape_count) = (inp.scalars[3] as usize, inp.scalars[4], inp.scalars[5] as usize);
     let mut next = 0;
     for pair in 0..pair_count {
+        let mut last = next;
+        while last < candidate_count && inp.candidate_int[4 * last] == pair {
+            last += 1;
+        }
+        let far = (next..last).all(|c| {
+            let ci = &inp.candidate_int[4 * c..4 * c + 4];
+            let cr = &inp.candidate_real[11 * c..11 * c + 11];
+            if ci[2] > 1 {
+                return false;
+            }
+            let m1 = &mid[ci[1] as usize];
+            let m2: &[f64] = if ci[2] == 0 { &mid[ci[3] as usize] } else { &cr[7..11] };
+            let apart = [m1[0] - m2[0], m1[1] - m2[1], m1[2] - m2[2]];
+            let reach = (((k.threshold + far_margin) + m1[3]) + m2[3]) + cr[6];
+            dot3(&apart, &apart) >= reach * reach
+        });
+        if far {
+            next = last;
+            continue;
+        }
         let mut best: Option<usize> = None;
         let (mut best_gap, mut best_s, mut best_t) = (0.0, 0.0, 0.0);
         let mut best_normal = [0.0; 3];
         let mut best_has_normal = false;
         while next < candidate_count && inp.candidate_int[4 * next] == pair {
             let ci = &inp.candidate_int[4 * next..4 * next + 4];
-            let cr = &inp.candidate_real[7 * next..7 * next + 7];
+            let cr = &inp.candidate_real[11 * next..11 * next + 11];
             let (p1, q1) = (&ends[ci[1] as usize][..3], &ends[ci[1] as usize][3..]);
             let (mut s, mut t, mut normal, mut has_normal) = (0.0, 0.0, [0.0; 3], false);
             let gap = match ci[2] {
