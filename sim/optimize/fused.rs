@@ -76,6 +76,11 @@ fn ptx() -> Result<&'static str, OptimizeError> {
     .map_err(|e| OptimizeError::Tensor(candle_core::Error::msg(format!("NVRTC could not compile the fused objective: {e}"))))
 }
 
+/// `i` as the kernels' 32-bit index.
+fn index(i: usize) -> Result<i32, OptimizeError> {
+    i32::try_from(i).map_err(|_| OptimizeError::Batch(format!("{i} does not fit the GPU kernel's indices")))
+}
+
 /// Row-major entries of a 3 x 3 matrix.
 fn row_major(m: &nalgebra::Matrix3<f64>) -> [f64; 9] {
     std::array::from_fn(|i| m[(i / 3, i % 3)])
@@ -108,7 +113,6 @@ impl Inputs {
     pub(super) fn new(batch: &Batch, params: &Params) -> Result<Self, OptimizeError> {
         let n = batch.dof;
         let count = batch.samples.len();
-        let index = |i: usize| i32::try_from(i).map_err(|_| OptimizeError::Batch(format!("{i} does not fit the GPU kernel's indices")));
         let mut design_static = Vec::with_capacity(batch.designs.len() * (2 * n + 24));
         for frame in &batch.designs {
             design_static.extend(frame.alpha.iter().map(|a| a.cos()));
@@ -350,6 +354,107 @@ impl super::Objective for Fused {
     }
 }
 
+/// A device buffer.
+#[cfg(feature = "cuda")]
+type Slice<T> = candle_core::cuda_backend::cudarc::driver::CudaSlice<T>;
+
+/// `values` on `gpu`; the device rejects empty buffers, so an unused one gets a placeholder.
+#[cfg(feature = "cuda")]
+fn upload<T>(gpu: &candle_core::CudaDevice, values: &[T]) -> Result<Slice<T>, OptimizeError>
+where
+    T: candle_core::cuda_backend::cudarc::driver::DeviceRepr + Default + Clone + 'static,
+{
+    let placeholder = [T::default()];
+    Ok(gpu.clone_htod(if values.is_empty() { &placeholder[..] } else { values })?)
+}
+
+/// Blocks of [`BLOCK`] threads for `threads` threads.
+#[cfg(feature = "cuda")]
+fn grid(threads: usize) -> Result<candle_core::cuda_backend::cudarc::driver::LaunchConfig, OptimizeError> {
+    let blocks = u32::try_from(threads.div_ceil(BLOCK as usize))
+        .map_err(|_| OptimizeError::Batch(format!("{threads} threads are too many for one launch")))?;
+    Ok(candle_core::cuda_backend::cudarc::driver::LaunchConfig {
+        grid_dim: (blocks.max(1), 1, 1),
+        block_dim: (BLOCK, 1, 1),
+        shared_mem_bytes: 0,
+    })
+}
+
+/// `what`'s launch failure as an error.
+#[cfg(feature = "cuda")]
+fn failed(what: &str, e: candle_core::cuda_backend::cudarc::driver::DriverError) -> OptimizeError {
+    OptimizeError::Tensor(candle_core::Error::msg(format!("launching {what}: {e:?}")))
+}
+
+/// The objective kernel's arguments that do not change while a batch is tuned, on the device.
+#[cfg(feature = "cuda")]
+struct ObjectiveOnDevice<'a> {
+    gpu: &'a candle_core::CudaDevice,
+    inputs: &'a Inputs,
+    sample_design: Slice<i32>,
+    sample_goal: Slice<i32>,
+    design_static: Slice<f64>,
+    goal_static: Slice<f64>,
+    capsule_link: Slice<i32>,
+    capsule_kind: Slice<i32>,
+    candidate_int: Slice<i32>,
+    candidate_real: Slice<f64>,
+    witness: Slice<f64>,
+}
+
+#[cfg(feature = "cuda")]
+impl<'a> ObjectiveOnDevice<'a> {
+    fn new(gpu: &'a candle_core::CudaDevice, inputs: &'a Inputs) -> Result<Self, OptimizeError> {
+        Ok(Self {
+            gpu,
+            inputs,
+            sample_design: upload(gpu, &inputs.sample_design)?,
+            sample_goal: upload(gpu, &inputs.sample_goal)?,
+            design_static: upload(gpu, &inputs.design_static)?,
+            goal_static: upload(gpu, &inputs.goal_static)?,
+            capsule_link: upload(gpu, &inputs.capsule_link)?,
+            capsule_kind: upload(gpu, &inputs.capsule_kind)?,
+            candidate_int: upload(gpu, &inputs.candidate_int)?,
+            candidate_real: upload(gpu, &inputs.candidate_real)?,
+            witness: upload(gpu, &inputs.witness)?,
+        })
+    }
+
+    /// The objective of every sample at `q`, `d`, `a` into `out` (rows of `2 + 3 n`).
+    fn launch(&self, q: &Slice<f64>, d: &Slice<f64>, a: &Slice<f64>, out: &mut Slice<f64>) -> Result<(), OptimizeError> {
+        use candle_core::cuda_backend::cudarc::driver::PushKernelArg;
+        let function = self.gpu.get_or_load_custom_func("paper_objective", MODULE, ptx()?)?;
+        let mut launch = function.builder();
+        for scalar in &self.inputs.scalars {
+            launch.arg(scalar);
+        }
+        launch
+            .arg(&self.inputs.constants)
+            .arg(q)
+            .arg(d)
+            .arg(a)
+            .arg(&self.sample_design)
+            .arg(&self.sample_goal)
+            .arg(&self.design_static)
+            .arg(&self.goal_static)
+            .arg(&self.capsule_link)
+            .arg(&self.capsule_kind)
+            .arg(&self.candidate_int)
+            .arg(&self.candidate_real)
+            .arg(&self.witness)
+            .arg(out);
+        // SAFETY: the arguments are in the kernel's order and types (six ints, the constants,
+        // then the device buffers), every buffer holds what the kernel reads for the inputs'
+        // samples, and `out` holds a row of `2 + 3 n` values for each.
+        unsafe { launch.launch(grid(self.inputs.scalars[0] as usize)?) }.map_err(|e| failed("the fused objective", e))?;
+        Ok(())
+    }
+}
+
+/// The module `fused.cu` is loaded as.
+#[cfg(feature = "cuda")]
+const MODULE: &str = "proving_ground_fused_objective";
+
 /// `fused.cu`'s `struct Step`: the constants of one step of the optimizer.
 #[cfg(feature = "cuda")]
 #[repr(C)]
@@ -404,13 +509,12 @@ fn device_loop(
     start: &Params,
     opts: &super::OptimizeOptions,
 ) -> Result<super::Optimized, OptimizeError> {
-    use candle_core::cuda_backend::cudarc::driver::{LaunchConfig, PushKernelArg};
+    use candle_core::cuda_backend::cudarc::driver::PushKernelArg;
     let n = batch.dof;
     let count = batch.samples.len();
     let goals = batch.targets.len();
     let inputs = Inputs::new(batch, start)?;
     let width = inputs.width();
-    let index = |i: usize| i32::try_from(i).map_err(|_| OptimizeError::Batch(format!("{i} does not fit the GPU kernel's indices")));
     let (free_d, free_a) = super::free_lengths(designs, n, start);
     let flags = |v: &[bool]| v.iter().map(|&f| i32::from(f)).collect::<Vec<i32>>();
     let economic: Vec<i32> = designs
@@ -428,14 +532,10 @@ fn device_loop(
         count,
     );
 
-    let up = |v: &[f64]| gpu.clone_htod(if v.is_empty() { &[0.0][..] } else { v });
-    let up_i = |v: &[i32]| gpu.clone_htod(if v.is_empty() { &[0][..] } else { v });
+    let up = |v: &[f64]| upload(gpu, v);
+    let up_i = |v: &[i32]| upload(gpu, v);
     let (mut q, mut d, mut a) = (up(&start.q)?, up(&start.d)?, up(&start.a)?);
-    let (sample_design, sample_goal) = (up_i(&inputs.sample_design)?, up_i(&inputs.sample_goal)?);
-    let (design_static, goal_static) = (up(&inputs.design_static)?, up(&inputs.goal_static)?);
-    let (capsule_link, capsule_kind) = (up_i(&inputs.capsule_link)?, up_i(&inputs.capsule_kind)?);
-    let (candidate_int, candidate_real) = (up_i(&inputs.candidate_int)?, up(&inputs.candidate_real)?);
-    let witness = up(&[])?;
+    let objective_kernel = ObjectiveOnDevice::new(gpu, &inputs)?;
     let (free_d, free_a, economic, limits) = (up_i(&flags(&free_d))?, up_i(&flags(&free_a))?, up_i(&economic)?, up(&limits)?);
     let (design_offsets, design_samples) = (up_i(&design_offsets)?, up_i(&design_samples)?);
     let (slot_offsets, slot_samples) = (up_i(&slot_offsets)?, up_i(&slot_samples)?);
@@ -447,29 +547,13 @@ fn device_loop(
     let mut chosen = gpu.alloc_zeros::<i32>(count)?;
     let mut objective = gpu.alloc_zeros::<f64>(designs.len().max(1))?;
 
-    let function = |name: &str| {
-        gpu.get_or_load_custom_func(name, "proving_ground_fused_objective", ptx()?)
-            .map_err(OptimizeError::from)
-    };
-    let (objective_kernel, choose, keep, joint_step, design_step) = (
-        function("paper_objective")?,
+    let function = |name: &str| gpu.get_or_load_custom_func(name, MODULE, ptx()?).map_err(OptimizeError::from);
+    let (choose, keep, joint_step, design_step) = (
         function("choose")?,
         function("keep")?,
         function("joint_step")?,
         function("design_step")?,
     );
-    let grid = |threads: usize| -> Result<LaunchConfig, OptimizeError> {
-        let blocks =
-            u32::try_from(threads.div_ceil(BLOCK as usize)).map_err(|_| OptimizeError::Batch(format!("{threads} threads are too many")))?;
-        Ok(LaunchConfig {
-            grid_dim: (blocks.max(1), 1, 1),
-            block_dim: (BLOCK, 1, 1),
-            shared_mem_bytes: 0,
-        })
-    };
-    let failed = |what: &str, e: candle_core::cuda_backend::cudarc::driver::DriverError| {
-        OptimizeError::Tensor(candle_core::Error::msg(format!("launching {what}: {e:?}")))
-    };
     let (lower, upper) = super::ECONOMIC_RANGE_M;
     let mut step_constants = Step {
         n: index(n)?,
@@ -493,29 +577,6 @@ fn device_loop(
 
     // SAFETY (every launch below): the arguments are in each kernel's order and types, and every
     // buffer holds what the kernel reads or writes for `count` samples and the batch's designs.
-    let evaluate = |q: &_, d: &_, a: &_, out: &mut _| -> Result<(), OptimizeError> {
-        let mut launch = objective_kernel.builder();
-        for scalar in &inputs.scalars {
-            launch.arg(scalar);
-        }
-        launch
-            .arg(&inputs.constants)
-            .arg(q)
-            .arg(d)
-            .arg(a)
-            .arg(&sample_design)
-            .arg(&sample_goal)
-            .arg(&design_static)
-            .arg(&goal_static)
-            .arg(&capsule_link)
-            .arg(&capsule_kind)
-            .arg(&candidate_int)
-            .arg(&candidate_real)
-            .arg(&witness)
-            .arg(out);
-        unsafe { launch.launch(grid(count)?) }.map_err(|e| failed("the fused objective", e))?;
-        Ok(())
-    };
     let choose_now = |d: &_, a: &_, out: &_, chosen: &mut _, objective: &mut _, s: &Step| -> Result<(), OptimizeError> {
         let mut launch = choose.builder();
         launch
@@ -531,7 +592,7 @@ fn device_loop(
         Ok(())
     };
 
-    evaluate(&q, &d, &a, &mut out)?;
+    objective_kernel.launch(&q, &d, &a, &mut out)?;
     choose_now(&d, &a, &out, &mut chosen, &mut objective, &step_constants)?;
     let initial = gpu.clone_dtoh(&objective)?;
     let (mut best_q, mut best_d, mut best_a) = (up(&start.q)?, up(&start.d)?, up(&start.a)?);
@@ -568,10 +629,10 @@ fn device_loop(
             .arg(&mut first_q)
             .arg(&mut second_q)
             .arg(&out)
-            .arg(&sample_design)
+            .arg(&objective_kernel.sample_design)
             .arg(&limits);
         unsafe { launch.launch(grid(count)?) }.map_err(|e| failed("joint_step", e))?;
-        evaluate(&q, &d, &a, &mut out)?;
+        objective_kernel.launch(&q, &d, &a, &mut out)?;
         choose_now(&d, &a, &out, &mut chosen, &mut objective, &s)?;
         let step_index = index(step)?;
         let mut launch = keep.builder();
@@ -615,55 +676,13 @@ fn device_loop(
 /// [`OptimizeError::Tensor`] when NVRTC, an allocation, a copy or the launch fails.
 #[cfg(feature = "cuda")]
 fn evaluate(device: &candle_core::CudaDevice, batch: &Batch, params: &Params) -> Result<Evaluation, OptimizeError> {
-    use candle_core::cuda_backend::cudarc::driver::{LaunchConfig, PushKernelArg};
     let inputs = Inputs::new(batch, params)?;
-    let count = batch.samples.len();
-    if count == 0 {
+    if batch.samples.is_empty() {
         return Ok(unpack(&[], batch.dof));
     }
-    // The device rejects empty buffers: an unused one gets a placeholder.
-    let up = |v: &[f64]| device.clone_htod(if v.is_empty() { &[0.0][..] } else { v });
-    let up_i = |v: &[i32]| device.clone_htod(if v.is_empty() { &[0][..] } else { v });
-    let (q, d, a) = (up(&inputs.q)?, up(&inputs.d)?, up(&inputs.a)?);
-    let (sample_design, sample_goal) = (up_i(&inputs.sample_design)?, up_i(&inputs.sample_goal)?);
-    let (design_static, goal_static) = (up(&inputs.design_static)?, up(&inputs.goal_static)?);
-    let (capsule_link, capsule_kind) = (up_i(&inputs.capsule_link)?, up_i(&inputs.capsule_kind)?);
-    let (candidate_int, candidate_real) = (up_i(&inputs.candidate_int)?, up(&inputs.candidate_real)?);
-    let witness = up(&inputs.witness)?;
-    let mut out = device.alloc_zeros::<f64>(count * inputs.width())?;
-
-    let function = device.get_or_load_custom_func("paper_objective", "proving_ground_fused_objective", ptx()?)?;
-    let mut launch = function.builder();
-    for scalar in &inputs.scalars {
-        launch.arg(scalar);
-    }
-    launch
-        .arg(&inputs.constants)
-        .arg(&q)
-        .arg(&d)
-        .arg(&a)
-        .arg(&sample_design)
-        .arg(&sample_goal)
-        .arg(&design_static)
-        .arg(&goal_static)
-        .arg(&capsule_link)
-        .arg(&capsule_kind)
-        .arg(&candidate_int)
-        .arg(&candidate_real)
-        .arg(&witness)
-        .arg(&mut out);
-    let blocks = u32::try_from(count.div_ceil(BLOCK as usize))
-        .map_err(|_| OptimizeError::Batch(format!("{count} samples are too many for one launch")))?;
-    let config = LaunchConfig {
-        grid_dim: (blocks, 1, 1),
-        block_dim: (BLOCK, 1, 1),
-        shared_mem_bytes: 0,
-    };
-    // SAFETY: the arguments are in the kernel's order and types (six ints, the constants, then
-    // the device buffers), every buffer holds what the kernel reads for `count` samples, and
-    // `out` holds `count * width` values.
-    unsafe { launch.launch(config) }
-        .map_err(|e| OptimizeError::Tensor(candle_core::Error::msg(format!("launching the fused objective: {e:?}"))))?;
+    let (q, d, a) = (upload(device, &inputs.q)?, upload(device, &inputs.d)?, upload(device, &inputs.a)?);
+    let mut out = device.alloc_zeros::<f64>(batch.samples.len() * inputs.width())?;
+    ObjectiveOnDevice::new(device, &inputs)?.launch(&q, &d, &a, &mut out)?;
     Ok(unpack(&device.clone_dtoh(&out)?, batch.dof))
 }
 
