@@ -74,6 +74,17 @@ pub enum Error {
         /// The robot.
         robot: String,
     },
+    /// A full validation of a robot with a moving link that has no mass (a URDF without
+    /// `<inertial>`): its engines and torque check need one.
+    #[error("{robot}: link `{link}` is moved by joint `{joint}` but has no <inertial>; its mass would be 0, and the engines and the torque check need it (--reach-only checks reach, IK and collisions without them)")]
+    NoMass {
+        /// The robot.
+        robot: String,
+        /// The link.
+        link: String,
+        /// The joint moving it.
+        joint: String,
+    },
     /// The caller stopped the run ([`crate::progress::Progress::stopped`]) before it finished.
     #[error("stopped before the run finished")]
     Stopped,

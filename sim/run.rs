@@ -255,7 +255,7 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
     // Built only when checked (the export is rendered at the end): a sweep validates thousands
     // of designs.
     let mjcf = if kinematics_checked(opts) {
-        to_mjcf(model, &MjcfOptions::default())?
+        to_mjcf(&with_placeholder_masses(model), &MjcfOptions::default())?
     } else {
         String::new()
     };
@@ -418,6 +418,25 @@ pub fn validated(
 }
 
 /// Whether the run checks our kinematics against MuJoCo's.
+/// `model` with a unit mass on each moving link that has none (a URDF without `<inertial>`),
+/// for the MuJoCo kinematics check alone: MuJoCo refuses a massless moving body, and the
+/// forward kinematics it is compared on do not depend on mass. Every other use of the model
+/// (the engines, the torque check, an export) refuses it instead.
+fn with_placeholder_masses(model: &crate::model::Model) -> std::borrow::Cow<'_, crate::model::Model> {
+    if model.links[1..].iter().all(|link| link.inertial.is_some()) {
+        return std::borrow::Cow::Borrowed(model);
+    }
+    let mut placed = model.clone();
+    for link in &mut placed.links[1..] {
+        link.inertial.get_or_insert(crate::model::Inertial {
+            mass: 1.0,
+            com: nalgebra::Vector3::zeros(),
+            inertia: nalgebra::Matrix3::identity() * 1e-3,
+        });
+    }
+    std::borrow::Cow::Owned(placed)
+}
+
 fn kinematics_checked(opts: &Options) -> bool {
     opts.kinematics_checks > 0 && opts.stop != Stop::Described
 }

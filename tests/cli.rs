@@ -299,6 +299,25 @@ fn rejects_moving_link_without_inertial() {
     );
 }
 
+/// A kinematics-only URDF (no `<inertial>`, as ROS-Industrial's support packages ship) is
+/// checked for reach with a warning naming the link; only the dynamics refuse it (above).
+#[test]
+fn reach_only_needs_no_inertial() {
+    let output = validate_design()
+        .arg(fixture("missing_inertial.urdf"))
+        .arg("--reach-only")
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(matches!(output.status.code(), Some(0 | 1 | 3)), "{stderr}");
+    assert!(
+        stderr.contains("link `arm` (line") && stderr.contains("has no <inertial>: reach, IK and collisions are checked"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("verdict: "), "{stdout}");
+}
+
 #[test]
 fn rejects_inertia_breaking_triangle_inequality() {
     let stderr = error_for("bad_inertia.urdf", &[]);

@@ -695,18 +695,26 @@ impl<'a> Builder<'a> {
                 format!("{problem}; the <inertial> of {}", sources.join(", "))
             },
         };
-        let inertial = Inertial::combine(&masses).ok_or_else(|| {
-            bad(
-                if group
-                    .iter()
-                    .all(|(n, _)| !self.facts.link_has_inertial.get(*n).copied().unwrap_or(false))
-                {
-                    "has no <inertial>; its mass would be 0".into()
-                } else {
-                    "its <inertial> mass is 0".into()
-                },
-            )
-        })?;
+        if sources.is_empty() {
+            // Kinematics-only files (ROS-Industrial's support packages among them) leave mass
+            // out: reach, IK and collisions need none; the engines and the torque check refuse
+            // the model in the pipeline, naming this link.
+            self.diagnostics.push(Diagnostic {
+                path: self.path.to_path_buf(),
+                element: self.element("link", chain_name),
+                message: format!(
+                    "moved by joint `{joint}` but has no <inertial>: reach, IK and collisions are checked, the engines and the torque check need its mass (run with --reach-only)"
+                ),
+            });
+            return Ok(Link {
+                name: chain_name.into(),
+                merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
+                colliders,
+                inertial: None,
+                segments: vec![],
+            });
+        }
+        let inertial = Inertial::combine(&masses).ok_or_else(|| bad("its <inertial> mass is 0".into()))?;
         let inertial = match inertial.check() {
             Ok(()) => inertial,
             Err(problem) => {

@@ -57,7 +57,8 @@ impl ValidateOptions {
 /// MuJoCo in parallel), and the static load.
 ///
 /// # Errors
-/// [`Error::NameClash`] for an obstacle named like a robot link, [`Error::Collide`] for geometry
+/// [`Error::NameClash`] for an obstacle named like a robot link, [`Error::NoMass`] for a moving
+/// link without mass unless `reach_only`, [`Error::Collide`] for geometry
 /// that cannot be built, [`Error::Engine`] when an engine refuses the model.
 pub use crate::report::{EngineRuns, Validation};
 
@@ -94,6 +95,21 @@ pub fn validate_with_progress(
             name: obstacle.name.clone(),
             robot: loaded.model.name.clone(),
         });
+    }
+    if !opts.reach_only {
+        if let Some((joint, link)) = loaded
+            .model
+            .joints
+            .iter()
+            .zip(&loaded.model.links[1..])
+            .find(|(_, link)| link.inertial.is_none())
+        {
+            return Err(Error::NoMass {
+                robot: loaded.model.name.clone(),
+                link: link.name.clone(),
+                joint: joint.name.clone(),
+            });
+        }
     }
     let mut input_warnings: Vec<String> = loaded.model.diagnostics.iter().map(ToString::to_string).collect();
     input_warnings.extend(
