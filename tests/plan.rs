@@ -53,7 +53,14 @@ fn wand() -> Model {
             max_velocity: None,
             max_effort: None,
         }],
-        links: vec![link("base", vec![]), link("rod", vec![rod])],
+        links: vec![
+            link("base", vec![]),
+            // A moving link needs mass for a full validation's torque check (`Error::NoMass`).
+            Link {
+                inertial: Some(proving_ground::model::Inertial::solid_cylinder(0.5, WAND_RADIUS_M, WAND_LENGTH_M)),
+                ..link("rod", vec![rod])
+            },
+        ],
         last_from_tool: Isometry3::identity(),
         diagnostics: vec![],
     }
