@@ -318,6 +318,23 @@ fn reach_only_needs_no_inertial() {
     assert!(stdout.contains("verdict: "), "{stdout}");
 }
 
+/// What ROS's parser reads in vendors' files is read here too: a placeholder box of size 0 0 0
+/// (ignored, with a warning naming it) and two `<material>` in one `<visual>` (visuals unread).
+#[test]
+fn reads_vendor_quirks() {
+    let output = validate_design()
+        .arg(fixture("vendor_quirks.urdf"))
+        .args(["--reach-only", "--describe"])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("link `base` (line 7) <collision> 0") && stderr.contains("every size is 0 (a placeholder): ignored"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn rejects_inertia_breaking_triangle_inequality() {
     let stderr = error_for("bad_inertia.urdf", &[]);

@@ -184,7 +184,7 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     doc.open("mujoco", [("model", model.name.as_str())]);
     doc.empty("compiler", [("angle", "radian"), ("autolimits", "true")]);
     let mut option = vec![
-        ("timestep", opts.timestep.to_string()),
+        ("timestep", super::number(opts.timestep)),
         ("gravity", numbers([0.0, 0.0, -opts.gravity_m_s2])),
     ];
     if let Some(name) = &opts.integrator {
@@ -208,7 +208,7 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
         doc.open("actuator", NO_ATTRIBUTES);
         for ((joint, kp), kv) in model.joints.iter().zip(&kp).zip(&kv) {
             let name = joint.name.as_str();
-            let (kp, kv) = (kp.to_string(), kv.to_string());
+            let (kp, kv) = (super::number(*kp), super::number(*kv));
             doc.empty("position", [("name", name), ("joint", name), ("kp", &kp), ("kv", &kv)]);
         }
         doc.close("actuator");
@@ -442,7 +442,7 @@ fn write_bodies(doc: &mut Doc, model: &Model, base_is_world: bool, opts: &MjcfOp
         if let (Some(inertial), false) = (&link.inertial, is_world) {
             let i = &inertial.inertia;
             let full = numbers([i[(0, 0)], i[(1, 1)], i[(2, 2)], i[(0, 1)], i[(0, 2)], i[(1, 2)]]);
-            let (pos, mass) = (numbers(xyz(&inertial.com)), inertial.mass.to_string());
+            let (pos, mass) = (numbers(xyz(&inertial.com)), super::number(inertial.mass));
             doc.empty("inertial", [("pos", &pos), ("mass", &mass), ("fullinertia", &full)]);
         }
         for (k, collider) in link.colliders.iter().enumerate() {
@@ -478,7 +478,7 @@ fn write_geoms(doc: &mut Doc, name: &str, mesh: &str, collider: &Collider, piece
 /// A `<geom>` named `name` at the collider's pose; a mesh refers to the asset `mesh`.
 fn geom_attributes(name: &str, mesh: &str, collider: &Collider) -> Attributes {
     let (kind, shape) = match &collider.shape {
-        Shape::Sphere { radius } => ("sphere", ("size", radius.to_string())),
+        Shape::Sphere { radius } => ("sphere", ("size", super::number(*radius))),
         Shape::Cylinder { radius, length } => ("cylinder", ("size", numbers([*radius, length / 2.0]))),
         Shape::Capsule { radius, length } => ("capsule", ("size", numbers([*radius, length / 2.0]))),
         Shape::Box { half_extents } => ("box", ("size", numbers(*half_extents))),
@@ -580,7 +580,8 @@ mod tests {
             text.contains(r#"<site name="tool" pos="0.30000000000000004 -0.3333333333333333 0" quat="1 0 0 0"/>"#),
             "{text}"
         );
-        let range = format!(r#"range="{} {}""#, -2.0 / 3.0, 1e-20);
+        // Tiny magnitudes in exponent form (MuJoCo refuses a number written with every zero).
+        let range = format!(r#"range="{} 1e-20""#, -2.0 / 3.0);
         assert!(text.contains(&range), "{range} not in\n{text}");
         let parsed: Vec<f64> = range[7..range.len() - 1].split(' ').map(|v| v.parse().expect("number")).collect();
         assert_eq!(parsed, [-2.0 / 3.0, 1e-20]);

@@ -175,7 +175,7 @@ fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOption
         let i = &inertial.inertia;
         doc.open("inertial", NO_ATTRIBUTES);
         doc.empty("origin", [("xyz", numbers(xyz(&inertial.com))), ("rpy", numbers([0.0; 3]))]);
-        doc.empty("mass", [("value", inertial.mass.to_string())]);
+        doc.empty("mass", [("value", super::number(inertial.mass))]);
         let entries = [
             ("ixx", (0, 0)),
             ("ixy", (0, 1)),
@@ -184,7 +184,7 @@ fn write_link(doc: &mut Doc, model: &Model, link: &Link, opts: &UrdfExportOption
             ("iyz", (1, 2)),
             ("izz", (2, 2)),
         ];
-        doc.empty("inertia", entries.map(|(key, at)| (key, i[at].to_string())));
+        doc.empty("inertia", entries.map(|(key, at)| (key, super::number(i[at]))));
         doc.close("inertial");
     }
     for (collider, (tag, attributes)) in link.colliders.iter().zip(&shapes) {
@@ -208,9 +208,15 @@ fn shape(
     opts: &UrdfExportOptions,
 ) -> Result<(&'static str, Attributes), ExportError> {
     Ok(match &collider.shape {
-        Shape::Sphere { radius } => ("sphere", vec![("radius", radius.to_string())]),
-        Shape::Cylinder { radius, length } => ("cylinder", vec![("radius", radius.to_string()), ("length", length.to_string())]),
-        Shape::Capsule { radius, length } => ("capsule", vec![("radius", radius.to_string()), ("length", length.to_string())]),
+        Shape::Sphere { radius } => ("sphere", vec![("radius", super::number(*radius))]),
+        Shape::Cylinder { radius, length } => (
+            "cylinder",
+            vec![("radius", super::number(*radius)), ("length", super::number(*length))],
+        ),
+        Shape::Capsule { radius, length } => (
+            "capsule",
+            vec![("radius", super::number(*radius)), ("length", super::number(*length))],
+        ),
         Shape::Box { half_extents } => ("box", vec![("size", numbers(half_extents.map(|h| 2.0 * h)))]),
         Shape::Mesh(mesh) => {
             let mesh_error = |problem: &'static str| ExportError::MeshPath {
@@ -270,11 +276,11 @@ fn write_joint(doc: &mut Doc, joint: &Joint, parent: &str, child: &str) {
     let mut limit = Vec::with_capacity(4);
     // A continuous joint, and a joint without known bounds, get effort and velocity only.
     if let (Some([lower, upper]), false) = (joint.limits, joint.kind == JointKind::Continuous) {
-        limit.push(("lower", lower.to_string()));
-        limit.push(("upper", upper.to_string()));
+        limit.push(("lower", super::number(lower)));
+        limit.push(("upper", super::number(upper)));
     }
-    limit.push(("effort", joint.max_effort.unwrap_or(0.0).to_string()));
-    limit.push(("velocity", joint.max_velocity.unwrap_or(0.0).to_string()));
+    limit.push(("effort", super::number(joint.max_effort.unwrap_or(0.0))));
+    limit.push(("velocity", super::number(joint.max_velocity.unwrap_or(0.0))));
     doc.empty("limit", limit);
     doc.close("joint");
 }

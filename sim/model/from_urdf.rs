@@ -63,7 +63,7 @@ pub fn from_urdf_str(text: &str, path: &Path, opts: &UrdfOptions) -> Result<Mode
         message,
     })?;
     super::urdf_xml::check(&doc, path)?;
-    let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfParse {
+    let robot = urdf_rs::read_from_string(&without_visuals(text, &doc)).map_err(|e| ModelError::UrdfParse {
         path: path.to_path_buf(),
         message: format!("{e} (urdf-rs, which gives no line)"),
     })?;
@@ -78,6 +78,29 @@ pub fn from_urdf_str(text: &str, path: &Path, opts: &UrdfOptions) -> Result<Mode
         diagnostics: vec![],
     }
     .build(opts)
+}
+
+/// The text without its links' `<visual>` elements: nothing here reads them, and urdf-rs
+/// refuses some that ROS's own parser reads (two `<material>` in one `<visual>`, as in the xacro
+/// output of ROS-Industrial's ABB IRB 4600 support package).
+fn without_visuals<'t>(text: &'t str, doc: &roxmltree::Document) -> std::borrow::Cow<'t, str> {
+    let visuals: Vec<std::ops::Range<usize>> = doc
+        .descendants()
+        .filter(|node| node.has_tag_name("visual") && node.parent().is_some_and(|parent| parent.has_tag_name("link")))
+        .map(|node| node.range())
+        .collect();
+    if visuals.is_empty() {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut kept = String::with_capacity(text.len());
+    let mut at = 0;
+    // In document order, never nested: each cut starts after the last one ended.
+    for range in visuals {
+        kept.push_str(&text[at..range.start]);
+        at = range.end;
+    }
+    kept.push_str(&text[at..]);
+    std::borrow::Cow::Owned(kept)
 }
 
 /// What urdf-rs does not tell: presence of elements and their lines.
@@ -340,6 +363,28 @@ impl<'a> Builder<'a> {
         let mut model_links = Vec::with_capacity(chain_links.len());
         for (index, group) in owned.iter().enumerate() {
             model_links.push(self.link(index, group, &links, &joints)?);
+        }
+        let massless: Vec<String> = model_links[1..]
+            .iter()
+            .filter(|link| link.inertial.is_none())
+            .map(|link| self.element("link", &link.name))
+            .collect();
+        if let Some((first, others)) = massless.split_first() {
+            // Kinematics-only files (ROS-Industrial's support packages among them) leave mass
+            // out: reach, IK and collisions need none; the engines and the torque check refuse
+            // the model in the pipeline (`Error::NoMass`). One warning for all such links.
+            let also = if others.is_empty() {
+                String::new()
+            } else {
+                format!(" (nor have {})", others.join(", "))
+            };
+            self.diagnostics.push(Diagnostic {
+                path: self.path.to_path_buf(),
+                element: first.clone(),
+                message: format!(
+                    "moved by a joint but has no <inertial>{also}: reach, IK and collisions are checked, the engines and the torque check need the mass (run with --reach-only)"
+                ),
+            });
         }
         if model_links.iter().skip(1).all(|link| link.colliders.is_empty()) {
             // Every configuration then counts as free: a user reading PASS must know why.
@@ -638,6 +683,14 @@ impl<'a> Builder<'a> {
                     Some(n) if !n.is_empty() => format!("{name}/{n}"),
                     _ => format!("{name}/collision {k}"),
                 };
+                if is_placeholder(&collision.geometry) {
+                    self.diagnostics.push(Diagnostic {
+                        path: self.path.to_path_buf(),
+                        element: format!("{element} <collision> {k}"),
+                        message: "every size is 0 (a placeholder): ignored, it has nothing to collide with".into(),
+                    });
+                    continue;
+                }
                 for (pose, shape) in self.shapes(&collision.geometry, name, &format!("{element} <collision> {k}"))? {
                     colliders.push(Collider {
                         link_from_shape: owner_from_link * origin * pose,
@@ -696,16 +749,7 @@ impl<'a> Builder<'a> {
             },
         };
         if sources.is_empty() {
-            // Kinematics-only files (ROS-Industrial's support packages among them) leave mass
-            // out: reach, IK and collisions need none; the engines and the torque check refuse
-            // the model in the pipeline, naming this link.
-            self.diagnostics.push(Diagnostic {
-                path: self.path.to_path_buf(),
-                element: self.element("link", chain_name),
-                message: format!(
-                    "moved by joint `{joint}` but has no <inertial>: reach, IK and collisions are checked, the engines and the torque check need its mass (run with --reach-only)"
-                ),
-            });
+            // No mass at all: warned about once for every such link (see `build`).
             return Ok(Link {
                 name: chain_name.into(),
                 merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
@@ -840,5 +884,18 @@ impl<'a> Builder<'a> {
                 vec![(Isometry3::identity(), Shape::Mesh(mesh))]
             }
         })
+    }
+}
+
+/// Whether a box, cylinder or capsule has every size zero: the placeholder some vendors write
+/// (Kinova's Jaco and Mico URDFs give their `root` a `<box size="0 0 0">`). A shape with some
+/// sizes zero and others not, a negative size, or a sphere of radius 0 (one number: a typo as
+/// likely as a placeholder) is still an error.
+fn is_placeholder(geometry: &urdf_rs::Geometry) -> bool {
+    match geometry {
+        urdf_rs::Geometry::Sphere { .. } => false,
+        urdf_rs::Geometry::Cylinder { radius, length } | urdf_rs::Geometry::Capsule { radius, length } => *radius == 0.0 && *length == 0.0,
+        urdf_rs::Geometry::Box { size } => size.0.iter().all(|v| *v == 0.0),
+        urdf_rs::Geometry::Mesh { .. } => false,
     }
 }

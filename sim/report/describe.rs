@@ -52,7 +52,7 @@ pub fn describe(model: &Model, hardware_cost: Option<f64>) -> String {
             .inertial
             .as_ref()
             .map(|m| format!("{:.3} kg", m.mass))
-            .unwrap_or_else(|| "fixed".into());
+            .unwrap_or_else(|| if i == 0 { "fixed" } else { "no mass" }.into());
         let shapes: Vec<String> = link
             .colliders
             .iter()
