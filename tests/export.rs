@@ -112,3 +112,35 @@ fn urdf_export_matches_mujocos_own_urdf_importer() {
         );
     }
 }
+
+/// A mesh whose vertices hold float noise (the ROBOTIS Open Manipulator's STLs: 1.5e-40 m after
+/// scaling, below f32's smallest normal number) exports to an MJCF that MuJoCo loads, and agrees
+/// with our kinematics.
+#[test]
+fn mesh_noise_below_f32_exports_to_an_mjcf_mujoco_loads() {
+    use proving_ground::model::{Collider, Shape, TriMesh};
+    let (id, mut model) = shipped_models().into_iter().next().expect("a shipped model");
+    let vertices = vec![[1.5e-40, 0.0, -2.0e-35], [0.05, 0.0, 0.0], [0.0, 0.05, 1e-39], [0.0, 0.0, 0.05]];
+    let last = model.links.len() - 1;
+    model.links[last].colliders.push(Collider {
+        link_from_shape: nalgebra::Isometry3::identity(),
+        shape: Shape::Mesh(TriMesh {
+            uri: "noise.stl".into(),
+            file: std::path::PathBuf::from("noise.stl"),
+            scale: [1.0; 3],
+            vertices,
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }),
+        label: "noise".into(),
+    });
+    let xml = to_mjcf(&model, &MjcfOptions::default()).expect("exports");
+    assert!(
+        xml.contains("-2e-35") && !xml.contains("1.5e-40"),
+        "tiny vertices: {}",
+        &xml[..xml.len().min(400)]
+    );
+    let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+    let mujoco = MujocoKinematics::from_xml_str(&xml, &id, &names).unwrap_or_else(|e| panic!("{id}: {e}"));
+    let agreement = compare_kinematics(&model, &mujoco, ToolElement::Site("tool"), 10, SEED).expect("compares");
+    assert!(agreement.max_position_error_m <= MUJOCO_AGREEMENT, "{agreement:?}");
+}

@@ -353,7 +353,14 @@ fn write_assets(doc: &mut Doc, model: &Model, world_colliders: &[Collider], piec
         return;
     }
     let asset = |doc: &mut Doc, name: &str, vertices: &[[f64; 3]], triangles: &[[u32; 3]]| {
-        let vertex = numbers(vertices.iter().flatten().copied());
+        // MuJoCo reads mesh vertices as f32 and refuses one below its smallest normal number
+        // ("number is too large": the ROBOTIS Open Manipulator's STLs hold 1.5e-40 m, noise
+        // about 0): those are written as 0.
+        let flushed = vertices
+            .iter()
+            .flatten()
+            .map(|&v| if v.abs() < f64::from(f32::MIN_POSITIVE) { 0.0 } else { v });
+        let vertex = numbers(flushed);
         let face = triangles.iter().flatten().map(u32::to_string).collect::<Vec<_>>().join(" ");
         doc.empty("mesh", [("name", name), ("vertex", &vertex), ("face", &face)]);
     };
