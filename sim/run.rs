@@ -265,6 +265,16 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
             return Err(Error::WouldOverwriteInput { path: path.clone() });
         }
     }
+    if opts.exports.mjcf.is_some() {
+        if let Some((joint, link)) = model.joints.iter().zip(&model.links[1..]).find(|(_, link)| link.inertial.is_none()) {
+            return Err(crate::export::ExportError::MissingInertial {
+                robot: model.name.clone(),
+                link: link.name.clone(),
+                joint: joint.name.clone(),
+            }
+            .into());
+        }
+    }
     let mut run = Run {
         input: input.to_path_buf(),
         model: model.clone(),

@@ -316,6 +316,17 @@ fn reach_only_needs_no_inertial() {
     );
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("verdict: "), "{stdout}");
+    // An MJCF export needs the mass: refused before any work, as every write is.
+    let out = std::env::temp_dir().join(format!("pg-massless-{}.xml", std::process::id()));
+    let stderr = error_for(
+        "missing_inertial.urdf",
+        &["--reach-only", "--export-mjcf", out.to_str().expect("utf-8 path")],
+    );
+    assert!(
+        stderr.contains("link `arm` is moved by joint `shoulder` but has no inertial"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing written");
 }
 
 /// What ROS's parser reads in vendors' files is read here too: a placeholder box of size 0 0 0
