@@ -266,7 +266,7 @@ fn run_stages(input: &Path, loaded: Loaded, mut scenario: Scenario, opts: &Optio
         }
     }
     if opts.exports.mjcf.is_some() {
-        if let Some((joint, link)) = model.joints.iter().zip(&model.links[1..]).find(|(_, link)| link.inertial.is_none()) {
+        if let Some((joint, link)) = model.massless_link() {
             return Err(crate::export::ExportError::MissingInertial {
                 robot: model.name.clone(),
                 link: link.name.clone(),
@@ -427,13 +427,12 @@ pub fn validated(
     }
 }
 
-/// Whether the run checks our kinematics against MuJoCo's.
 /// `model` with a unit mass on each moving link that has none (a URDF without `<inertial>`),
 /// for the MuJoCo kinematics check alone: MuJoCo refuses a massless moving body, and the
 /// forward kinematics it is compared on do not depend on mass. Every other use of the model
 /// (the engines, the torque check, an export) refuses it instead.
 fn with_placeholder_masses(model: &crate::model::Model) -> std::borrow::Cow<'_, crate::model::Model> {
-    if model.links[1..].iter().all(|link| link.inertial.is_some()) {
+    if model.massless_link().is_none() {
         return std::borrow::Cow::Borrowed(model);
     }
     let mut placed = model.clone();
@@ -447,6 +446,7 @@ fn with_placeholder_masses(model: &crate::model::Model) -> std::borrow::Cow<'_, 
     std::borrow::Cow::Owned(placed)
 }
 
+/// Whether the run checks our kinematics against MuJoCo's.
 fn kinematics_checked(opts: &Options) -> bool {
     opts.kinematics_checks > 0 && opts.stop != Stop::Described
 }

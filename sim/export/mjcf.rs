@@ -136,14 +136,12 @@ pub fn to_mjcf(model: &Model, opts: &MjcfOptions) -> Result<String, ExportError>
     check_chain(model)?;
     // Without an inertial MuJoCo would derive the mass from the geoms at water density, or
     // make it zero; neither is the robot.
-    for (joint, link) in model.joints.iter().zip(&model.links[1..]) {
-        if link.inertial.is_none() {
-            return Err(ExportError::MissingInertial {
-                robot: model.name.clone(),
-                link: link.name.clone(),
-                joint: joint.name.clone(),
-            });
-        }
+    if let Some((joint, link)) = model.massless_link() {
+        return Err(ExportError::MissingInertial {
+            robot: model.name.clone(),
+            link: link.name.clone(),
+            joint: joint.name.clone(),
+        });
     }
     let kp = gains(model, "kp", opts.kp.as_deref(), DEFAULT_KP)?;
     let kv = gains(model, "kv", opts.kv.as_deref(), DEFAULT_KV)?;

@@ -249,7 +249,7 @@ impl Ik<'_> {
         let mut settled = 0usize;
         let mut evaluated = 0usize;
         if self.parts_left == 0 {
-            return Cells::Open(format!("the goal's {} parts to cut are spent", super::cell_parts(self.model)));
+            return Cells::Open(format!("the goal's {} parts to cut are spent", self.cell_parts));
         }
         let mut open = Unsettled {
             failure: None,

@@ -219,6 +219,8 @@ pub struct Ik<'a> {
     coaxial: Option<coaxial::Merged>,
     /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
     collision_queries: usize,
+    /// Parts of tolerances each goal may cut ([`cell_parts`]).
+    cell_parts: usize,
     /// How far the links can move per joint turn, for certificates against the tolerance.
     bounds: MotionBounds,
     /// Whether the arm's first joints collide wherever they are (see [`prefix`]), once asked:
@@ -288,6 +290,7 @@ impl<'a> Ik<'a> {
             redundant: methods.redundant.clone(),
             held: None,
             parts_left: cell_parts(model),
+            cell_parts: cell_parts(model),
             reach_parts_left: parts::PARTS_PER_GOAL,
             misses: Vec::new(),
             sub_chains: methods.sub_chains.clone(),
@@ -323,7 +326,7 @@ impl<'a> Ik<'a> {
     /// joint-space search, which proves that no configuration within the limits is within the
     /// tolerance, or finds one.
     pub fn solve(&mut self, goal: &Goal, goal_index: usize, first_seed: Option<&[f64]>) -> GoalSolutions {
-        self.parts_left = cell_parts(self.model);
+        self.parts_left = self.cell_parts;
         self.reach_parts_left = parts::PARTS_PER_GOAL;
         self.misses.clear();
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);

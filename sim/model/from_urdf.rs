@@ -722,14 +722,15 @@ impl<'a> Builder<'a> {
                 }
             }
         }
+        let link = |inertial: Option<Inertial>| Link {
+            name: chain_name.into(),
+            merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
+            colliders,
+            inertial,
+            segments: vec![],
+        };
         if index == 0 {
-            return Ok(Link {
-                name: chain_name.into(),
-                merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
-                colliders,
-                inertial: Inertial::combine(&masses),
-                segments: vec![],
-            });
+            return Ok(link(Inertial::combine(&masses)));
         }
         let joint = &joints[index - 1].name;
         // Where to fix it: the links whose <inertial> were combined, with their lines.
@@ -750,13 +751,7 @@ impl<'a> Builder<'a> {
         };
         if sources.is_empty() {
             // No mass at all: warned about once for every such link (see `build`).
-            return Ok(Link {
-                name: chain_name.into(),
-                merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
-                colliders,
-                inertial: None,
-                segments: vec![],
-            });
+            return Ok(link(None));
         }
         let inertial = Inertial::combine(&masses).ok_or_else(|| bad("its <inertial> mass is 0".into()))?;
         let inertial = match inertial.check() {
@@ -785,13 +780,7 @@ impl<'a> Builder<'a> {
                 fixed
             }
         };
-        Ok(Link {
-            name: chain_name.into(),
-            merged: group[1..].iter().map(|(n, _)| n.to_string()).collect(),
-            colliders,
-            inertial: Some(inertial),
-            segments: vec![],
-        })
+        Ok(link(Some(inertial)))
     }
 
     fn inertial(&self, inertial: &urdf_rs::Inertial, element: &str) -> Result<Inertial, ModelError> {

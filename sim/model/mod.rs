@@ -390,6 +390,12 @@ impl Model {
         self.joints.len()
     }
 
+    /// The first moving link without mass properties (a URDF without `<inertial>`), with the
+    /// joint that moves it: the engines, the torque check and an MJCF export need them.
+    pub fn massless_link(&self) -> Option<(&Joint, &Link)> {
+        self.joints.iter().zip(&self.links[1..]).find(|(_, link)| link.inertial.is_none())
+    }
+
     /// The same robot mounted at `world_from_mount` (a scenario's base pose): the design's own
     /// base pose is then relative to the mount.
     pub fn placed(&self, world_from_mount: &Isometry3<f64>) -> Model {

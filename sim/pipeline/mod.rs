@@ -97,13 +97,7 @@ pub fn validate_with_progress(
         });
     }
     if !opts.reach_only {
-        if let Some((joint, link)) = loaded
-            .model
-            .joints
-            .iter()
-            .zip(&loaded.model.links[1..])
-            .find(|(_, link)| link.inertial.is_none())
-        {
+        if let Some((joint, link)) = loaded.model.massless_link() {
             return Err(Error::NoMass {
                 robot: loaded.model.name.clone(),
                 link: link.name.clone(),
