@@ -65,10 +65,32 @@ impl Hessenberg {
                     *aij -= 2.0 * vi * wj;
                 }
             }
-            for i in 0..n {
-                let row = &mut self.a[i * n + k + 1..i * n + n];
-                let dot: f64 = row.iter().zip(&v[k + 1..]).map(|(a, b)| a * b).sum();
-                for (aij, vj) in row.iter_mut().zip(&v[k + 1..]) {
+            // Four rows at a time: each row's dot product keeps its own order of additions,
+            // and the four chains overlap instead of waiting on one another.
+            let tail = &v[k + 1..n];
+            let mut groups = self.a.chunks_exact_mut(4 * n);
+            for group in &mut groups {
+                let (r0, rest) = group.split_at_mut(n);
+                let (r1, rest) = rest.split_at_mut(n);
+                let (r2, r3) = rest.split_at_mut(n);
+                let (r0, r1, r2, r3) = (&mut r0[k + 1..], &mut r1[k + 1..], &mut r2[k + 1..], &mut r3[k + 1..]);
+                let mut dots = [-0.0f64; 4];
+                for ((((a0, a1), a2), a3), vj) in r0.iter().zip(r1.iter()).zip(r2.iter()).zip(r3.iter()).zip(tail) {
+                    dots[0] += a0 * vj;
+                    dots[1] += a1 * vj;
+                    dots[2] += a2 * vj;
+                    dots[3] += a3 * vj;
+                }
+                for (row, dot) in [r0, r1, r2, r3].into_iter().zip(dots) {
+                    for (aij, vj) in row.iter_mut().zip(tail) {
+                        *aij -= 2.0 * dot * vj;
+                    }
+                }
+            }
+            for row in groups.into_remainder().chunks_exact_mut(n) {
+                let row = &mut row[k + 1..];
+                let dot: f64 = row.iter().zip(tail).map(|(a, b)| a * b).sum();
+                for (aij, vj) in row.iter_mut().zip(tail) {
                     *aij -= 2.0 * dot * vj;
                 }
             }
@@ -219,23 +241,44 @@ impl Hessenberg {
             let (hx, hy, hz) = (p / s, q / s, r / s);
             let (q2, r2) = (q / p, r / p);
             let third = k != nn - 1;
-            for j in k..=nn {
-                let mut dot = self.a[k * n + j] + q2 * self.a[(k + 1) * n + j];
-                if third {
-                    dot += r2 * self.a[(k + 2) * n + j];
-                    self.a[(k + 2) * n + j] -= dot * hz;
+            let (first, rest) = self.a[k * n..].split_at_mut(n);
+            let (second, rest) = rest.split_at_mut(n);
+            let (first, second) = (&mut first[k..=nn], &mut second[k..=nn]);
+            if third {
+                let third_row = &mut rest[k..=nn];
+                for ((a0, a1), a2) in first.iter_mut().zip(second.iter_mut()).zip(third_row.iter_mut()) {
+                    let dot = *a0 + q2 * *a1 + r2 * *a2;
+                    *a2 -= dot * hz;
+                    *a1 -= dot * hy;
+                    *a0 -= dot * hx;
                 }
-                self.a[(k + 1) * n + j] -= dot * hy;
-                self.a[k * n + j] -= dot * hx;
+            } else {
+                for (a0, a1) in first.iter_mut().zip(second.iter_mut()) {
+                    let dot = *a0 + q2 * *a1;
+                    *a1 -= dot * hy;
+                    *a0 -= dot * hx;
+                }
             }
-            for i in l..=nn.min(k + 3) {
-                let mut dot = hx * self.a[i * n + k] + hy * self.a[i * n + k + 1];
-                if third {
-                    dot += hz * self.a[i * n + k + 2];
-                    self.a[i * n + k + 2] -= dot * r2;
+            let rows = self.a[l * n..(nn.min(k + 3) + 1) * n].chunks_exact_mut(n);
+            if third {
+                for row in rows {
+                    let [a0, a1, a2] = &mut row[k..k + 3] else {
+                        unreachable!("three columns")
+                    };
+                    let dot = hx * *a0 + hy * *a1 + hz * *a2;
+                    *a2 -= dot * r2;
+                    *a1 -= dot * q2;
+                    *a0 -= dot;
                 }
-                self.a[i * n + k + 1] -= dot * q2;
-                self.a[i * n + k] -= dot;
+            } else {
+                for row in rows {
+                    let [a0, a1] = &mut row[k..k + 2] else {
+                        unreachable!("two columns")
+                    };
+                    let dot = hx * *a0 + hy * *a1;
+                    *a1 -= dot * q2;
+                    *a0 -= dot;
+                }
             }
         }
     }
