@@ -75,15 +75,6 @@ fn unit(k: usize) -> f64 {
     }
 }
 
-/// Whether some offset of the box `centre` +- `half` (units of the tolerance, as [`Cell`]'s) is
-/// within the tolerance: both parts' nearest points within the unit ball.
-pub(super) fn touches_tolerance(centre: &[f64; 6], half: &[f64; 6]) -> bool {
-    [0, 3].into_iter().all(|first| {
-        let nearest = Vector3::from_fn(|k, _| (centre[first + k].abs() - half[first + k]).max(0.0));
-        nearest.norm() <= 1.0
-    })
-}
-
 /// The smallest box holding the part of the box `centre` +- `half` (units of the tolerance, as
 /// [`Cell`]'s) within the tolerance: per part, the bounding box of the box's intersection with
 /// the unit ball (along each offset, as far as the ball reaches with the other two offsets at
@@ -419,6 +410,15 @@ impl Ik<'_> {
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
+
+    /// Whether some offset of the box `centre` +- `half` (units of the tolerance, as [`Cell`]'s) is
+    /// within the tolerance: both parts' nearest points within the unit ball.
+    fn touches_tolerance(centre: &[f64; 6], half: &[f64; 6]) -> bool {
+        [0, 3].into_iter().all(|first| {
+            let nearest = Vector3::from_fn(|k, _| (centre[first + k].abs() - half[first + k]).max(0.0));
+            nearest.norm() <= 1.0
+        })
+    }
 
     /// Every offset of a box within the tolerance lies in its clipped box, and the clipped box
     /// lies in the box; a box the tolerance holds is its own clip, one it misses has none.

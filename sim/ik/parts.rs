@@ -13,7 +13,9 @@
 //! half-widths' norm, and the rotation part's (two rotations whose rotation vectors differ by
 //! `v` differ by at most `|v|`, the exponential map contracting on the rotation group). A box
 //! that fails is halved across the offset that widens its slack most, down to a thirty-second
-//! of the tolerance; boxes that miss the tolerance need nothing. Every box proven: out of reach.
+//! of the tolerance; boxes that miss the tolerance need nothing, and one straddling its edge is
+//! shrunk to the bounding box of what of it lies within ([`super::cells::clipped_to_tolerance`]).
+//! Every box proven: out of reach.
 //! A small box whose centre pose has solutions (ignoring the limits, as the proofs do) ends
 //! the cut: the tolerance holds reachable poses and no cut can prove it.
 //!
@@ -22,8 +24,9 @@
 //! over a part: its remainder shrinks as the square of the radius, the doubling as the radius).
 //!
 //! Used by the self-motion sweep of a UR-type arm's free turn ([`super::selfmotion`]), where
-//! a sample without solutions stays unproven at the finest step; the closed form's proof costs
-//! about a microsecond a part.
+//! a sample without solutions stays unproven at the finest step, and for a UR-type arm's pose
+//! goal with no solution that the searches leave open; the closed form's proof costs about a
+//! microsecond a part.
 //! The spherical wrist's bound (a search over joints 2 and 3) costs a thousand times that and
 //! is not cut.
 
@@ -116,10 +119,11 @@ pub(super) fn out_of_reach_by_parts(
     let mut stack = vec![whole];
     let mut proven = 0;
     let mut first: Option<String> = None;
-    while let Some(part) = stack.pop() {
-        if !super::cells::touches_tolerance(&part.centre, &part.half) {
+    while let Some(mut part) = stack.pop() {
+        let Some((centre, half)) = super::cells::clipped_to_tolerance(&part.centre, &part.half) else {
             continue;
-        }
+        };
+        (part.centre, part.half) = (centre, half);
         *budget = budget.checked_sub(1)?;
         let centre = super::cells::offset_goal(goal, &part.centre);
         match prove(&centre, part.radii()) {
