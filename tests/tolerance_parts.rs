@@ -17,11 +17,25 @@ use rand::SeedableRng;
 
 /// A design placed on a scenario, with the collision world a run checks.
 fn placed(design: &str, scenario: &str) -> (Model, Scenario, CollisionWorld) {
+    place(design, load_scenario(&repo().join(scenario)).expect("the scenario loads"))
+}
+
+fn place(design: &str, scenario: Scenario) -> (Model, Scenario, CollisionWorld) {
     let model = load(&repo().join(design), &LoadOptions::default()).expect("the design loads").model;
-    let scenario = load_scenario(&repo().join(scenario)).expect("the scenario loads");
     let model = model.placed(&scenario.world_from_base);
     let world = collision_world(&model, &scenario, &[]).expect("the world builds");
     (model, scenario, world)
+}
+
+/// The proof IK gives goal `index` of cluttered task `task` of generator seed `seed` (not a
+/// shipped task) for `design`, with the placed model and its scenario.
+fn proof_on_generated_task(design: &str, task: usize, seed: u64, index: usize) -> (Model, Scenario, CollisionWorld, String) {
+    let (model, scenario, world) = place(design, proving_ground::scenario::generate::cluttered(task, seed));
+    let result = Ik::with_collisions(&model, &world, IkOptions::default()).solve(&scenario.goals[index], index, None);
+    let proof = result
+        .proof
+        .unwrap_or_else(|| panic!("expected a proof: undecided {:?}", result.undecided));
+    (model, scenario, world, proof)
 }
 
 /// economic-elbow on cluttered task 30, goal 5: its eight exact solutions all collide, one of
@@ -108,18 +122,8 @@ fn a_free_configuration_found_by_parts_is_within_the_tolerance_and_free() {
 /// independent distance query.
 #[test]
 fn a_proof_by_parts_clipped_to_the_tolerance_holds_for_sampled_poses() {
-    let model = load(&repo().join("designs/ur10e.json"), &LoadOptions::default())
-        .expect("the design loads")
-        .model;
-    let scenario = proving_ground::scenario::generate::cluttered(15, 7);
-    let model = model.placed(&scenario.world_from_base);
-    let world = collision_world(&model, &scenario, &[]).expect("the world builds");
+    let (model, scenario, world, proof) = proof_on_generated_task("designs/ur10e.json", 15, 7, 5);
     let goal = &scenario.goals[5];
-    let result = Ik::with_collisions(&model, &world, IkOptions::default()).solve(goal, 5, None);
-    let proof = result
-        .proof
-        .as_deref()
-        .unwrap_or_else(|| panic!("expected a proof: undecided {:?}", result.undecided));
     assert!(proof.contains("parts of the tolerance"), "{proof}");
 
     let closed_form = Ik::new(&model, IkOptions::default());
@@ -157,18 +161,8 @@ fn a_proof_by_parts_clipped_to_the_tolerance_holds_for_sampled_poses() {
 /// (closest miss 6.5 mm). No pose sampled throughout the tolerance has a solution.
 #[test]
 fn a_pose_beyond_reach_is_proven_part_by_part_and_no_sampled_pose_has_a_solution() {
-    let model = load(&repo().join("designs/modular-elbow.json"), &LoadOptions::default())
-        .expect("the design loads")
-        .model;
-    let scenario = proving_ground::scenario::generate::cluttered(5, 7);
-    let model = model.placed(&scenario.world_from_base);
-    let world = collision_world(&model, &scenario, &[]).expect("the world builds");
+    let (model, scenario, _, proof) = proof_on_generated_task("designs/modular-elbow.json", 5, 7, 1);
     let goal = &scenario.goals[1];
-    let result = Ik::with_collisions(&model, &world, IkOptions::default()).solve(goal, 1, None);
-    let proof = result
-        .proof
-        .as_deref()
-        .unwrap_or_else(|| panic!("expected a proof: undecided {:?}", result.undecided));
     assert!(proof.contains("parts, each out of reach"), "{proof}");
 
     let closed_form = Ik::new(&model, IkOptions::default());
