@@ -38,6 +38,39 @@ fn proof_on_generated_task(design: &str, task: usize, seed: u64, index: usize) -
     (model, scenario, world, proof)
 }
 
+/// Solves 4 000 poses sampled throughout `goal`'s tolerance in closed form and measures every
+/// solution within the limits with an independent distance query: each must collide. Returns
+/// the solutions measured.
+fn sampled_solutions_all_collide(model: &Model, world: &CollisionWorld, goal: &Goal, seed: u64) -> usize {
+    let closed_form = Ik::new(model, IkOptions::default());
+    let arm = closed_form.closed_form().expect("a UR-type arm");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut ws = model.workspace();
+    let mut check = Distances::new();
+    let mut solutions = 0;
+    for _ in 0..4000 {
+        let pose = Isometry3::from_parts(
+            Translation3::from(goal.position + in_ball(&mut rng, REACHED_POSITION_M * 0.999)),
+            UnitQuaternion::from_scaled_axis(in_ball(&mut rng, REACHED_ORIENTATION_RAD * 0.999)) * goal.rotation,
+        );
+        let found = arm.solve(&pose);
+        assert!(found.finite, "a sampled pose is singular");
+        for q in &found.configurations {
+            if !within_limits(model, q) {
+                continue;
+            }
+            solutions += 1;
+            model.forward(q, &mut ws);
+            collide::distances(world, &ws.link_in_world, &QueryOptions::default(), &mut check);
+            assert!(
+                check.in_contact(),
+                "a free configuration {q:?} within the tolerance (pose {pose:?}) of a goal proven unreachable"
+            );
+        }
+    }
+    solutions
+}
+
 /// economic-elbow on cluttered task 30, goal 5: its eight exact solutions all collide, one of
 /// them by 1.6 mm where the goal's tolerance may move the pair by 1.8 mm, so only the parts
 /// decide it (the goal was `undecided` before them; the proof lists the parts' pair among
@@ -53,37 +86,8 @@ fn a_proof_by_parts_holds_for_poses_sampled_throughout_the_tolerance() {
         result.undecided
     );
 
-    let closed_form = Ik::new(&model, IkOptions::default());
-    let arm = closed_form.closed_form().expect("economic-elbow is a UR-type arm");
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(22);
-    let mut ws = model.workspace();
-    let mut check = Distances::new();
-    let (mut poses, mut solutions) = (0, 0);
-    for _ in 0..4000 {
-        let pose = Isometry3::from_parts(
-            Translation3::from(goal.position + in_ball(&mut rng, REACHED_POSITION_M * 0.999)),
-            UnitQuaternion::from_scaled_axis(in_ball(&mut rng, REACHED_ORIENTATION_RAD * 0.999)) * goal.rotation,
-        );
-        let found = arm.solve(&pose);
-        assert!(found.finite, "a sampled pose is singular");
-        poses += 1;
-        for q in &found.configurations {
-            if !within_limits(&model, q) {
-                continue;
-            }
-            solutions += 1;
-            model.forward(q, &mut ws);
-            collide::distances(&world, &ws.link_in_world, &QueryOptions::default(), &mut check);
-            assert!(
-                check.in_contact(),
-                "a free configuration {q:?} within the tolerance (pose {pose:?}) of a goal proven unreachable"
-            );
-        }
-    }
-    assert!(
-        solutions > poses,
-        "the samples must exercise the solutions: {solutions} over {poses} poses"
-    );
+    let solutions = sampled_solutions_all_collide(&model, &world, goal, 22);
+    assert!(solutions > 4000, "the samples must exercise the solutions: {solutions}");
 }
 
 /// Parts also find what the one certificate misses: economic-spherical-wrist on the course,
@@ -126,32 +130,7 @@ fn a_proof_by_parts_clipped_to_the_tolerance_holds_for_sampled_poses() {
     let goal = &scenario.goals[5];
     assert!(proof.contains("parts of the tolerance"), "{proof}");
 
-    let closed_form = Ik::new(&model, IkOptions::default());
-    let arm = closed_form.closed_form().expect("ur10e is a UR-type arm");
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(64);
-    let mut ws = model.workspace();
-    let mut check = Distances::new();
-    let mut solutions = 0;
-    for _ in 0..4000 {
-        let pose = Isometry3::from_parts(
-            Translation3::from(goal.position + in_ball(&mut rng, REACHED_POSITION_M * 0.999)),
-            UnitQuaternion::from_scaled_axis(in_ball(&mut rng, REACHED_ORIENTATION_RAD * 0.999)) * goal.rotation,
-        );
-        let found = arm.solve(&pose);
-        assert!(found.finite, "a sampled pose is singular");
-        for q in &found.configurations {
-            if !within_limits(&model, q) {
-                continue;
-            }
-            solutions += 1;
-            model.forward(q, &mut ws);
-            collide::distances(&world, &ws.link_in_world, &QueryOptions::default(), &mut check);
-            assert!(
-                check.in_contact(),
-                "a free configuration {q:?} within the tolerance (pose {pose:?}) of a goal proven unreachable"
-            );
-        }
-    }
+    let solutions = sampled_solutions_all_collide(&model, &world, goal, 64);
     assert!(solutions > 4000, "the samples must exercise the solutions: {solutions}");
 }
 
