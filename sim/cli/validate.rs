@@ -90,7 +90,9 @@ pub(crate) struct ValidateArgs {
     /// Boxes at most each joint-space search visits (the sub-chains', then the whole arm's,
     /// which below 10 000 boxes runs only where no sub-chain stands in) for
     /// a goal that IK neither reaches nor decides; from 10 000, one pose per 200 boxes is also
-    /// sampled within such a goal's tolerance and solved exactly (0 turns the searches off: such goals stay
+    /// sampled within such a goal's tolerance and solved exactly, a colliding solution's
+    /// tolerance is cut down to 1/64 (else 1/16), and a UR-type arm's pose beyond reach is
+    /// proven part by part (0 turns the searches off: such goals stay
     /// undecided).
     #[arg(long, value_name = "N", default_value_t = proving_ground::ik::SEARCH_BOXES)]
     pub(crate) search_boxes: usize,
