@@ -9,6 +9,9 @@ use crate::model::{JointKind, KinematicsWorkspace, Model};
 use nalgebra::{Isometry3, Matrix3, SMatrix, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
+/// Distance and sine of angle (lengths scaled as the chain's) below which two lines are one.
+const SAME_LINE: f64 = 1e-9;
+
 /// One joint's axis line: a point on it and its unit direction.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Line {
@@ -40,6 +43,17 @@ pub(crate) struct Chain {
 }
 
 impl Chain {
+    /// Whether two consecutive joints turn about one line (within rounding of the scaled
+    /// lengths): every pose's solutions then form continua.
+    pub(crate) fn has_coaxial_pair(&self) -> bool {
+        self.lines.windows(2).any(|pair| {
+            let (first, next) = (&pair[0], &pair[1]);
+            let offset = next.point - first.point;
+            let off_line = (offset - first.axis * first.axis.dot(&offset)).norm();
+            first.axis.cross(&next.axis).norm() <= SAME_LINE && off_line <= SAME_LINE
+        })
+    }
+
     /// Tool pose (rotation, translation) at `q`.
     pub(crate) fn forward(&self, q: &[f64; 6]) -> (Matrix3<f64>, Vector3<f64>) {
         let mut rotation = self.home_rotation;

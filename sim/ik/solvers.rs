@@ -48,6 +48,12 @@ impl AllSolutions {
         if let Some(wrist) = SphericalWrist::of_arm(arm.clone()) {
             return Some(AllSolutions::Wrist(Box::new(wrist)));
         }
+        // With two joints on one line the pose's solutions are continua, which the elimination
+        // and the parallel triple cannot list: their probes would fail, after two whole solves
+        // per variant tried (about 0.2 ms an arm).
+        if arm.forward.has_coaxial_pair() {
+            return None;
+        }
         if let Some(general) = General6R::of_arm(arm.clone()) {
             return Some(AllSolutions::General(Box::new(general)));
         }
