@@ -225,8 +225,16 @@ pub struct Ik<'a> {
     bounds: MotionBounds,
     /// Whether the arm's first joints collide wherever they are (see [`prefix`]), once asked:
     /// the proof every goal that nothing else decides gets.
-    collides_everywhere: Option<Option<String>>,
+    collides_everywhere: Everywhere<'a>,
     ws: KinematicsWorkspace,
+}
+
+/// Where a solver keeps its answer to "do the first joints collide wherever they are": its
+/// own, or one shared by the solvers of a batch of goals (the answer is the arm's in its world,
+/// whichever goal asks; rayon makes several solvers per batch).
+enum Everywhere<'a> {
+    Own(Option<Option<String>>),
+    Shared(&'a std::sync::OnceLock<Option<String>>),
 }
 
 /// What a sub-chain's search proved, from "joints 1 to k for ...": out of the goal's reach, or
@@ -270,17 +278,23 @@ pub const SWEEP_SEARCH_BOXES: usize = 200;
 impl<'a> Ik<'a> {
     /// A solver for `model` that ignores collisions.
     pub fn new(model: &'a Model, opts: IkOptions) -> Self {
-        Self::build(model, None, opts, &Methods::of(model))
+        Self::build(model, None, opts, &Methods::of(model), Everywhere::Own(None))
     }
 
     /// A solver for `model` in a collision world built for the same model: solutions are checked
     /// with exact geometry, and colliding ones refined.
     pub fn with_collisions(model: &'a Model, world: &'a CollisionWorld, opts: IkOptions) -> Self {
-        Self::build(model, Some(world), opts, &Methods::of(model))
+        Self::build(model, Some(world), opts, &Methods::of(model), Everywhere::Own(None))
     }
 
     /// A solver with the model's methods already found (one detection for many solvers).
-    fn build(model: &'a Model, world: Option<&'a CollisionWorld>, opts: IkOptions, methods: &Methods) -> Self {
+    fn build(
+        model: &'a Model,
+        world: Option<&'a CollisionWorld>,
+        opts: IkOptions,
+        methods: &Methods,
+        collides_everywhere: Everywhere<'a>,
+    ) -> Self {
         Self {
             model,
             solver: Solver::new(model),
@@ -297,7 +311,7 @@ impl<'a> Ik<'a> {
             coaxial: methods.coaxial.clone(),
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
-            collides_everywhere: None,
+            collides_everywhere,
             ws: model.workspace(),
             opts,
         }
@@ -811,16 +825,19 @@ impl<'a> Ik<'a> {
     /// The proof that every configuration collides, whatever the goal (see [`prefix`]): found
     /// once per solver, with the budget of one search (a box is one collision query).
     fn collides_everywhere(&mut self) -> Option<String> {
-        if self.collides_everywhere.is_none() {
-            let margin = self.margin();
-            let budget = self.opts.search_boxes.min(self.collision_queries);
-            let found = self
-                .checker
+        let margin = self.margin();
+        let budget = self.opts.search_boxes.min(self.collision_queries);
+        let (model, bounds, checker) = (self.model, &self.bounds, &mut self.checker);
+        let find = || {
+            checker
                 .as_mut()
-                .and_then(|checker| prefix::first_joints_collide(self.model, checker, &self.bounds, margin, budget));
-            self.collides_everywhere = Some(found.map(|proof| proof.describe()));
+                .and_then(|checker| prefix::first_joints_collide(model, checker, bounds, margin, budget))
+                .map(|proof| proof.describe())
+        };
+        match &mut self.collides_everywhere {
+            Everywhere::Own(known) => known.get_or_insert_with(find).clone(),
+            Everywhere::Shared(known) => known.get_or_init(find).clone(),
         }
-        self.collides_everywhere.clone().flatten()
     }
 
     /// A proof that no free configuration reaches `goal`, from the first sub-chain whose search
@@ -1587,7 +1604,8 @@ pub fn solve_goals_counted(
     // number of threads, with the same result.
     // The methods are detected once; each thread's solver gets a copy.
     let methods = Methods::of(model);
-    let make = || Ik::build(model, world, opts.clone(), &methods);
+    let everywhere = std::sync::OnceLock::new();
+    let make = || Ik::build(model, world, opts.clone(), &methods, Everywhere::Shared(&everywhere));
     let stop = std::sync::atomic::AtomicBool::new(false);
     scenario
         .goals

@@ -77,6 +77,13 @@ pub(super) fn first_joints_collide(
     let dof = model.dof();
     // Joints beyond the prefix move none of its links: they stay mid-range.
     let mut q: Vec<f64> = lower.iter().zip(&upper).map(|(lo, hi)| 0.5 * (lo + hi)).collect();
+    // Every prefix's first box is centred on this configuration, and its pairs are among the
+    // longest prefix's: where those keep the margin there, so do the shorter prefixes', and each
+    // cover would stop at its first box. One query answers for all of them.
+    let longest = checker.pairs_up_to(dof.min(MOST_JOINTS));
+    if checker.clearance_among(&q, &longest, true) > margin {
+        return None;
+    }
     let mut half = vec![0.0; dof];
     let mut single = vec![0.0; dof];
     let mut left = budget;
