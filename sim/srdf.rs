@@ -73,7 +73,8 @@ struct Disabled {
 /// # Errors
 /// [`SrdfError`] naming the file, and the element and line: an unreadable file, malformed XML,
 /// a root other than `<robot>`, a `<disable_collisions>` without `link1` or `link2`, or a link
-/// name the model does not have (neither a model link nor a link merged into one).
+/// name neither the model nor the URDF it was read from has. A link of the URDF outside the
+/// model's chain (`--base`, `--tip`) leaves its pairs out of nothing: a note says so.
 pub fn exclusions(path: &Path, model: &Model) -> Result<SrdfExclusions, SrdfError> {
     let error = |element: String, message: String| SrdfError {
         path: path.to_path_buf(),
@@ -122,26 +123,36 @@ pub fn exclusions(path: &Path, model: &Model) -> Result<SrdfExclusions, SrdfErro
         .file_name()
         .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
 
+    let outside = urdf_links(model);
     let mut covered: BTreeMap<(usize, usize), Vec<&Disabled>> = BTreeMap::new();
     let mut disabled_names: BTreeSet<(&str, &str)> = BTreeSet::new();
     let mut notes = Vec::new();
     for entry in &disabled {
-        let find = |name: &str| {
-            owner.get(name).copied().ok_or_else(|| {
-                error(
+        let missing = [&entry.a, &entry.b].into_iter().find(|name| !owner.contains_key(name.as_str()));
+        if let Some(name) = missing {
+            if !outside.contains(name.as_str()) {
+                return Err(error(
                     format!(
                         "<disable_collisions link1=\"{}\" link2=\"{}\"> (line {})",
                         entry.a, entry.b, entry.line
                     ),
                     format!(
-                        "no link named `{name}` in the model of {} (model links: {}, and the links merged into them)",
+                        "no link named `{name}` in the model of {} (model links: {}, and the links merged into them){}",
                         model.name,
-                        known()
+                        known(),
+                        if outside.is_empty() { "" } else { ", nor in its URDF" }
                     ),
-                )
-            })
-        };
-        let (i, j) = (find(&entry.a)?, find(&entry.b)?);
+                ));
+            }
+            // A whole robot's SRDF names every link of the URDF; an arm chosen with --base or
+            // --tip has only some of them, and a pair with one outside is never checked.
+            notes.push(format!(
+                "{} - {} (line {}): `{name}` is in the URDF but not in the arm checked, so the pair is never checked",
+                entry.a, entry.b, entry.line
+            ));
+            continue;
+        }
+        let (i, j) = (owner[entry.a.as_str()], owner[entry.b.as_str()]);
         if i == j {
             notes.push(format!(
                 "{} - {} (line {}): both are part of model link `{}`, one rigid body",
@@ -185,6 +196,26 @@ pub fn exclusions(path: &Path, model: &Model) -> Result<SrdfExclusions, SrdfErro
         pairs,
         notes,
     })
+}
+
+/// The link names of the URDF `model` was read from (none for other sources, or when the file
+/// cannot be read again): what an SRDF may name outside the model's chain.
+fn urdf_links(model: &Model) -> BTreeSet<String> {
+    let crate::model::ModelSource::Urdf { path, .. } = &model.source else {
+        return BTreeSet::new();
+    };
+    let Ok(text) = crate::files::read_text(path, crate::limits::MAX_TEXT_BYTES) else {
+        return BTreeSet::new();
+    };
+    let Ok(doc) = crate::limits::parse_xml(&text) else {
+        return BTreeSet::new();
+    };
+    doc.root_element()
+        .children()
+        .filter(|node| node.has_tag_name("link"))
+        .filter_map(|node| node.attribute("name"))
+        .map(str::to_string)
+        .collect()
 }
 
 /// Per model link, the URDF links with collision geometry it is made of (a collider's label

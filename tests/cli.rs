@@ -172,6 +172,35 @@ fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
 }
 
 #[test]
+fn srdf_of_the_whole_robot_applies_to_an_arm_cut_from_it() {
+    // A whole robot's SRDF names links an arm chosen with --base leaves out: their pairs are
+    // never checked, so they are noted, not refused.
+    let srdf = "designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf";
+    let output = validate_design()
+        .arg(panda_urdf())
+        .args(["--base", "panda_link2", "--srdf", srdf, "--describe"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("collision pairs disabled by {srdf} (11 model link pairs left out):")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(
+            "  not applied: panda_link0 - panda_link1 (line 47): `panda_link0` is in the URDF but not in the arm checked, so the pair is never checked"
+        ),
+        "{stdout}"
+    );
+}
+
+#[test]
 fn srdf_errors_name_the_file_and_line() {
     let dir = tempfile::tempdir().expect("temp dir");
     let srdf = dir.path().join("typo.srdf");
@@ -194,7 +223,8 @@ fn srdf_errors_name_the_file_and_line() {
         "<robot name=\"panda\">\n  <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\" reason=\"Adjacent\"/>\n</robot>\n",
     );
     assert!(
-        stderr.contains("typo.srdf: <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\"> (line 2): no link named `panda_lnk1`"),
+        stderr.contains("typo.srdf: <disable_collisions link1=\"panda_link0\" link2=\"panda_lnk1\"> (line 2): no link named `panda_lnk1`")
+            && stderr.contains("nor in its URDF"),
         "{stderr}"
     );
     let stderr = refused(&panda_urdf(), "<robot><disable_collisions link1=\"panda_link0\"/></robot>");
