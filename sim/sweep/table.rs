@@ -235,7 +235,8 @@ pub(super) fn percent(part: usize, whole: usize) -> f64 {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Ranking {
     /// The paper's: by task loss alone (a design that misses a goal can rank above one that
-    /// solves the task when its other goals score better).
+    /// solves the task when its other goals score better); robots without one (URDF, MJCF)
+    /// after, by goals solved.
     #[default]
     Loss,
     /// Designs that solve the task first, then by goals solved, then by task loss.
@@ -253,7 +254,7 @@ impl Ranking {
 
     fn words(self) -> &'static str {
         match self {
-            Ranking::Loss => "by task loss",
+            Ranking::Loss => "by task loss (robots without one after, by goals solved)",
             Ranking::SolvedFirst => "solving designs first, then by goals solved, then by task loss",
         }
     }
@@ -309,7 +310,12 @@ pub fn text(
                 Ranking::Loss => std::cmp::Ordering::Equal,
                 Ranking::SolvedFirst => b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved)),
             };
-            first.then(loss(a).total_cmp(&loss(b))).then_with(|| a.design.cmp(&b.design))
+            // Robots without a task loss (URDF and MJCF input) tie on it: goals solved order them.
+            let solved = b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved));
+            first
+                .then(loss(a).total_cmp(&loss(b)))
+                .then(solved)
+                .then_with(|| a.design.cmp(&b.design))
         });
         rows.truncate(top);
         let distribution = distributions.get(*scenario);
@@ -403,6 +409,29 @@ mod tests {
             task_loss: loss,
             verdict: None,
         }
+    }
+
+    #[test]
+    fn robots_without_a_task_loss_rank_after_designs_by_goals_solved() {
+        let solving = |design: &str, solved: usize| Record {
+            goals_solved: solved,
+            task_solved: solved == 8,
+            ..record(design, None)
+        };
+        let records = [
+            solving("a-robot", 4),
+            record("dh-arm", Some(2.0)),
+            solving("b-robot", 7),
+            solving("c-robot", 8),
+        ];
+        let distributions = distributions(&records, None);
+        let overall = ranked(&records, &distributions);
+        let table = text(&records, &distributions, &overall, "the sweep", 10, Ranking::Loss);
+        let order: Vec<usize> = ["dh-arm", "c-robot", "b-robot", "a-robot"]
+            .iter()
+            .map(|name| table.find(&format!(" {name} ")).unwrap_or(usize::MAX))
+            .collect();
+        assert!(order.windows(2).all(|pair| pair[0] < pair[1]), "{table}");
     }
 
     #[test]
