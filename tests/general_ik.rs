@@ -493,3 +493,123 @@ fn a_cycling_eigenvalue_iteration_does_not_hang_the_solver() {
         }
     }
 }
+
+/// A unit vector drawn uniformly from the sphere.
+fn unit_vector(rng: &mut impl Rng) -> nalgebra::Vector3<f64> {
+    loop {
+        let v = nalgebra::Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let norm = v.norm();
+        if (0.1..1.0).contains(&norm) {
+            return v / norm;
+        }
+    }
+}
+
+/// The general 6R's proof that a pose without solution has none within the tolerance (every
+/// complex root of its determinant stays off the real angles), against the exact solver on
+/// the tolerance sampled. Poses are pushed past the workspace boundary along a random
+/// direction of pose space, found by bisection, by 0.3 to 6 times the tolerance: none whose
+/// tolerance holds the boundary is proven, and no pose sampled within a proven one's
+/// tolerance (half on its edge) has a solution. Random free designs and economic ones (the
+/// paper's grid of offsets and quarter-turn twists, as `python/bench.py` draws them).
+#[test]
+fn general_out_of_reach_proofs_hold_near_the_workspace_boundary() {
+    use nalgebra::{Translation3, UnitQuaternion};
+    use proving_ground::ik::search::Radii;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+    let economic = |rng: &mut rand_chacha::ChaCha8Rng, index: usize| {
+        let rows: Vec<[f64; 3]> = (0..6)
+            .map(|_| {
+                [
+                    [0.0, 0.1, 0.2, 0.3][rng.random_range(0..4)],
+                    [0.0, 0.2, 0.3, 0.4][rng.random_range(0..4)],
+                    [0.0, PI / 2.0, -PI / 2.0][rng.random_range(0..3)],
+                ]
+            })
+            .collect();
+        common::dh_design(&format!("economic-{index}"), &rows)
+    };
+    let (mut tried, mut proven, mut inside) = (0, 0, 0);
+    for index in 0..48 {
+        let model = if index % 2 == 0 {
+            random_free_design(&mut rng, index)
+        } else {
+            economic(&mut rng, index)
+        };
+        let Some(solver) = General6R::new(&model) else { continue };
+        for _ in 0..3 {
+            let start = model.tool_pose(&model.random_configuration(&mut rng));
+            // One unit of `s` moves the pose by at most the tolerance: `cos` of it in position,
+            // `sin` in rotation.
+            let split: f64 = rng.random_range(0.0..PI / 2.0);
+            let (dp, dr) = (
+                unit_vector(&mut rng) * (split.cos() * 1e-3),
+                unit_vector(&mut rng) * split.sin().to_radians(),
+            );
+            let along = |s: f64| {
+                Isometry3::from_parts(
+                    Translation3::from(start.translation.vector + dp * s),
+                    start.rotation * UnitQuaternion::from_scaled_axis(dr * s),
+                )
+            };
+            let solvable = |s: f64| !solver.solve(&along(s)).configurations.is_empty();
+            let mut high = 1.0;
+            while solvable(high) && high < 4096.0 {
+                high *= 2.0;
+            }
+            if high >= 4096.0 {
+                continue;
+            }
+            let mut low = if high > 1.0 { high / 2.0 } else { 0.0 };
+            for _ in 0..40 {
+                let middle = 0.5 * (low + high);
+                if solvable(middle) {
+                    low = middle;
+                } else {
+                    high = middle;
+                }
+            }
+            for beyond in [0.3, 0.95, 1.5, 3.0, 6.0] {
+                let centre = along(high + beyond);
+                if solver.solve(&centre).configurations.is_empty() {
+                    tried += 1;
+                } else {
+                    continue;
+                }
+                let Some(proof) = solver.out_of_reach_within(&centre, Radii::REACHED, 0.0) else {
+                    continue;
+                };
+                proven += 1;
+                // Within 1 unit the boundary's solutions are within the tolerance.
+                inside += usize::from(beyond < 1.0);
+                for k in 0..300 {
+                    let (rp, ro) = if k % 2 == 0 {
+                        (1e-3, 1f64.to_radians())
+                    } else {
+                        (1e-3 * rng.random::<f64>(), 1f64.to_radians() * rng.random::<f64>())
+                    };
+                    let (u, w) = (unit_vector(&mut rng), unit_vector(&mut rng));
+                    let sample = Isometry3::from_parts(
+                        Translation3::from(centre.translation.vector + u * rp),
+                        centre.rotation * UnitQuaternion::from_scaled_axis(w * ro),
+                    );
+                    assert!(
+                        solver.solve(&sample).configurations.is_empty(),
+                        "{}: a pose within the tolerance has a solution, yet: {proof}",
+                        model.name
+                    );
+                }
+            }
+        }
+    }
+    println!("{tried} poses beyond the boundary, {proven} proven");
+    assert_eq!(
+        inside, 0,
+        "a pose whose tolerance holds the workspace boundary was proven out of reach"
+    );
+    assert!(tried > 150 && proven > 10, "too few cases: {tried} tried, {proven} proven");
+}

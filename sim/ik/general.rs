@@ -21,9 +21,9 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use super::lines::{half_angle, interpolate2, node_inverse, quadratic_roots, Arm, Chain, NODES};
+use super::lines::{half_angle, interpolate2, node_inverse, quadratic_eigenvalues, quadratic_roots, Arm, Chain, NODES};
 use crate::model::Model;
-use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 
 /// The fourteen Raghavan–Roth quantities of a point `p` and a direction `l`.
 fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
@@ -47,6 +47,27 @@ const CANDIDATE: f64 = 1e-6;
 /// Tangents beyond this (joint 3 within about 2 degrees of the offset's half turn) are retried
 /// with another offset.
 const LARGE_ROOT: f64 = 50.0;
+/// Step of the pose (m, rad) for the roots' rates of change in an out-of-reach proof.
+const POSE_STEP: f64 = 1e-6;
+/// A root's match after a step must be this many times nearer than the next root.
+const MATCH_MARGIN: f64 = 8.0;
+/// Distance (rad) within which roots are copies of one multiple root split by rounding (a
+/// four-fold root splits by about the fourth root of the machine epsilon times its scale).
+const CLUSTER: f64 = 1e-3;
+/// How much a multiple root's split may grow over a step and still be rounding's, as a factor
+/// and a floor (rad): one that is the pose's splits by the square root of the step or more.
+const SPLIT_GROWTH: f64 = 10.0;
+const ROUNDING_SPREAD: f64 = 1e-7;
+/// Imaginary part (rad) of a root's angle beyond which it is the formulation's own (joint 3's
+/// tangent at +-i, to rounding: the determinant's factor that is no solution) and moves no
+/// solution: a true root that far off would need a turn of its angle the tolerance cannot give.
+const FAR_FROM_REAL: f64 = 8.0;
+/// Imaginary part (rad) below which a root counts as real: a solution, no out-of-reach proof.
+const REAL_ROOT: f64 = 1e-6;
+/// How many times its first-order motion over the tolerance a root must stay off the real
+/// angles: where two roots approach a fold their distance falls as the square root of the
+/// pose's, which first order underestimates twice; four keeps a margin of two on that.
+const FACTOR: f64 = 4.0;
 /// Ratio of smallest to largest singular value below which a matrix counts as singular.
 const SINGULAR: f64 = 1e-10;
 
@@ -134,6 +155,109 @@ impl General6R {
         let first = self.elimination.block + 1;
         let order = if self.reversed { ", reversed chain" } else { "" };
         format!("joints {first}-{} kept{order}", first + 2)
+    }
+
+    /// Why no configuration reaches world pose `goal` within `radii`, turned by up to `turn`
+    /// about tool z, when the pose has no solution and none can appear within: each of its
+    /// determinant's complex roots (joint 3's angle, complex) stays off the real angles by more
+    /// than four times the first-order motion the tolerance can give it (near a fold, where two
+    /// roots meet, their distance shrinks as the square root of the pose's: twice would be the
+    /// limit) (each root's rate of change
+    /// with the pose by finite differences, the roots matched to their nearest), and a real
+    /// root appears only where two meet on the real line (a branch pair born). `None` when the
+    /// pose has a real root, the system degenerates at it or next to it, or a root's motion or
+    /// its match is in doubt.
+    pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
+        let (offset3, roots) = self.angles(goal, None)?;
+        // The pose's derivatives per metre and per radian, by one step along each axis.
+        let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| {
+            let mut unit = Vector3::zeros();
+            unit[axis % 3] = 1.0;
+            if axis < 3 {
+                Isometry3::from_parts(Translation3::from(goal.translation.vector + unit * POSE_STEP), goal.rotation)
+            } else {
+                goal * UnitQuaternion::from_scaled_axis(unit * POSE_STEP)
+            }
+        });
+        // A tolerance on the real tool moves the chain's (a held joint's frame) by the lever
+        // times its angle on top; a turn about the chain tool's own z moves only its rotation.
+        let position = radii.position_m + self.arm.tool_lever * radii.orientation_rad;
+        let rotation = radii.orientation_rad + turn;
+        let motion = |rate: &[f64; 2]| rate[0].sqrt() * position + rate[1].sqrt() * rotation;
+        // Roots within a rounding split of one another are one multiple root (a factor of the
+        // determinant that is the geometry's): it moves as their centroid, which rounding
+        // leaves precise, and must stay one after each step.
+        let clusters = clusters(&roots);
+        let mut rates = vec![[0.0; 2]; clusters.len()];
+        // Rotations first: they move the roots most, so a failing proof ends soonest.
+        for axis in [3, 4, 5, 0, 1, 2] {
+            let (_, moved) = self.angles(&steps[axis], Some(offset3))?;
+            for (cluster, rate) in clusters.iter().zip(rates.iter_mut()) {
+                let members: Vec<(f64, f64)> = cluster.iter().map(|&i| roots[i]).collect();
+                let (centre, spread) = centroid(&members);
+                let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, m), *m)).collect();
+                near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let count = members.len();
+                let (farthest, next) = (near.get(count - 1)?.0, near.get(count).map_or(f64::INFINITY, |n| n.0));
+                // False for NaN too: no proof from a root that is not a number.
+                let matched = farthest * MATCH_MARGIN < next;
+                if !matched {
+                    return None;
+                }
+                let copies: Vec<(f64, f64)> = near[..count].iter().map(|n| n.1).collect();
+                let (moved_centre, moved_spread) = centroid(&copies);
+                // A multiple root that is the pose's alone splits under a step far more than
+                // rounding spreads it.
+                if moved_spread > SPLIT_GROWTH * spread + ROUNDING_SPREAD {
+                    return None;
+                }
+                rate[usize::from(axis >= 3)] += (angle_distance(&centre, &moved_centre) / POSE_STEP).powi(2);
+                let off_real = members.iter().map(|m| m.1.abs()).fold(f64::INFINITY, f64::min) - spread;
+                let stays_off = off_real > FACTOR * motion(rate);
+                if !stays_off {
+                    return None;
+                }
+            }
+        }
+        let closest = roots.iter().map(|root| root.1.abs()).fold(f64::INFINITY, f64::min);
+        Some(format!(
+            "the pose has no solution and none appears within {:.1} mm and {:.2} deg of it: joint {}'s angle at every root of the determinant is at least {closest:.3} rad (imaginary part) off the real angles, more than four times what the tolerance can move it (first order)",
+            radii.position_m * 1e3,
+            (radii.orientation_rad + turn).to_degrees(),
+            if self.reversed { 6 - self.elimination.block } else { self.elimination.block + 1 }
+        ))
+    }
+
+    /// Every root of `goal`'s determinant as joint 3's complex angle `(re, im)` (re modulo a
+    /// turn), at `offset3` (else the first tangent offset whose companion matrix works), and
+    /// the offset; `None` when the system degenerates or the pose has a real root.
+    fn angles(&self, goal: &Isometry3<f64>, offset3: Option<f64>) -> Option<(f64, Vec<(f64, f64)>)> {
+        let (rotation, translation) = self.arm.goal(goal, self.reversed);
+        let system = self.elimination.system(&rotation, &translation)?;
+        let offsets: Vec<f64> = match offset3 {
+            Some(offset) => vec![offset],
+            None => std::iter::once(OFFSETS[0]).chain(RETRY_OFFSETS).collect(),
+        };
+        for offset in offsets {
+            let [c, b, a] = system.quadratic(offset);
+            let Some(eigenvalues) = quadratic_eigenvalues(&c, &b, &a) else {
+                continue;
+            };
+            let angles: Vec<(f64, f64)> = eigenvalues
+                .iter()
+                .map(|&(re, im)| {
+                    // 2 atan(re + i im): its real part from atan2, its imaginary part from a log.
+                    let real = offset + (2.0 * re).atan2(1.0 - re * re - im * im);
+                    let imaginary = 0.5 * ((re * re + (1.0 + im).powi(2)) / (re * re + (1.0 - im).powi(2))).ln();
+                    (real, imaginary)
+                })
+                .collect();
+            if angles.iter().any(|(re, im)| !(re.is_finite() && im.abs() > REAL_ROOT)) {
+                return None;
+            }
+            return Some((offset, angles));
+        }
+        None
     }
 
     /// Every configuration whose tool frame is at world pose `goal`, unpolished.
@@ -320,6 +444,45 @@ impl Elimination {
         q[block + 3] = self.chain.angle_of(block + 3, &q, rotation);
         Some(q.map(super::wrap_angle))
     }
+}
+
+/// The roots of `roots` (complex angles) not [`FAR_FROM_REAL`] grouped where they lie within
+/// [`CLUSTER`] of one another (single linkage), by index.
+fn clusters(roots: &[(f64, f64)]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (index, root) in roots.iter().enumerate() {
+        if root.1.abs() > FAR_FROM_REAL {
+            continue;
+        }
+        let joined: Vec<usize> = (0..groups.len())
+            .filter(|&g| groups[g].iter().any(|&other| angle_distance(root, &roots[other]) <= CLUSTER))
+            .collect();
+        let mut group = vec![index];
+        for &g in joined.iter().rev() {
+            group.extend(groups.remove(g));
+        }
+        group.sort_unstable();
+        groups.push(group);
+    }
+    groups.sort();
+    groups
+}
+
+/// The centroid of complex angles (real parts unwrapped about the first) and their largest
+/// distance from it.
+fn centroid(angles: &[(f64, f64)]) -> ((f64, f64), f64) {
+    let first = angles[0];
+    let count = angles.len() as f64;
+    let re = angles.iter().map(|a| first.0 + super::wrap_angle(a.0 - first.0)).sum::<f64>() / count;
+    let im = angles.iter().map(|a| a.1).sum::<f64>() / count;
+    let centre = (re, im);
+    let spread = angles.iter().map(|a| angle_distance(&centre, a)).fold(0.0, f64::max);
+    (centre, spread)
+}
+
+/// The distance between two complex angles, their real parts compared modulo a turn.
+fn angle_distance(a: &(f64, f64), b: &(f64, f64)) -> f64 {
+    super::wrap_angle(a.0 - b.0).hypot(a.1 - b.1)
 }
 
 /// Whether two roots are one within rounding: two solutions sharing joint 3's angle (the null

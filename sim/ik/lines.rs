@@ -328,6 +328,25 @@ const NEAR_REAL: f64 = 1e-4;
 /// within `80 N` steps per eigenvalue block (an unbounded iteration can cycle forever on some
 /// finite matrices: found on a modular catalog arm).
 pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>, a: &SMatrix<f64, N, N>) -> Option<Vec<f64>> {
+    let eigenvalues = quadratic_eigenvalues(c, b, a)?;
+    let mut roots: Vec<f64> = eigenvalues
+        .iter()
+        .filter(|(re, im)| re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs()))
+        .map(|&(re, _)| re)
+        .collect();
+    // Ascending: the solutions' order (and what reports list first) is the roots', not the
+    // eigenvalue iteration's.
+    roots.sort_by(f64::total_cmp);
+    Some(roots)
+}
+
+/// Every eigenvalue `(re, im)` of the companion matrix of `c + b x + a x^2` (see
+/// [`quadratic_roots`], whose conditions it shares).
+pub(crate) fn quadratic_eigenvalues<const N: usize>(
+    c: &SMatrix<f64, N, N>,
+    b: &SMatrix<f64, N, N>,
+    a: &SMatrix<f64, N, N>,
+) -> Option<Vec<(f64, f64)>> {
     // Conditioning from the inverse: cheaper than an SVD.
     let inverse = a.try_inverse()?;
     let condition = inverse.norm() * a.norm();
@@ -348,14 +367,5 @@ pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatri
     if !companion.iter().all(|x| x.is_finite()) {
         return None;
     }
-    let eigenvalues = super::eigen::Hessenberg::new(size, companion).eigenvalues(80 * N)?;
-    let mut roots: Vec<f64> = eigenvalues
-        .iter()
-        .filter(|(re, im)| re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs()))
-        .map(|&(re, _)| re)
-        .collect();
-    // Ascending: the solutions' order (and what reports list first) is the roots', not the
-    // eigenvalue iteration's.
-    roots.sort_by(f64::total_cmp);
-    Some(roots)
+    super::eigen::Hessenberg::new(size, companion).eigenvalues(80 * N)
 }

@@ -226,6 +226,8 @@ pub struct Ik<'a> {
     /// Whether the arm's first joints collide wherever they are (see [`prefix`]), once asked:
     /// the proof every goal that nothing else decides gets.
     collides_everywhere: Everywhere<'a>,
+    /// The goal being solved is a pose the all-solutions method found no solution of.
+    without_solution: bool,
     ws: KinematicsWorkspace,
 }
 
@@ -312,6 +314,7 @@ impl<'a> Ik<'a> {
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
             collides_everywhere,
+            without_solution: false,
             ws: model.workspace(),
             opts,
         }
@@ -343,6 +346,7 @@ impl<'a> Ik<'a> {
         self.parts_left = self.cell_parts;
         self.reach_parts_left = parts::PARTS_PER_GOAL;
         self.misses.clear();
+        self.without_solution = false;
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
         judge_task_tolerance(self.model, goal, &mut result);
@@ -358,6 +362,7 @@ impl<'a> Ik<'a> {
             (Some(arm), _) if all_solutions => arm.solve(&pose),
             (None, Some((method, mode))) if self.opts.analytic && finite && goal.tolerance == *mode => {
                 let found = method.solve_proving(&pose, self.cap_evaluations());
+                self.without_solution = found.configurations.is_empty() && found.resolved;
                 AnalyticSolutions {
                     configurations: found.configurations,
                     finite: found.resolved,
@@ -712,6 +717,14 @@ impl<'a> Ik<'a> {
             result.proof = Some(proof);
             return;
         }
+        if self.opts.search_boxes < search::FIRST_ORDER_BUDGET && !posed {
+            if let Some(proof) = self.roots_stay_complex(goal) {
+                result.complete = true;
+                result.undecided = None;
+                result.proof = Some(proof);
+                return;
+            }
+        }
         if !reduced.is_empty() && self.opts.search_boxes < search::FIRST_ORDER_BUDGET {
             // A sweep's few boxes over every joint rule out nothing the sub-chains' searches
             // just left open: on the 36 cluttered tasks (200 random 6R designs, 312 modular
@@ -767,6 +780,16 @@ impl<'a> Ik<'a> {
             self.opts.search_boxes
         };
         let outcome = search::search_helped(self.model, goal, search::Radii::REACHED, budget, &mut oracle, &helpers);
+        // What the searches leave open, the first-order proof may still decide.
+        let open = !matches!(outcome, Some(search::Search::Proven { .. } | search::Search::Found { .. }));
+        if open && !posed {
+            if let Some(proof) = self.roots_stay_complex(goal) {
+                result.complete = true;
+                result.undecided = None;
+                result.proof = Some(proof);
+                return;
+            }
+        }
         let Some(outcome) = outcome else {
             return;
         };
@@ -820,6 +843,23 @@ impl<'a> Ik<'a> {
                 result.undecided = Some(format!("{miss}a joint-space search of {boxes} boxes (its budget) {what}"));
             }
         }
+    }
+
+    /// The general elimination's proof that a pose without solution has none within the goal's
+    /// tolerance either ([`general::General6R::out_of_reach_within`]: first order, its roots'
+    /// distance from the real angles against four times their motion), for a goal the exact
+    /// searches left open. `None` where a reach bound proves the goal: the report gives that
+    /// exact proof instead.
+    fn roots_stay_complex(&self, goal: &Goal) -> Option<String> {
+        let (method @ AllSolutions::General(_), Tolerance::Pose | Tolerance::ZSymmetric) = self.all.as_ref()? else {
+            return None;
+        };
+        if !self.without_solution || reach::last_joints_beyond_reach(self.model, goal).is_some() {
+            return None;
+        }
+        let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
+        let proof = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0)?;
+        Some(format!("{}: {proof}", self.method()))
     }
 
     /// The proof that every configuration collides, whatever the goal (see [`prefix`]): found

@@ -104,7 +104,8 @@ impl AllSolutions {
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, evaluations: usize) -> Option<String> {
         match self {
             AllSolutions::Wrist(wrist) => wrist.out_of_reach_within(goal, radii, turn, evaluations),
-            AllSolutions::General(_) | AllSolutions::Parallel(_) => None,
+            AllSolutions::General(general) => general.out_of_reach_within(goal, radii, turn),
+            AllSolutions::Parallel(_) => None,
         }
     }
 
