@@ -104,21 +104,31 @@ fn panda_loads_without_a_tip_and_with_one() {
     assert!(!stdout.contains("model choices"), "an explicit --tip chooses nothing: {stdout}");
 }
 
-#[test]
-fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
-    let srdf = "designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf";
+/// The Panda's SRDF, as the tests give it.
+const PANDA_SRDF: &str = "designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf";
+
+/// `--describe` of the Panda with its SRDF and `options`: it must succeed; its stdout.
+fn describe_panda_with_srdf(options: &[&str]) -> String {
     let output = validate_design()
         .arg(panda_urdf())
-        .args(["--srdf", srdf, "--describe"])
+        .args(options)
+        .args(["--srdf", PANDA_SRDF, "--describe"])
         .output()
         .expect("runs");
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
     assert_eq!(
         output.status.code(),
         Some(0),
         "{stdout}\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
+    stdout
+}
+
+#[test]
+fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
+    let srdf = PANDA_SRDF;
+    let stdout = describe_panda_with_srdf(&[]);
     assert!(
         stdout.contains(&format!("collision pairs disabled by {srdf} (18 model link pairs left out):")),
         "{stdout}"
@@ -175,21 +185,9 @@ fn srdf_leaves_out_the_disabled_pairs_with_their_reasons() {
 fn srdf_of_the_whole_robot_applies_to_an_arm_cut_from_it() {
     // A whole robot's SRDF names links an arm chosen with --base leaves out: their pairs are
     // never checked, so they are noted, not refused.
-    let srdf = "designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf";
-    let output = validate_design()
-        .arg(panda_urdf())
-        .args(["--base", "panda_link2", "--srdf", srdf, "--describe"])
-        .output()
-        .expect("runs");
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    assert_eq!(
-        output.status.code(),
-        Some(0),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    let stdout = describe_panda_with_srdf(&["--base", "panda_link2"]);
     assert!(
-        stdout.contains(&format!("collision pairs disabled by {srdf} (11 model link pairs left out):")),
+        stdout.contains(&format!("collision pairs disabled by {PANDA_SRDF} (11 model link pairs left out):")),
         "{stdout}"
     );
     assert!(
