@@ -158,15 +158,13 @@ impl General6R {
     }
 
     /// Why no configuration reaches world pose `goal` within `radii`, turned by up to `turn`
-    /// about tool z, when the pose has no solution and none can appear within: each of its
-    /// determinant's complex roots (joint 3's angle, complex) stays off the real angles by more
-    /// than four times the first-order motion the tolerance can give it (near a fold, where two
-    /// roots meet, their distance shrinks as the square root of the pose's: twice would be the
-    /// limit) (each root's rate of change
-    /// with the pose by finite differences, the roots matched to their nearest), and a real
-    /// root appears only where two meet on the real line (a branch pair born). `None` when the
-    /// pose has a real root, the system degenerates at it or next to it, or a root's motion or
-    /// its match is in doubt.
+    /// about tool z, when the pose has no solution and none can appear within. A real root
+    /// appears only where two meet on the real line (a branch pair born), so it suffices that
+    /// each of the determinant's complex roots (joint 3's angle, complex) stays off the real
+    /// angles by more than [`FACTOR`] times the first-order motion the tolerance can give it;
+    /// each root's rate of change with the pose is taken by finite differences, the roots
+    /// matched to their nearest. `None` when the pose has a real root, the system degenerates
+    /// at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         let (offset3, roots) = self.angles(goal, None)?;
         // The pose's derivatives per metre and per radian, by one step along each axis.
@@ -187,17 +185,23 @@ impl General6R {
         // Roots within a rounding split of one another are one multiple root (a factor of the
         // determinant that is the geometry's): it moves as their centroid, which rounding
         // leaves precise, and must stay one after each step.
-        let clusters = clusters(&roots);
+        // Per cluster: its size, centroid, spread and distance from the real angles.
+        let clusters: Vec<(usize, (f64, f64), f64, f64)> = clusters(&roots)
+            .iter()
+            .map(|cluster| {
+                let members: Vec<(f64, f64)> = cluster.iter().map(|&i| roots[i]).collect();
+                let (centre, spread) = centroid(&members);
+                let off_real = members.iter().map(|m| m.1.abs()).fold(f64::INFINITY, f64::min) - spread;
+                (members.len(), centre, spread, off_real)
+            })
+            .collect();
         let mut rates = vec![[0.0; 2]; clusters.len()];
         // Rotations first: they move the roots most, so a failing proof ends soonest.
         for axis in [3, 4, 5, 0, 1, 2] {
             let (_, moved) = self.angles(&steps[axis], Some(offset3))?;
-            for (cluster, rate) in clusters.iter().zip(rates.iter_mut()) {
-                let members: Vec<(f64, f64)> = cluster.iter().map(|&i| roots[i]).collect();
-                let (centre, spread) = centroid(&members);
+            for (&(count, centre, spread, off_real), rate) in clusters.iter().zip(rates.iter_mut()) {
                 let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, m), *m)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let count = members.len();
                 let (farthest, next) = (near.get(count - 1)?.0, near.get(count).map_or(f64::INFINITY, |n| n.0));
                 // False for NaN too: no proof from a root that is not a number.
                 let matched = farthest * MATCH_MARGIN < next;
@@ -212,7 +216,6 @@ impl General6R {
                     return None;
                 }
                 rate[usize::from(axis >= 3)] += (angle_distance(&centre, &moved_centre) / POSE_STEP).powi(2);
-                let off_real = members.iter().map(|m| m.1.abs()).fold(f64::INFINITY, f64::min) - spread;
                 let stays_off = off_real > FACTOR * motion(rate);
                 if !stays_off {
                     return None;

@@ -717,13 +717,8 @@ impl<'a> Ik<'a> {
             result.proof = Some(proof);
             return;
         }
-        if self.opts.search_boxes < search::FIRST_ORDER_BUDGET && !posed {
-            if let Some(proof) = self.roots_stay_complex(goal) {
-                result.complete = true;
-                result.undecided = None;
-                result.proof = Some(proof);
-                return;
-            }
+        if self.opts.search_boxes < search::FIRST_ORDER_BUDGET && !posed && self.roots_stay_complex(goal, result) {
+            return;
         }
         if !reduced.is_empty() && self.opts.search_boxes < search::FIRST_ORDER_BUDGET {
             // A sweep's few boxes over every joint rule out nothing the sub-chains' searches
@@ -782,13 +777,8 @@ impl<'a> Ik<'a> {
         let outcome = search::search_helped(self.model, goal, search::Radii::REACHED, budget, &mut oracle, &helpers);
         // What the searches leave open, the first-order proof may still decide.
         let open = !matches!(outcome, Some(search::Search::Proven { .. } | search::Search::Found { .. }));
-        if open && !posed {
-            if let Some(proof) = self.roots_stay_complex(goal) {
-                result.complete = true;
-                result.undecided = None;
-                result.proof = Some(proof);
-                return;
-            }
+        if open && !posed && self.roots_stay_complex(goal, result) {
+            return;
         }
         let Some(outcome) = outcome else {
             return;
@@ -848,18 +838,23 @@ impl<'a> Ik<'a> {
     /// The general elimination's proof that a pose without solution has none within the goal's
     /// tolerance either ([`general::General6R::out_of_reach_within`]: first order, its roots'
     /// distance from the real angles against four times their motion), for a goal the exact
-    /// searches left open. `None` where a reach bound proves the goal: the report gives that
-    /// exact proof instead.
-    fn roots_stay_complex(&self, goal: &Goal) -> Option<String> {
-        let (method @ AllSolutions::General(_), Tolerance::Pose | Tolerance::ZSymmetric) = self.all.as_ref()? else {
-            return None;
+    /// searches left open, written into `result`; whether it holds. Not where a reach bound
+    /// proves the goal: the report gives that exact proof instead.
+    fn roots_stay_complex(&self, goal: &Goal, result: &mut GoalSolutions) -> bool {
+        let Some((method @ AllSolutions::General(_), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
+            return false;
         };
         if !self.without_solution || reach::last_joints_beyond_reach(self.model, goal).is_some() {
-            return None;
+            return false;
         }
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-        let proof = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0)?;
-        Some(format!("{}: {proof}", self.method()))
+        let Some(proof) = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0) else {
+            return false;
+        };
+        result.complete = true;
+        result.undecided = None;
+        result.proof = Some(format!("{}: {proof}", self.method()));
+        true
     }
 
     /// The proof that every configuration collides, whatever the goal (see [`prefix`]): found

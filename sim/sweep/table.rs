@@ -306,12 +306,12 @@ pub fn text(
         let mut rows: Vec<&Record> = records.iter().filter(|r| r.scenario == *scenario).collect();
         let loss = |r: &Record| r.task_loss.unwrap_or(f64::INFINITY);
         rows.sort_by(|a, b| {
+            let solved = b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved));
             let first = match ranking {
                 Ranking::Loss => std::cmp::Ordering::Equal,
-                Ranking::SolvedFirst => b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved)),
+                Ranking::SolvedFirst => solved,
             };
             // Robots without a task loss (URDF and MJCF input) tie on it: goals solved order them.
-            let solved = b.task_solved.cmp(&a.task_solved).then(b.goals_solved.cmp(&a.goals_solved));
             first
                 .then(loss(a).total_cmp(&loss(b)))
                 .then(solved)
