@@ -161,7 +161,7 @@ impl General6R {
     /// about tool z, when the pose has no solution and none can appear within. A real root
     /// appears only where two meet on the real line (a branch pair born), so it suffices that
     /// each of the determinant's complex roots (joint 3's angle, complex) stays off the real
-    /// angles by more than [`FACTOR`] times the first-order motion the tolerance can give it;
+    /// angles by more than `FACTOR` (4) times the first-order motion the tolerance can give it;
     /// each root's rate of change with the pose is taken by finite differences, the roots
     /// matched to their nearest. `None` when the pose has a real root, the system degenerates
     /// at it or next to it, or a root's motion or its match is in doubt.
