@@ -21,9 +21,11 @@
 //! eliminates joint 1 instead of joint 6; an arm for which both degenerate gets `None`, and its
 //! pose goals stay with the numeric solver.
 
-use super::lines::{half_angle, interpolate2, node_inverse, quadratic_eigenvalues, quadratic_roots, Arm, Chain, NODES};
+use super::deflate::Deflation;
+use super::lines::{half_angle, interpolate2, near_real, node_inverse, quadratic_eigenvalues, Arm, Chain, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use std::sync::OnceLock;
 
 /// The fourteen Raghavan–Roth quantities of a point `p` and a direction `l`.
 fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
@@ -39,8 +41,12 @@ fn fourteen(p: &Vector3<f64>, l: &Vector3<f64>) -> [f64; 14] {
 /// Offsets of the half-angle tangents (rad): a solution at `offset + pi` would be at infinity, so
 /// the offsets are angles no design chooses on purpose.
 const OFFSETS: [f64; 3] = [0.713_281_0, -1.302_717_5, 2.218_919_3];
-/// Further offsets of joint 3 tried when the leading matrix is near singular.
-const RETRY_OFFSETS: [f64; 3] = [-0.411_734_9, 1.577_102_6, -2.650_381_7];
+/// Joint 3's offsets in the order tried: the first, then others where its leading matrix is
+/// near singular or a root near infinity.
+const OFFSETS3: [f64; 4] = [OFFSETS[0], -0.411_734_9, 1.577_102_6, -2.650_381_7];
+/// Configurations whose poses probe an elimination: for its regularity, and for the subspace
+/// its deflation takes out.
+const PROBES: [[f64; 6]; 2] = [[0.9, -0.4, 1.3, 2.1, -0.7, 0.5], [-2.3, 1.7, -0.6, -1.2, 2.6, -1.9]];
 
 /// Pose error (scaled lengths and rad) beyond which a fast candidate is recomputed by the SVD.
 const CANDIDATE: f64 = 1e-6;
@@ -97,6 +103,9 @@ struct Elimination {
     block: usize,
     /// Left side: `[quantity][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
     left: [[[f64; 9]; 3]; 14],
+    /// Per offset of [`OFFSETS3`], found at first use: the companion's `+-i` subspace to take
+    /// out (`None` where the arm's has no clear one).
+    deflations: [OnceLock<Option<Deflation>>; 4],
 }
 
 /// Every solution of one pose, unpolished.
@@ -166,7 +175,7 @@ impl General6R {
     /// matched to their nearest. `None` when the pose has a real root, the system degenerates
     /// at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let (offset3, roots) = self.angles(goal, None)?;
+        let (index3, roots) = self.angles(goal, None)?;
         // The pose's derivatives per metre and per radian, by one step along each axis.
         let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| {
             let mut unit = Vector3::zeros();
@@ -198,7 +207,7 @@ impl General6R {
         let mut rates = vec![[0.0; 2]; clusters.len()];
         // Rotations first: they move the roots most, so a failing proof ends soonest.
         for axis in [3, 4, 5, 0, 1, 2] {
-            let (_, moved) = self.angles(&steps[axis], Some(offset3))?;
+            let (_, moved) = self.angles(&steps[axis], Some(index3))?;
             for (&(count, centre, spread, off_real), rate) in clusters.iter().zip(rates.iter_mut()) {
                 let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, m), *m)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -231,19 +240,20 @@ impl General6R {
         ))
     }
 
-    /// Every root of `goal`'s determinant as joint 3's complex angle `(re, im)` (re modulo a
-    /// turn), at `offset3` (else the first tangent offset whose companion matrix works), and
-    /// the offset; `None` when the system degenerates or the pose has a real root.
-    fn angles(&self, goal: &Isometry3<f64>, offset3: Option<f64>) -> Option<(f64, Vec<(f64, f64)>)> {
+    /// Every root of `goal`'s determinant but the `+-i` ones the deflation takes out, as joint
+    /// 3's complex angle `(re, im)` (re modulo a turn), at offset `OFFSETS3[index]` (else the
+    /// first whose companion matrix works), and the offset's index; `None` when the system
+    /// degenerates or the pose has a real root.
+    fn angles(&self, goal: &Isometry3<f64>, index: Option<usize>) -> Option<(usize, Vec<(f64, f64)>)> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let system = self.elimination.system(&rotation, &translation)?;
-        let offsets: Vec<f64> = match offset3 {
-            Some(offset) => vec![offset],
-            None => std::iter::once(OFFSETS[0]).chain(RETRY_OFFSETS).collect(),
+        let indices: Vec<usize> = match index {
+            Some(index) => vec![index],
+            None => (0..OFFSETS3.len()).collect(),
         };
-        for offset in offsets {
-            let [c, b, a] = system.quadratic(offset);
-            let Some(eigenvalues) = quadratic_eigenvalues(&c, &b, &a) else {
+        for index in indices {
+            let offset = OFFSETS3[index];
+            let Some((eigenvalues, _)) = self.elimination.eigenvalues(&system, index) else {
                 continue;
             };
             let angles: Vec<(f64, f64)> = eigenvalues
@@ -258,7 +268,7 @@ impl General6R {
             if angles.iter().any(|(re, im)| !(re.is_finite() && im.abs() > REAL_ROOT)) {
                 return None;
             }
-            return Some((offset, angles));
+            return Some((index, angles));
         }
         None
     }
@@ -307,7 +317,12 @@ impl Elimination {
                 }
             }
         }
-        let elimination = Elimination { chain, block, left };
+        let elimination = Elimination {
+            chain,
+            block,
+            left,
+            deflations: Default::default(),
+        };
         let probe = [0.37, -1.91, 2.47];
         let exact = elimination.chain.left(block, probe);
         let fitted = elimination.left_at(probe[0], probe[1], probe[2]);
@@ -321,8 +336,7 @@ impl Elimination {
     /// pass the first two and still fail the last (the null vector leaves a kept joint free, as
     /// where the carried line meets the last kept axis); the probes catch it.
     fn regular(&self) -> bool {
-        let probes = [[0.9, -0.4, 1.3, 2.1, -0.7, 0.5], [-2.3, 1.7, -0.6, -1.2, 2.6, -1.9]];
-        probes.iter().all(|probe| {
+        PROBES.iter().all(|probe| {
             let (rotation, translation) = self.chain.forward(probe);
             let Some(system) = self.system(&rotation, &translation) else {
                 return false;
@@ -406,7 +420,7 @@ impl Elimination {
         let Some(system) = self.system(rotation, translation) else {
             return out;
         };
-        let Some((offset3, roots, [c, b, a])) = system.roots() else {
+        let Some((offset3, roots, [c, b, a])) = self.roots(&system) else {
             return out;
         };
         out.resolved = !nearly_repeated(&roots);
@@ -431,6 +445,47 @@ impl Elimination {
             }
         }
         out
+    }
+
+    /// The offset of joint 3's tangent used and the near-real roots of `system`'s determinant;
+    /// `None` when the leading matrix is singular, or its eigenvalues do not converge, at every
+    /// offset tried.
+    fn roots(&self, system: &System) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
+        for (index, &offset3) in OFFSETS3.iter().enumerate() {
+            let Some((eigenvalues, quadratic)) = self.eigenvalues(system, index) else { continue };
+            let roots = near_real(&eigenvalues);
+            // A root near infinity (joint 3 near the offset's half turn) is imprecise: another
+            // offset moves it.
+            if roots.iter().any(|x| x.abs() > LARGE_ROOT) && index + 1 < OFFSETS3.len() {
+                continue;
+            }
+            return Some((offset3, roots, quadratic));
+        }
+        None
+    }
+
+    /// The eigenvalues of `system`'s companion matrix at offset `OFFSETS3[index]`, without the
+    /// `+-i` ones where the arm's deflation holds at this pose (all 24 where not), and the
+    /// matrix quadratic.
+    fn eigenvalues(&self, system: &System, index: usize) -> Option<(Vec<(f64, f64)>, [Matrix12; 3])> {
+        let [c, b, a] = system.quadratic(OFFSETS3[index]);
+        let deflated = self.deflation(index).and_then(|deflation| deflation.eigenvalues(&c, &b, &a));
+        let eigenvalues = match deflated {
+            Some(eigenvalues) => eigenvalues,
+            None => quadratic_eigenvalues(&c, &b, &a)?,
+        };
+        Some((eigenvalues, [c, b, a]))
+    }
+
+    /// The deflation at offset `OFFSETS3[index]`, found from the first probe's pose.
+    fn deflation(&self, index: usize) -> Option<&Deflation> {
+        self.deflations[index]
+            .get_or_init(|| {
+                let (rotation, translation) = self.chain.forward(&PROBES[0]);
+                let [c, b, a] = self.system(&rotation, &translation)?.quadratic(OFFSETS3[index]);
+                Deflation::of(&c, &b, &a)
+            })
+            .as_ref()
     }
 
     /// The configuration of a root: joints 4 and 5 from the null vector, 1 and 2 from the
@@ -617,23 +672,6 @@ impl System {
         c + b * x3 + a * (x3 * x3)
     }
 
-    /// The offset of joint 3's tangent used and the near-real roots of the determinant; `None`
-    /// when the leading matrix is singular, or its eigenvalues do not converge, at every offset
-    /// tried.
-    fn roots(&self) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
-        for offset3 in [OFFSETS[0]].into_iter().chain(RETRY_OFFSETS) {
-            let [c, b, a] = self.quadratic(offset3);
-            let Some(roots) = quadratic_roots(&c, &b, &a) else { continue };
-            // A root near infinity (joint 3 near the offset's half turn) is imprecise: another
-            // offset moves it.
-            if roots.iter().any(|x| x.abs() > LARGE_ROOT) && offset3 != RETRY_OFFSETS[RETRY_OFFSETS.len() - 1] {
-                continue;
-            }
-            return Some((offset3, roots, [c, b, a]));
-        }
-        None
-    }
-
     /// Joints 1 and 2 from the left side's values at joints 3 to 5: the products solved for.
     fn first_two(&self, left: &[f64; 14]) -> Option<(f64, f64)> {
         let rhs = SVector::<f64, 14>::from_fn(|k, _| left[k] - self.right[k][0]);
@@ -683,5 +721,63 @@ impl Chain {
             direction = line.rotation(-angle(joint)) * direction;
         }
         fourteen(&(point - self.lines[block].point), &direction)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The deflated eigenvalues are the whole companion's less eight at `+-i`, matched one to
+    /// one, on random poses at every offset, for shipped arms whose eliminations keep joints 3
+    /// to 5 (a general arm), 2 to 4 (a UR type) and, reversed, 1 to 3 (a spherical wrist).
+    #[test]
+    fn the_deflation_takes_out_the_eight_roots_at_plus_minus_i_and_no_other() {
+        let mut blocks = Vec::new();
+        for design in ["free-offset-6dof", "ur5e", "economic-spherical-wrist"] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("designs/{design}.json"));
+            let model = crate::pipeline::load_model(&path, &Default::default()).expect("shipped design loads");
+            let solver = General6R::new(&model).expect("the elimination holds");
+            blocks.push((solver.elimination.block, solver.reversed));
+            deflation_agrees(&solver.elimination);
+        }
+        assert_eq!(blocks, [(2, false), (1, false), (0, true)]);
+    }
+
+    fn deflation_agrees(elimination: &Elimination) {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..20 {
+            let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-3.0..3.0));
+            let (rotation, translation) = elimination.chain.forward(&q);
+            let system = elimination.system(&rotation, &translation).expect("a regular pose");
+            for (index, &offset) in OFFSETS3.iter().enumerate() {
+                let deflation = elimination.deflation(index).expect("the arm's subspace at every offset");
+                let [c, b, a] = system.quadratic(offset);
+                let deflated = deflation.eigenvalues(&c, &b, &a).expect("the subspace holds at every pose");
+                let mut whole = quadratic_eigenvalues(&c, &b, &a).expect("a regular companion");
+                assert_eq!((deflated.len(), whole.len()), (16, 24));
+                for (re, im) in &deflated {
+                    let scale = 1.0 + re.hypot(*im);
+                    let (nearest, distance) = whole
+                        .iter()
+                        .enumerate()
+                        .map(|(i, w)| (i, (w.0 - re).hypot(w.1 - im)))
+                        .min_by(|x, y| x.1.total_cmp(&y.1))
+                        .expect("eigenvalues left");
+                    assert!(distance <= 1e-7 * scale, "({re}, {im}) is {distance} from the companion's");
+                    whole.swap_remove(nearest);
+                }
+                assert!(whole.iter().all(|(re, im)| re.abs() < 1e-6 && (im.abs() - 1.0).abs() < 1e-6), "left: {whole:?}");
+            }
+        }
+    }
+
+    /// A matrix quadratic without the factor keeps its whole companion.
+    #[test]
+    fn a_quadratic_without_the_factor_has_no_deflation() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
+        let [c, b, a]: [Matrix12; 3] = std::array::from_fn(|_| Matrix12::from_fn(|_, _| rng.random_range(-1.0..1.0)));
+        assert!(Deflation::of(&c, &b, &a).is_none());
     }
 }

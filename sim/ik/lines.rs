@@ -328,7 +328,11 @@ const NEAR_REAL: f64 = 1e-4;
 /// within `80 N` steps per eigenvalue block (an unbounded iteration can cycle forever on some
 /// finite matrices: found on a modular catalog arm).
 pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatrix<f64, N, N>, a: &SMatrix<f64, N, N>) -> Option<Vec<f64>> {
-    let eigenvalues = quadratic_eigenvalues(c, b, a)?;
+    Some(near_real(&quadratic_eigenvalues(c, b, a)?))
+}
+
+/// The real parts of the eigenvalues within [`NEAR_REAL`] of the real line, ascending.
+pub(crate) fn near_real(eigenvalues: &[(f64, f64)]) -> Vec<f64> {
     let mut roots: Vec<f64> = eigenvalues
         .iter()
         .filter(|(re, im)| re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs()))
@@ -337,7 +341,7 @@ pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatri
     // Ascending: the solutions' order (and what reports list first) is the roots', not the
     // eigenvalue iteration's.
     roots.sort_by(f64::total_cmp);
-    Some(roots)
+    roots
 }
 
 /// Every eigenvalue `(re, im)` of the companion matrix of `c + b x + a x^2` (see
@@ -347,12 +351,7 @@ pub(crate) fn quadratic_eigenvalues<const N: usize>(
     b: &SMatrix<f64, N, N>,
     a: &SMatrix<f64, N, N>,
 ) -> Option<Vec<(f64, f64)>> {
-    // Conditioning from the inverse: cheaper than an SVD.
-    let inverse = a.try_inverse()?;
-    let condition = inverse.norm() * a.norm();
-    if condition.is_nan() || condition >= 1e8 {
-        return None;
-    }
+    let inverse = leading_inverse(a)?;
     let (ac, ab) = (inverse * c, inverse * b);
     // Row-major: the identity above right, then -A^-1 C and -A^-1 B.
     let size = 2 * N;
@@ -368,4 +367,15 @@ pub(crate) fn quadratic_eigenvalues<const N: usize>(
         return None;
     }
     super::eigen::Hessenberg::new(size, companion).eigenvalues(80 * N)
+}
+
+/// The inverse of a matrix quadratic's leading coefficient; `None` when it is singular or its
+/// condition number reaches `1e8` (taken from the inverse: cheaper than an SVD).
+pub(crate) fn leading_inverse<const N: usize>(a: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
+    let inverse = a.try_inverse()?;
+    let condition = inverse.norm() * a.norm();
+    if condition.is_nan() || condition >= 1e8 {
+        return None;
+    }
+    Some(inverse)
 }

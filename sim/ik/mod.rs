@@ -10,6 +10,7 @@ mod cap;
 mod cells;
 mod certify;
 mod coaxial;
+mod deflate;
 mod dls;
 mod eigen;
 mod error;
