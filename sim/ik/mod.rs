@@ -58,6 +58,9 @@ pub const REACHED_ORIENTATION_RAD: f64 = std::f64::consts::PI / 180.0;
 /// Closest numeric miss (m, rad) within which poses around an exactly unreachable goal are
 /// tried: ten times the tolerance in position, about six in orientation.
 const NEARBY_MISS_M: f64 = 0.01;
+/// Parts of a goal's tolerance the general elimination's roots' proof may cut it into (each up
+/// to seven eliminations, about 0.3 ms): a validation's, never a sweep's.
+const GENERAL_PARTS: usize = 256;
 const NEARBY_MISS_RAD: f64 = 0.1;
 
 /// Solver settings.
@@ -718,7 +721,7 @@ impl<'a> Ik<'a> {
             result.proof = Some(proof);
             return;
         }
-        if self.opts.search_boxes < search::FIRST_ORDER_BUDGET && !posed && self.roots_stay_complex(goal, result) {
+        if self.opts.search_boxes < search::FIRST_ORDER_BUDGET && !posed && self.roots_stay_complex(goal, result, false) {
             return;
         }
         if !reduced.is_empty() && self.opts.search_boxes < search::FIRST_ORDER_BUDGET {
@@ -778,7 +781,8 @@ impl<'a> Ik<'a> {
         let outcome = search::search_helped(self.model, goal, search::Radii::REACHED, budget, &mut oracle, &helpers);
         // What the searches leave open, the first-order proof may still decide.
         let open = !matches!(outcome, Some(search::Search::Proven { .. } | search::Search::Found { .. }));
-        if open && !posed && self.roots_stay_complex(goal, result) {
+        let in_parts = self.opts.search_boxes >= search::FIRST_ORDER_BUDGET;
+        if open && !posed && self.roots_stay_complex(goal, result, in_parts) {
             return;
         }
         let Some(outcome) = outcome else {
@@ -840,16 +844,25 @@ impl<'a> Ik<'a> {
     /// tolerance either ([`general::General6R::out_of_reach_within`]: first order, its roots'
     /// distance from the real angles against four times their motion), for a goal the exact
     /// searches left open, written into `result`; whether it holds. Not where a reach bound
-    /// proves the goal: the report gives that exact proof instead.
-    fn roots_stay_complex(&self, goal: &Goal, result: &mut GoalSolutions) -> bool {
-        let Some((method @ AllSolutions::General(_), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
+    /// proves the goal: the report gives that exact proof instead. With `in_parts`, where the
+    /// proof over the whole tolerance fails, the tolerance is cut ([`parts`], at most
+    /// [`GENERAL_PARTS`] parts): a pose a millimetre or two beyond a fold of the arm's
+    /// solutions has roots nearer the real angles than four times their motion over the whole
+    /// tolerance, but not over a part of it.
+    fn roots_stay_complex(&self, goal: &Goal, result: &mut GoalSolutions, in_parts: bool) -> bool {
+        let Some((method @ AllSolutions::General(general), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
             return false;
         };
         if !self.without_solution || reach::last_joints_beyond_reach(self.model, goal).is_some() {
             return false;
         }
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-        let Some(proof) = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0) else {
+        let whole = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0);
+        let proof = whole.or_else(|| {
+            let mut budget = GENERAL_PARTS;
+            in_parts.then(|| general.out_of_reach_in_parts(goal, &mut budget)).flatten()
+        });
+        let Some(proof) = proof else {
             return false;
         };
         result.complete = true;
@@ -995,6 +1008,7 @@ impl<'a> Ik<'a> {
         let proof = parts::out_of_reach_by_parts(
             goal,
             &mut budget,
+            parts::LEVER_M,
             |part, radii| arm.out_of_reach_within(&pose_of(part), radii, 0.0),
             |part| !arm.solve(&pose_of(part)).configurations.is_empty(),
         );

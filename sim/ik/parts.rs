@@ -46,7 +46,7 @@ const SMALLEST_HALF: f64 = 1.0 / 32.0;
 /// when weighing a rotation offset against a position one: which offset is halved, never what
 /// is proven. Measured on modular-elbow's workspace goal 69 (61 samples of its free turn cut):
 /// 0.3 m needs 1 607 596 parts, 0.1 m 187 055, 0.03 m 77 663, 0.01 m 46 163, 0.001 m 203 379.
-const LEVER_M: f64 = 0.03;
+pub(super) const LEVER_M: f64 = 0.03;
 
 /// A box of pose offsets in units of the tolerance: position (mm, world axes), then rotation
 /// (degrees, world axes; a `z_symmetric` goal's along goal x and y, the last one 0).
@@ -74,14 +74,14 @@ impl Part {
         }
     }
 
-    /// The offset to halve: the one whose half-width adds most to the slack; `None` when
-    /// every one is at its smallest.
-    fn widest(&self) -> Option<usize> {
+    /// The offset to halve: the one whose half-width adds most to the slack, a rotation's
+    /// weighed as `lever` (m per rad) times it; `None` when every one is at its smallest.
+    fn widest(&self, lever: f64) -> Option<usize> {
         let weight = |k: usize| {
             if k < 3 {
                 self.half[k] * REACHED_POSITION_M
             } else {
-                self.half[k] * REACHED_ORIENTATION_RAD * LEVER_M
+                self.half[k] * REACHED_ORIENTATION_RAD * lever
             }
         };
         (0..6)
@@ -103,10 +103,12 @@ impl Part {
 /// poses within the given radii of a goal's pose) proves it of every part of the tolerance;
 /// `None` when a part stays unproven at the smallest size, `solvable` (whether a goal's pose
 /// has solutions) finds a small part's centre reachable, or `budget` (boxes, taken as used)
-/// runs out.
+/// runs out. `lever` (m per rad) weighs a rotation offset against a position one when a part
+/// is split (the proof's own slack: [`LEVER_M`] for a wrist centre's).
 pub(super) fn out_of_reach_by_parts(
     goal: &Goal,
     budget: &mut usize,
+    lever: f64,
     prove: impl Fn(&Goal, Radii) -> Option<String>,
     solvable: impl Fn(&Goal) -> bool,
 ) -> Option<String> {
@@ -136,7 +138,7 @@ pub(super) fn out_of_reach_by_parts(
                 if small && part.is_within() && solvable(&centre) {
                     return None;
                 }
-                stack.extend(part.halves(part.widest()?));
+                stack.extend(part.halves(part.widest(lever)?));
             }
         }
     }
@@ -181,11 +183,11 @@ mod tests {
             let never = |_: &Goal| false;
             let mut budget = PARTS_PER_GOAL;
             assert!(
-                out_of_reach_by_parts(&goal, &mut budget, far_from(inside), never).is_none(),
+                out_of_reach_by_parts(&goal, &mut budget, LEVER_M, far_from(inside), never).is_none(),
                 "{tolerance:?}"
             );
             let mut budget = PARTS_PER_GOAL;
-            let proof = out_of_reach_by_parts(&goal, &mut budget, far_from(outside), never);
+            let proof = out_of_reach_by_parts(&goal, &mut budget, LEVER_M, far_from(outside), never);
             assert!(proof.is_some(), "{tolerance:?}");
         }
     }

@@ -170,6 +170,7 @@ impl Ik<'_> {
         let proof = super::parts::out_of_reach_by_parts(
             goal,
             &mut budget,
+            super::parts::LEVER_M,
             // The ball bounds alone: a cap's evaluations per part would cost seconds a goal.
             |part, radii| self.part_out_of_reach(part, parameter, value, slack, radii, 0),
             |part| self.sample(part, parameter, value).is_some_and(|(_, found, _)| !found.is_empty()),
