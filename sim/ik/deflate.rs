@@ -44,7 +44,7 @@ impl Deflation {
     /// From the matrix quadratic of any pose of the arm at this offset; `None` when `P(i)` has no
     /// clear null space (the caller keeps the whole companion).
     pub(crate) fn of(c: &Matrix12, b: &Matrix12, a: &Matrix12) -> Option<Deflation> {
-        let p = (c - a).zip_map(b, |re, im| Complex::new(re, im));
+        let p = (c - a).zip_map(b, Complex::new);
         let svd = p.svd(false, true);
         let v_t = svd.v_t?;
         let mut order: Vec<usize> = (0..12).collect();
@@ -100,7 +100,9 @@ impl Deflation {
         let residual = (residual_re.norm_squared() + residual_im.norm_squared()).sqrt();
         // The null vectors are unit: their Frobenius norm is the square root of their count.
         let count = self.null_re.ncols() as f64;
-        if !(residual <= HOLDS * count.sqrt() * (d.norm_squared() + b.norm_squared()).sqrt()) {
+        // False for NaN too.
+        let holds = residual <= HOLDS * count.sqrt() * (d.norm_squared() + b.norm_squared()).sqrt();
+        if !holds {
             return None;
         }
         let inverse = leading_inverse(a)?;

@@ -248,7 +248,7 @@ impl General6R {
     }
 
     /// [`Self::out_of_reach_within`] part by part over `goal`'s tolerance (see
-    /// [`super::parts`]; at most `budget` parts, taken as used), for a pose a millimetre or two
+    /// `ik::parts`; at most `budget` parts, taken as used), for a pose a millimetre or two
     /// beyond a fold of the arm's solutions: its roots are nearer the real angles than four
     /// times their motion over the whole tolerance, but not over a small enough part of it.
     /// `None` where a small part's centre pose has solutions (ignoring the limits), a part stays
@@ -496,7 +496,7 @@ impl Elimination {
     /// The eigenvalues of `system`'s companion matrix at offset `OFFSETS3[index]`, without the
     /// `+-i` ones where the arm's deflation holds at this pose (all 24 where not), and the
     /// matrix quadratic.
-    fn eigenvalues(&self, system: &System, index: usize) -> Option<(Vec<(f64, f64)>, [Matrix12; 3])> {
+    fn eigenvalues(&self, system: &System, index: usize) -> Option<(Vec<(f64, f64)>, Quadratic)> {
         let [c, b, a] = system.quadratic(OFFSETS3[index]);
         let deflated = self.deflation(index).and_then(|deflation| deflation.eigenvalues(&c, &b, &a));
         let eigenvalues = match deflated {
@@ -661,6 +661,8 @@ struct System {
 }
 
 type Matrix12 = SMatrix<f64, 12, 12>;
+/// A matrix quadratic's coefficients of `x^0, x^1, x^2`.
+type Quadratic = [Matrix12; 3];
 
 impl System {
     /// The 12 x 12 matrix's coefficients of `x3^0, x3^1, x3^2` for joint 3's tangent offset.
