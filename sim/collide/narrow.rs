@@ -212,6 +212,11 @@ fn touching(pose_a: &Pose, pose_b: &Pose) -> Measured {
     }
 }
 
+/// Signed distance (m) within which a support-map pair's answer is taken as possibly degenerate
+/// and asked again with one shape turned by [`TURN_RAD`] (about each axis).
+const DEGENERATE_M: f64 = 1e-9;
+const TURN_RAD: f64 = 1e-10;
+
 /// parry's default dispatcher, with separated support-map pairs polished and meshes traversed
 /// through this dispatcher, so each triangle's distance is polished too.
 pub(super) struct Polished {
@@ -299,6 +304,19 @@ impl QueryDispatcher for Polished {
         let Some(mut contact) = support_map_contact(pos12, g1, g2, wider) else {
             return Ok(None);
         };
+        if contact.dist.abs() < DEGENERATE_M {
+            // GJK and EPA answer "touching" on some exactly degenerate overlaps (found: a
+            // cylinder's end face in a plane holding the other cylinder's axis, 60 mm deep,
+            // at one configuration and not at its neighbours 1e-9 rad away): a true touch is
+            // as rare, so ask again with the second shape turned by a tenth of a nanoradian
+            // (moving its points by far less than a nanometre) and keep a deeper answer.
+            let turned = *pos12 * Pose::new(Vector::ZERO, Vector::new(TURN_RAD, -TURN_RAD, TURN_RAD));
+            if let Some(again) = support_map_contact(&turned, g1, g2, wider) {
+                if again.dist < contact.dist - DEGENERATE_M {
+                    contact = again;
+                }
+            }
+        }
         if contact.dist > 0.0 && self.polish {
             polish(pos12, g1, g2, &mut contact);
         }
