@@ -271,9 +271,9 @@ impl General6R {
     fn angles(&self, goal: &Isometry3<f64>, index: Option<usize>) -> Option<(usize, Vec<(f64, f64)>)> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let system = self.elimination.system(&rotation, &translation)?;
-        let indices: Vec<usize> = match index {
-            Some(index) => vec![index],
-            None => (0..OFFSETS3.len()).collect(),
+        let indices = match index {
+            Some(index) => index..index + 1,
+            None => 0..OFFSETS3.len(),
         };
         for index in indices {
             let offset = OFFSETS3[index];
@@ -477,7 +477,7 @@ impl Elimination {
     /// The offset of joint 3's tangent used and the near-real roots of `system`'s determinant;
     /// `None` when the leading matrix is singular, or its eigenvalues do not converge, at every
     /// offset tried.
-    fn roots(&self, system: &System) -> Option<(f64, Vec<f64>, [Matrix12; 3])> {
+    fn roots(&self, system: &System) -> Option<(f64, Vec<f64>, Quadratic)> {
         for (index, &offset3) in OFFSETS3.iter().enumerate() {
             let Some((eigenvalues, quadratic)) = self.eigenvalues(system, index) else {
                 continue;
@@ -666,7 +666,7 @@ type Quadratic = [Matrix12; 3];
 
 impl System {
     /// The 12 x 12 matrix's coefficients of `x3^0, x3^1, x3^2` for joint 3's tangent offset.
-    fn quadratic(&self, offset3: f64) -> [Matrix12; 3] {
+    fn quadratic(&self, offset3: f64) -> Quadratic {
         let (h3, h4, h5) = (half_angle(offset3), half_angle(OFFSETS[1]), half_angle(OFFSETS[2]));
         let mut out = [Matrix12::zeros(); 3];
         // The change of basis one joint at a time (it is a product of three): 5, then 4, then 3.
@@ -818,7 +818,7 @@ mod tests {
     #[test]
     fn a_quadratic_without_the_factor_has_no_deflation() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
-        let [c, b, a]: [Matrix12; 3] = std::array::from_fn(|_| Matrix12::from_fn(|_, _| rng.random_range(-1.0..1.0)));
+        let [c, b, a]: Quadratic = std::array::from_fn(|_| Matrix12::from_fn(|_, _| rng.random_range(-1.0..1.0)));
         assert!(Deflation::of(&c, &b, &a).is_none());
     }
 }

@@ -58,10 +58,10 @@ pub const REACHED_ORIENTATION_RAD: f64 = std::f64::consts::PI / 180.0;
 /// Closest numeric miss (m, rad) within which poses around an exactly unreachable goal are
 /// tried: ten times the tolerance in position, about six in orientation.
 const NEARBY_MISS_M: f64 = 0.01;
+const NEARBY_MISS_RAD: f64 = 0.1;
 /// Parts of a goal's tolerance the general elimination's roots' proof may cut it into (each up
 /// to seven eliminations, about 0.3 ms): a validation's, never a sweep's.
 const GENERAL_PARTS: usize = 256;
-const NEARBY_MISS_RAD: f64 = 0.1;
 
 /// Solver settings.
 #[derive(Debug, Clone)]
