@@ -182,3 +182,72 @@ fn proofs_of_arms_with_coaxial_joints_merged_hold_against_a_dense_numeric_search
         assert!(proven >= 3, "joints {joints}: only {proven} goals proven with them merged");
     }
 }
+
+/// The arm with coaxial joints merged into five and a virtual sixth about tool z (or into six),
+/// solved exactly (issue 22): random free designs of the paper's generator's values with one
+/// pair on one axis. Goals within 0.999 mm and 0.999 deg of a configuration's tool pose (witnessed
+/// reachable) never get its proof; goals 2 to 20 mm and degrees off one (out of a five-joint
+/// arm's reach by a little, the hardest to prove) get it, and a dense numeric search of the
+/// arm itself reaches none of those.
+#[test]
+fn merged_arms_with_a_virtual_tool_joint_prove_only_what_is_unreachable() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+    let values = |rng: &mut rand_chacha::ChaCha8Rng| {
+        [
+            [0.0, 0.1, 0.2, 0.3][rng.random_range(0..4)],
+            [0.0, 0.2, 0.3, 0.4][rng.random_range(0..4)],
+            [0.0, PI / 2.0, -PI / 2.0][rng.random_range(0..3)],
+        ]
+    };
+    let dense = common::dense_numeric();
+    let (mut designs, mut proven, mut offered) = (0, 0, 0);
+    // Six 6-joint designs (five joints merged, a virtual sixth), then three 7-joint ones (six
+    // merged, no virtual joint).
+    while designs < 9 {
+        let joints = if designs < 6 { 6 } else { 7 };
+        let mut rows: Vec<[f64; 3]> = (0..joints).map(|_| values(&mut rng)).collect();
+        let pair = rng.random_range(0..4);
+        rows[pair] = [rows[pair][0], 0.0, 0.0];
+        let model = common::dh_design(&format!("coaxial-{designs}"), &rows);
+        let proves = |result: &proving_ground::ik::GoalSolutions| {
+            result
+                .proof
+                .as_deref()
+                .filter(|p| p.contains("the arm so merged has joints"))
+                .map(str::to_owned)
+        };
+        let sweep = IkOptions {
+            search_boxes: proving_ground::ik::SWEEP_SEARCH_BOXES,
+            ..IkOptions::default()
+        };
+        let mut ik = Ik::new(&model, sweep);
+        let mut numeric = Ik::new(&model, dense.clone());
+        for index in 0..12 {
+            let (q, goal) = witnessed_goal(&model, Tolerance::Pose, &mut rng);
+            let result = ik.solve(&goal, index, None);
+            assert!(
+                proves(&result).is_none(),
+                "{rows:?}: goal {index} is within the tolerance at {q:?}, yet {:?}",
+                result.proof
+            );
+            // The same pose moved by 2 to 20 mm and turned by 2 to 20 degrees.
+            let shift = common::unit(&mut rng) * rng.random_range(0.002..0.02);
+            let turn = UnitQuaternion::from_scaled_axis(common::unit(&mut rng) * rng.random_range(2.0_f64..20.0).to_radians());
+            let off = Goal {
+                position: goal.position + shift,
+                rotation: turn * goal.rotation,
+                ..goal
+            };
+            let result = ik.solve(&off, index, None);
+            offered += 1;
+            let Some(proof) = proves(&result) else { continue };
+            proven += 1;
+            common::assert_unreached(&mut numeric, &off, index, &proof, &format!("{rows:?}"));
+        }
+        designs += 1;
+    }
+    // 33 of 108 when written (a proof fails where a solution's virtual angle is within what the
+    // tolerance can move it, or a complex root is within four times its motion of the real
+    // angles).
+    assert!(proven * 4 >= offered, "only {proven} of {offered} goals just out of reach proven");
+}

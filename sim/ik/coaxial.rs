@@ -13,7 +13,8 @@
 //! R_(j+1)(q_(j+1) +- q_j)`.
 
 use super::reduce;
-use crate::model::{JointKind, Model};
+use crate::model::{Joint, JointKind, Link, Model};
+use nalgebra::{Isometry3, Vector3};
 
 /// Largest distance (m) between the two axis lines, and sine of their angle, at which two
 /// joints count as one axis: designs are exact, URDFs within their rounding.
@@ -78,6 +79,55 @@ impl Merged {
             each.join("; "),
             self.names.join(", ")
         )
+    }
+}
+
+impl Merged {
+    /// The merged arm as a 6R arm, for the all-solutions methods: a merged arm of six joints as
+    /// it is; one of five with a sixth, virtual, revolute joint about the tool's z axis, held at
+    /// 0 by its limits `[0, 0]`. Either reaches exactly the tool poses the arm reaches (the
+    /// virtual joint turns the tool only where it is 0), and its pose has finitely many
+    /// solutions where the arm's form continua: the five joints' solutions bring the tool's
+    /// position and z axis to the goal's, the virtual angle says how far about z the tool
+    /// stays off. `None` for other joint counts.
+    pub(super) fn six_joints(&self) -> Option<Model> {
+        let mut model = self.model.clone();
+        match model.dof() {
+            6 => {}
+            5 => {
+                let tool = model.last_from_tool;
+                model.joints.push(Joint {
+                    name: "virtual joint about the tool's z axis".into(),
+                    kind: JointKind::Revolute,
+                    parent_from_joint: tool,
+                    axis: Vector3::z_axis(),
+                    limits: Some([0.0, 0.0]),
+                    max_velocity: None,
+                    max_effort: None,
+                });
+                model.links.push(Link {
+                    name: "virtual".into(),
+                    merged: Vec::new(),
+                    colliders: Vec::new(),
+                    inertial: None,
+                    segments: Vec::new(),
+                });
+                model.last_from_tool = Isometry3::identity();
+            }
+            _ => return None,
+        }
+        Some(model)
+    }
+
+    /// How the arm of [`Self::six_joints`] reads, for proofs: [`Self::describe`], and the virtual
+    /// joint where there is one.
+    pub(super) fn describe_six(&self) -> String {
+        let virtual_joint = if self.model.dof() == 5 {
+            ", and a sixth, virtual, about the tool's z axis held at 0 (the five reach the goal's position and z axis, the sixth says how far about z the tool stays off)"
+        } else {
+            ""
+        };
+        format!("{}{virtual_joint}", self.describe())
     }
 }
 

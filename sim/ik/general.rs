@@ -22,7 +22,7 @@
 //! pose goals stay with the numeric solver.
 
 use super::deflate::Deflation;
-use super::lines::{half_angle, interpolate2, near_real, node_inverse, quadratic_eigenvalues, Arm, Chain, NODES};
+use super::lines::{half_angle, interpolate2, is_near_real, near_real, node_inverse, quadratic_eigenvalues, Arm, Chain, NODES};
 use crate::model::Model;
 use crate::scenario::Goal;
 use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
@@ -103,6 +103,14 @@ fn eliminated(block: usize) -> [usize; 2] {
 }
 
 /// The elimination of one chain, with what does not depend on the pose.
+/// A root of the determinant as joint 3's complex angle `(re, im)`, and whether
+/// [`General6R::solve`] takes it as a solution (near the real line).
+#[derive(Debug, Clone, Copy)]
+struct Root {
+    angle: (f64, f64),
+    solution: bool,
+}
+
 #[derive(Debug, Clone)]
 struct Elimination {
     chain: Chain,
@@ -182,7 +190,30 @@ impl General6R {
     /// matched to their nearest. `None` when the pose has a real root, the system degenerates
     /// at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let (index3, roots) = self.angles(goal, None)?;
+        let closest = self.roots_stay_off(goal, radii, turn, false)?;
+        Some(format!(
+            "the pose has no solution and none appears within {:.1} mm and {:.2} deg of it: joint {}'s angle at every root of the determinant is at least {closest:.3} rad (imaginary part) off the real angles, more than four times what the tolerance can move it (first order)",
+            radii.position_m * 1e3,
+            (radii.orientation_rad + turn).to_degrees(),
+            if self.reversed { 6 - self.elimination.block } else { self.elimination.block + 1 }
+        ))
+    }
+
+    /// Whether no solution appears within `radii` of world pose `goal` (turned by up to `turn`
+    /// about tool z) beside those of the pose itself: the check of
+    /// [`Self::out_of_reach_within`] on the complex roots alone, those [`Self::solve`] does not
+    /// take as solutions. A proof from the pose's solutions (each certified over the tolerance)
+    /// holds only with it: the tolerance may hold a branch pair born off every one of them.
+    pub fn no_solution_appears_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> bool {
+        self.roots_stay_off(goal, radii, turn, true).is_some()
+    }
+
+    /// The core of [`Self::out_of_reach_within`]: the smallest imaginary part of the roots that
+    /// stay off the real angles, each by more than `FACTOR` times its first-order motion over
+    /// the tolerance; with `solutions`, the pose's solutions (near-real roots, see
+    /// [`near_real`]) are let be, else one is a failure. `None` on any failure.
+    fn roots_stay_off(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, solutions: bool) -> Option<f64> {
+        let (index3, roots) = self.angles(goal, None, solutions)?;
         // The pose's derivatives per metre and per radian, by one step along each axis.
         let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| {
             let mut unit = Vector3::zeros();
@@ -198,14 +229,17 @@ impl General6R {
         let position = radii.position_m + self.arm.tool_lever * radii.orientation_rad;
         let rotation = radii.orientation_rad + turn;
         let motion = |rate: &[f64; 2]| rate[0].sqrt() * position + rate[1].sqrt() * rotation;
+        let points: Vec<(f64, f64)> = roots.iter().map(|root| root.angle).collect();
         // Roots within a rounding split of one another are one multiple root (a factor of the
         // determinant that is the geometry's): it moves as their centroid, which rounding
         // leaves precise, and must stay one after each step.
-        // Per cluster: its size, centroid, spread and distance from the real angles.
-        let clusters: Vec<(usize, (f64, f64), f64, f64)> = clusters(&roots)
+        // Per cluster: its size, centroid, spread and distance from the real angles; clusters
+        // holding a solution are not followed.
+        let clusters: Vec<(usize, (f64, f64), f64, f64)> = clusters(&points)
             .iter()
+            .filter(|cluster| !(solutions && cluster.iter().any(|&i| roots[i].solution)))
             .map(|cluster| {
-                let members: Vec<(f64, f64)> = cluster.iter().map(|&i| roots[i]).collect();
+                let members: Vec<(f64, f64)> = cluster.iter().map(|&i| points[i]).collect();
                 let (centre, spread) = centroid(&members);
                 let off_real = members.iter().map(|m| m.1.abs()).fold(f64::INFINITY, f64::min) - spread;
                 (members.len(), centre, spread, off_real)
@@ -214,9 +248,9 @@ impl General6R {
         let mut rates = vec![[0.0; 2]; clusters.len()];
         // Rotations first: they move the roots most, so a failing proof ends soonest.
         for axis in [3, 4, 5, 0, 1, 2] {
-            let (_, moved) = self.angles(&steps[axis], Some(index3))?;
+            let (_, moved) = self.angles(&steps[axis], Some(index3), solutions)?;
             for (&(count, centre, spread, off_real), rate) in clusters.iter().zip(rates.iter_mut()) {
-                let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, m), *m)).collect();
+                let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, &m.angle), m.angle)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let (farthest, next) = (near.get(count - 1)?.0, near.get(count).map_or(f64::INFINITY, |n| n.0));
                 // False for NaN too: no proof from a root that is not a number.
@@ -238,13 +272,7 @@ impl General6R {
                 }
             }
         }
-        let closest = roots.iter().map(|root| root.1.abs()).fold(f64::INFINITY, f64::min);
-        Some(format!(
-            "the pose has no solution and none appears within {:.1} mm and {:.2} deg of it: joint {}'s angle at every root of the determinant is at least {closest:.3} rad (imaginary part) off the real angles, more than four times what the tolerance can move it (first order)",
-            radii.position_m * 1e3,
-            (radii.orientation_rad + turn).to_degrees(),
-            if self.reversed { 6 - self.elimination.block } else { self.elimination.block + 1 }
-        ))
+        Some(clusters.iter().map(|cluster| cluster.3 + cluster.2).fold(f64::INFINITY, f64::min))
     }
 
     /// [`Self::out_of_reach_within`] part by part over `goal`'s tolerance (see
@@ -265,10 +293,11 @@ impl General6R {
     }
 
     /// Every root of `goal`'s determinant but the `+-i` ones the deflation takes out, as joint
-    /// 3's complex angle `(re, im)` (re modulo a turn), at offset `OFFSETS3[index]` (else the
-    /// first whose companion matrix works), and the offset's index; `None` when the system
-    /// degenerates or the pose has a real root.
-    fn angles(&self, goal: &Isometry3<f64>, index: Option<usize>) -> Option<(usize, Vec<(f64, f64)>)> {
+    /// 3's complex angle (re modulo a turn) and whether [`Self::solve`] takes it as a solution,
+    /// at offset `OFFSETS3[index]` (else the first whose companion matrix works), and the
+    /// offset's index; `None` when the system degenerates, or, without `solutions`, the pose
+    /// has a real root.
+    fn angles(&self, goal: &Isometry3<f64>, index: Option<usize>, solutions: bool) -> Option<(usize, Vec<Root>)> {
         let (rotation, translation) = self.arm.goal(goal, self.reversed);
         let system = self.elimination.system(&rotation, &translation)?;
         let indices = match index {
@@ -280,19 +309,25 @@ impl General6R {
             let Some((eigenvalues, _)) = self.elimination.eigenvalues(&system, index) else {
                 continue;
             };
-            let angles: Vec<(f64, f64)> = eigenvalues
+            let roots: Vec<Root> = eigenvalues
                 .iter()
                 .map(|&(re, im)| {
                     // 2 atan(re + i im): its real part from atan2, its imaginary part from a log.
                     let real = offset + (2.0 * re).atan2(1.0 - re * re - im * im);
                     let imaginary = 0.5 * ((re * re + (1.0 + im).powi(2)) / (re * re + (1.0 - im).powi(2))).ln();
-                    (real, imaginary)
+                    Root {
+                        angle: (real, imaginary),
+                        solution: is_near_real(re, im),
+                    }
                 })
                 .collect();
-            if angles.iter().any(|(re, im)| !(re.is_finite() && im.abs() > REAL_ROOT)) {
+            if roots
+                .iter()
+                .any(|root| !root.angle.0.is_finite() || (!solutions && root.angle.1.abs() <= REAL_ROOT))
+            {
                 return None;
             }
-            return Some((index, angles));
+            return Some((index, roots));
         }
         None
     }

@@ -331,11 +331,16 @@ pub(crate) fn quadratic_roots<const N: usize>(c: &SMatrix<f64, N, N>, b: &SMatri
     Some(near_real(&quadratic_eigenvalues(c, b, a)?))
 }
 
+/// Whether eigenvalue `re + i im` is within [`NEAR_REAL`] of the real line: a root taken as real.
+pub(crate) fn is_near_real(re: f64, im: f64) -> bool {
+    re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs())
+}
+
 /// The real parts of the eigenvalues within [`NEAR_REAL`] of the real line, ascending.
 pub(crate) fn near_real(eigenvalues: &[(f64, f64)]) -> Vec<f64> {
     let mut roots: Vec<f64> = eigenvalues
         .iter()
-        .filter(|(re, im)| re.is_finite() && im.abs() <= NEAR_REAL * (1.0 + re.abs()))
+        .filter(|&&(re, im)| is_near_real(re, im))
         .map(|&(re, _)| re)
         .collect();
     // Ascending: the solutions' order (and what reports list first) is the roots', not the

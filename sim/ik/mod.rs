@@ -50,6 +50,7 @@ use refine::Checker;
 use serde::Serialize;
 use solvers::{AllSolutions, HeldJoint};
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 /// Position error below which a goal is reached (m): the paper's 1 mm.
 pub const REACHED_POSITION_M: f64 = 1e-3;
@@ -59,6 +60,8 @@ pub const REACHED_ORIENTATION_RAD: f64 = std::f64::consts::PI / 180.0;
 /// tried: ten times the tolerance in position, about six in orientation.
 const NEARBY_MISS_M: f64 = 0.01;
 const NEARBY_MISS_RAD: f64 = 0.1;
+/// How a merged arm's proof from its pose's solutions ends (see [`Ik::merged_out_of_reach`]).
+const NONE_APPEARS: &str = "and no other solution appears within the tolerance: every complex root of the determinant stays off the real angles by more than four times what the tolerance can move it (first order)";
 /// Parts of a goal's tolerance the general elimination's roots' proof may cut it into (each up
 /// to seven eliminations, about 0.3 ms): a validation's, never a sweep's.
 const GENERAL_PARTS: usize = 256;
@@ -173,20 +176,47 @@ struct Methods {
     redundant: Option<HeldJoint>,
     sub_chains: Vec<reduce::SubChain>,
     coaxial: Option<coaxial::Merged>,
+    merged_six: Option<Arc<MergedSix>>,
+}
+
+/// The arm with its coaxial joints merged, as a 6R arm ([`coaxial::Merged::six_joints`]), and
+/// its methods: shared by a batch's solvers, the model outliving each solver it lends itself to.
+struct MergedSix {
+    model: Model,
+    methods: Methods,
 }
 
 impl Methods {
     fn of(model: &Model) -> Self {
+        Self::merging(model, true)
+    }
+
+    /// The methods of `model`; with `merge`, those of its merged arm too (not of a merged arm's:
+    /// a virtual joint on its last joint's axis would merge again).
+    fn merging(model: &Model, merge: bool) -> Self {
         let analytic = UrArm::detect(model);
         let all = if analytic.is_none() { AllSolutions::of(model) } else { None };
         let redundant = HeldJoint::of(model);
         let sub_chains = reduce::sub_chains(model);
+        let coaxial = coaxial::Merged::of(model);
+        // Only for an arm no method lists the solutions of, and no redundant arm's either: the
+        // merged arm proves out of reach what its own continua hide.
+        let merged_six = coaxial
+            .as_ref()
+            .filter(|_| merge && analytic.is_none() && all.is_none())
+            .and_then(coaxial::Merged::six_joints)
+            .and_then(|six| {
+                let methods = Methods::merging(&six, false);
+                let decides = methods.analytic.is_some() || matches!(methods.all, Some((_, Tolerance::Pose)));
+                decides.then(|| Arc::new(MergedSix { model: six, methods }))
+            });
         Self {
             analytic,
             all,
             redundant,
             sub_chains,
-            coaxial: coaxial::Merged::of(model),
+            coaxial,
+            merged_six,
         }
     }
 }
@@ -221,6 +251,11 @@ pub struct Ik<'a> {
     /// The arm with its coaxial joints merged, which the search tries after the arm's own
     /// sub-chains (see [`coaxial`]).
     coaxial: Option<coaxial::Merged>,
+    /// The merged arm as a 6R arm with its methods, where they list its solutions.
+    merged_six: Option<Arc<MergedSix>>,
+    /// A solver lent to a merged arm for its proofs alone: the numeric attempts that could only
+    /// add a closest miss after its exact solutions are certified are skipped.
+    proving_only: bool,
     /// Collision queries at most per goal's searches ([`COLLISION_QUERIES`], fewer with meshes).
     collision_queries: usize,
     /// Parts of tolerances each goal may cut ([`cell_parts`]).
@@ -315,6 +350,8 @@ impl<'a> Ik<'a> {
             misses: Vec::new(),
             sub_chains: methods.sub_chains.clone(),
             coaxial: methods.coaxial.clone(),
+            merged_six: methods.merged_six.clone(),
+            proving_only: false,
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
             collides_everywhere,
@@ -388,7 +425,17 @@ impl<'a> Ik<'a> {
                 }
                 return result;
             }
-            _ => return self.solve_numeric(goal, goal_index, first_seed, &[], true),
+            _ => {
+                let mut result = self.solve_numeric(goal, goal_index, first_seed, &[], true);
+                let posed = result.solutions.iter().any(|s| s.pose_reached);
+                if !posed && self.opts.analytic && finite && goal.tolerance == Tolerance::Pose {
+                    if let Some(proof) = self.merged_out_of_reach(goal, goal_index) {
+                        result.complete = true;
+                        result.proof = Some(proof);
+                    }
+                }
+                return result;
+            }
         };
         if goal.tolerance == Tolerance::ZSymmetric && self.analytic.is_some() {
             // A continuum of solutions (any turn about tool z): the goal rotation's own are on
@@ -496,7 +543,9 @@ impl<'a> Ik<'a> {
         }
         let mut starts = 0;
         let mut closest: Option<IkSolution> = None;
-        if !outside.is_empty() {
+        // A merged arm's solver proves alone: its certified solutions need no closest miss.
+        let certified = self.proving_only && open.is_empty();
+        if !outside.is_empty() && !certified {
             let mut rng = self.rng(goal_index);
             let done = CONVERGED;
             for mut q in outside.iter().cloned() {
@@ -962,6 +1011,55 @@ impl<'a> Ik<'a> {
             )),
             _ => None,
         }
+    }
+
+    /// Why no configuration reaches pose `goal` within its tolerance, from the arm with its
+    /// coaxial joints merged, as a 6R arm ([`MergedSix`]): its solutions stand for the arm's
+    /// continua, each once, so a proof of its holds for the arm. Either the pose has
+    /// solutions, each certified outside the limits (the virtual joint's `[0, 0]` among them)
+    /// throughout the tolerance, and the elimination's complex roots stay off the real angles
+    /// throughout it (no pair born off them: a numeric cross-check rarely lands on a five-joint
+    /// arm's thin set of poses), or it has none and none appears within the tolerance (the
+    /// roots' proof). Asked only where the arm's numeric search found no configuration within
+    /// the tolerance.
+    fn merged_out_of_reach(&self, goal: &Goal, goal_index: usize) -> Option<String> {
+        let six = Arc::clone(self.merged_six.as_ref()?);
+        let merged = self.coaxial.as_ref()?;
+        let opts = IkOptions {
+            seeds: 0,
+            branch_starts: 0,
+            goal_starts: Vec::new(),
+            max_iterations: self.opts.max_iterations,
+            seed: self.opts.seed,
+            distinct_tolerance: self.opts.distinct_tolerance,
+            refinement_steps: self.opts.refinement_steps,
+            clearance_m: self.opts.clearance_m,
+            analytic: true,
+            search_boxes: self.opts.search_boxes,
+        };
+        let mut ik = Ik::build(&six.model, None, opts, &six.methods, Everywhere::Own(None));
+        ik.proving_only = true;
+        let mut result = ik.solve_by_methods(goal, goal_index, None);
+        if result.proof.is_some() && !ik.without_solution {
+            // The pose's solutions are certified over the tolerance; a pair born within it, off
+            // them all, the numeric cross-check alone would miss (five joints have a thin set
+            // of poses: its starts rarely land there).
+            let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
+            let born = match ik.all.as_ref() {
+                Some((AllSolutions::General(general), _)) => !general.no_solution_appears_within(&pose, search::Radii::REACHED, 0.0),
+                _ => true,
+            };
+            if born {
+                return None;
+            }
+            result.proof = result.proof.map(|proof| format!("{proof}; {NONE_APPEARS}"));
+        }
+        if result.proof.is_none() && !result.solutions.iter().any(|s| s.pose_reached) {
+            let in_parts = self.opts.search_boxes >= search::FIRST_ORDER_BUDGET;
+            ik.roots_stay_complex(goal, &mut result, in_parts);
+        }
+        let proof = result.proof.filter(|_| !result.solutions.iter().any(|s| s.pose_reached))?;
+        Some(format!("{}: {proof}", merged.describe_six()))
     }
 
     /// Every solution of a world pose by the closed form or the all-solutions method, when the
