@@ -515,8 +515,9 @@ fn unit_vector(rng: &mut impl Rng) -> nalgebra::Vector3<f64> {
 /// direction of pose space, found by bisection, by 0.3 to 6 times the tolerance: none whose
 /// tolerance holds the boundary is proven, and no pose sampled within a proven one's
 /// tolerance (half on its edge) has a solution; likewise where the proof over the whole
-/// tolerance fails and the tolerance is cut into parts. Random free designs and economic ones (the
-/// paper's grid of offsets and quarter-turn twists, as `python/bench.py` draws them).
+/// tolerance fails and the tolerance is cut into parts. Random free designs, economic ones (the
+/// paper's grid of offsets and quarter-turn twists, as `python/bench.py` draws them) and arms
+/// of the modular catalog (805 poses, 131 proven, 51 in parts, when written).
 #[test]
 fn general_out_of_reach_proofs_hold_near_the_workspace_boundary() {
     use nalgebra::{Translation3, UnitQuaternion};
@@ -536,11 +537,15 @@ fn general_out_of_reach_proofs_hold_near_the_workspace_boundary() {
         common::dh_design(&format!("economic-{index}"), &rows)
     };
     let (mut tried, mut proven, mut inside, mut in_parts) = (0, 0, 0, 0);
-    for index in 0..48 {
-        let model = if index % 2 == 0 {
-            random_free_design(&mut rng, index)
-        } else {
-            economic(&mut rng, index)
+    for index in 0..72 {
+        let model = match index % 3 {
+            0 => random_free_design(&mut rng, index),
+            1 => economic(&mut rng, index),
+            // The modular catalog's arms: offsets and axes the modules' geometry repeats.
+            _ => {
+                use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+                catalog_entry(&modular6_slots(rng.random_range(0..15_625))).load().model
+            }
         };
         let Some(solver) = General6R::new(&model) else { continue };
         for _ in 0..3 {

@@ -185,9 +185,10 @@ impl General6R {
     /// about tool z, when the pose has no solution and none can appear within. A real root
     /// appears only where two meet on the real line (a branch pair born), so it suffices that
     /// each of the determinant's complex roots (joint 3's angle, complex) stays off the real
-    /// angles by more than `FACTOR` (4) times the first-order motion the tolerance can give it;
-    /// each root's rate of change with the pose is taken by finite differences, the roots
-    /// matched to their nearest. `None` when the pose has a real root, the system degenerates
+    /// angles by more than `FACTOR` (4) times the first-order change the tolerance can give its
+    /// imaginary part (its real part may move freely: only the imaginary part reaching 0 makes
+    /// it real); each root's rate of change with the pose is taken by finite differences, the
+    /// roots matched to their nearest. `None` when the pose has a real root, the system degenerates
     /// at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         let closest = self.roots_stay_off(goal, radii, turn, false)?;
@@ -209,8 +210,8 @@ impl General6R {
     }
 
     /// The core of [`Self::out_of_reach_within`]: the smallest imaginary part of the roots that
-    /// stay off the real angles, each by more than `FACTOR` times its first-order motion over
-    /// the tolerance; with `solutions`, the pose's solutions (near-real roots, see
+    /// stay off the real angles, each by more than `FACTOR` times its imaginary part's
+    /// first-order change over the tolerance; with `solutions`, the pose's solutions (near-real roots, see
     /// [`near_real`]) are let be, else one is a failure. `None` on any failure.
     fn roots_stay_off(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, solutions: bool) -> Option<f64> {
         let (index3, roots) = self.angles(goal, None, solutions)?;
@@ -265,7 +266,8 @@ impl General6R {
                 if moved_spread > SPLIT_GROWTH * spread + ROUNDING_SPREAD {
                     return None;
                 }
-                rate[usize::from(axis >= 3)] += (angle_distance(&centre, &moved_centre) / POSE_STEP).powi(2);
+                // Off the real angles is the imaginary part alone.
+                rate[usize::from(axis >= 3)] += ((centre.1.abs() - moved_centre.1.abs()) / POSE_STEP).powi(2);
                 let stays_off = off_real > FACTOR * motion(rate);
                 if !stays_off {
                     return None;
