@@ -176,12 +176,14 @@ struct Methods {
     redundant: Option<HeldJoint>,
     sub_chains: Vec<reduce::SubChain>,
     coaxial: Option<coaxial::Merged>,
-    merged_six: Option<Arc<MergedSix>>,
+    merged_six: Option<Arc<MergedArm>>,
+    merged_five: Option<Arc<MergedArm>>,
 }
 
-/// The arm with its coaxial joints merged, as a 6R arm ([`coaxial::Merged::six_joints`]), and
+/// The arm with its coaxial joints merged, for pose goals as a 6R arm
+/// ([`coaxial::Merged::six_joints`]), for `z_symmetric` ones as the five joints they are, and
 /// its methods: shared by a batch's solvers, the model outliving each solver it lends itself to.
-struct MergedSix {
+struct MergedArm {
     model: Model,
     methods: Methods,
 }
@@ -201,15 +203,22 @@ impl Methods {
         let coaxial = coaxial::Merged::of(model);
         // Only for an arm no method lists the solutions of, and no redundant arm's either: the
         // merged arm proves out of reach what its own continua hide.
-        let merged_six = coaxial
-            .as_ref()
-            .filter(|_| merge && analytic.is_none() && all.is_none())
-            .and_then(coaxial::Merged::six_joints)
-            .and_then(|six| {
-                let methods = Methods::merging(&six, false);
-                let decides = methods.analytic.is_some() || matches!(methods.all, Some((_, Tolerance::Pose)));
-                decides.then(|| Arc::new(MergedSix { model: six, methods }))
-            });
+        let merged = coaxial.as_ref().filter(|_| merge && analytic.is_none() && all.is_none());
+        let merged_six = merged.and_then(coaxial::Merged::six_joints).and_then(|six| {
+            let methods = Methods::merging(&six, false);
+            let decides = methods.analytic.is_some() || matches!(methods.all, Some((_, Tolerance::Pose)));
+            decides.then(|| Arc::new(MergedArm { model: six, methods }))
+        });
+        let merged_five = merged.filter(|m| m.model.dof() == 5).and_then(|m| {
+            let methods = Methods::merging(&m.model, false);
+            let decides = matches!(methods.all, Some((_, Tolerance::ZSymmetric)));
+            decides.then(|| {
+                Arc::new(MergedArm {
+                    model: m.model.clone(),
+                    methods,
+                })
+            })
+        });
         Self {
             analytic,
             all,
@@ -217,6 +226,7 @@ impl Methods {
             sub_chains,
             coaxial,
             merged_six,
+            merged_five,
         }
     }
 }
@@ -252,7 +262,10 @@ pub struct Ik<'a> {
     /// sub-chains (see [`coaxial`]).
     coaxial: Option<coaxial::Merged>,
     /// The merged arm as a 6R arm with its methods, where they list its solutions.
-    merged_six: Option<Arc<MergedSix>>,
+    merged_six: Option<Arc<MergedArm>>,
+    /// The merged arm of five joints with its methods, where they list its `z_symmetric`
+    /// goals' solutions.
+    merged_five: Option<Arc<MergedArm>>,
     /// A solver lent to a merged arm for its proofs alone: the numeric attempts that could only
     /// add a closest miss after its exact solutions are certified are skipped.
     proving_only: bool,
@@ -351,6 +364,7 @@ impl<'a> Ik<'a> {
             sub_chains: methods.sub_chains.clone(),
             coaxial: methods.coaxial.clone(),
             merged_six: methods.merged_six.clone(),
+            merged_five: methods.merged_five.clone(),
             proving_only: false,
             collision_queries: collision_queries(model),
             bounds: MotionBounds::of(model),
@@ -428,7 +442,8 @@ impl<'a> Ik<'a> {
             _ => {
                 let mut result = self.solve_numeric(goal, goal_index, first_seed, &[], true);
                 let posed = result.solutions.iter().any(|s| s.pose_reached);
-                if !posed && self.opts.analytic && finite && goal.tolerance == Tolerance::Pose {
+                let decided = matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric);
+                if !posed && self.opts.analytic && finite && decided {
                     if let Some(proof) = self.merged_out_of_reach(goal, goal_index) {
                         result.complete = true;
                         result.proof = Some(proof);
@@ -1013,18 +1028,24 @@ impl<'a> Ik<'a> {
         }
     }
 
-    /// Why no configuration reaches pose `goal` within its tolerance, from the arm with its
-    /// coaxial joints merged, as a 6R arm ([`MergedSix`]): its solutions stand for the arm's
-    /// continua, each once, so a proof of its holds for the arm. Either the pose has
-    /// solutions, each certified outside the limits (the virtual joint's `[0, 0]` among them)
-    /// throughout the tolerance, and the elimination's complex roots stay off the real angles
-    /// throughout it (no pair born off them: a numeric cross-check rarely lands on a five-joint
-    /// arm's thin set of poses), or it has none and none appears within the tolerance (the
-    /// roots' proof). Asked only where the arm's numeric search found no configuration within
-    /// the tolerance.
+    /// Why no configuration reaches `goal` within its tolerance, from the arm with its coaxial
+    /// joints merged ([`MergedArm`]: a pose goal's as a 6R arm, a `z_symmetric` goal's as the
+    /// five joints, whose method adds the virtual joint the goal's free turn is): its solutions
+    /// stand for the arm's continua, each once, so a proof of its holds for the arm. Either the
+    /// pose has solutions, each certified outside the limits (a pose goal's virtual joint's
+    /// `[0, 0]` among them) throughout the tolerance, and the elimination's complex roots stay
+    /// off the real angles throughout it (no pair born off them: a numeric cross-check rarely
+    /// lands on a five-joint arm's thin set of poses), or it has none and none appears within
+    /// the tolerance (the roots' proof). Asked only where the arm's numeric search found no
+    /// configuration within the tolerance.
     fn merged_out_of_reach(&self, goal: &Goal, goal_index: usize) -> Option<String> {
-        let six = Arc::clone(self.merged_six.as_ref()?);
         let merged = self.coaxial.as_ref()?;
+        let arm = match goal.tolerance {
+            Tolerance::Pose => self.merged_six.as_ref()?,
+            Tolerance::ZSymmetric => self.merged_five.as_ref()?,
+            Tolerance::Position => return None,
+        };
+        let arm = Arc::clone(arm);
         let opts = IkOptions {
             seeds: 0,
             branch_starts: 0,
@@ -1037,7 +1058,7 @@ impl<'a> Ik<'a> {
             analytic: true,
             search_boxes: self.opts.search_boxes,
         };
-        let mut ik = Ik::build(&six.model, None, opts, &six.methods, Everywhere::Own(None));
+        let mut ik = Ik::build(&arm.model, None, opts, &arm.methods, Everywhere::Own(None));
         ik.proving_only = true;
         let mut result = ik.solve_by_methods(goal, goal_index, None);
         if result.proof.is_some() && !ik.without_solution {
@@ -1059,7 +1080,12 @@ impl<'a> Ik<'a> {
             ik.roots_stay_complex(goal, &mut result, in_parts);
         }
         let proof = result.proof.filter(|_| !result.solutions.iter().any(|s| s.pose_reached))?;
-        Some(format!("{}: {proof}", merged.describe_six()))
+        let described = if goal.tolerance == Tolerance::Pose {
+            merged.describe_six()
+        } else {
+            merged.describe()
+        };
+        Some(format!("{described}: {proof}"))
     }
 
     /// Every solution of a world pose by the closed form or the all-solutions method, when the
