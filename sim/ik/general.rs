@@ -102,7 +102,6 @@ fn eliminated(block: usize) -> [usize; 2] {
     }
 }
 
-/// The elimination of one chain, with what does not depend on the pose.
 /// A root of the determinant as joint 3's complex angle `(re, im)`, and whether
 /// [`General6R::solve`] takes it as a solution (near the real line).
 #[derive(Debug, Clone, Copy)]
@@ -111,6 +110,7 @@ struct Root {
     solution: bool,
 }
 
+/// The elimination of one chain, with what does not depend on the pose.
 #[derive(Debug, Clone)]
 struct Elimination {
     chain: Chain,
@@ -188,8 +188,8 @@ impl General6R {
     /// angles by more than `FACTOR` (4) times the first-order change the tolerance can give its
     /// imaginary part (its real part may move freely: only the imaginary part reaching 0 makes
     /// it real); each root's rate of change with the pose is taken by finite differences, the
-    /// roots matched to their nearest. `None` when the pose has a real root, the system degenerates
-    /// at it or next to it, or a root's motion or its match is in doubt.
+    /// roots matched to their nearest. `None` when the pose has a real root, the system
+    /// degenerates at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         let closest = self.roots_stay_off(goal, radii, turn, false)?;
         Some(format!(
@@ -211,8 +211,8 @@ impl General6R {
 
     /// The core of [`Self::out_of_reach_within`]: the smallest imaginary part of the roots that
     /// stay off the real angles, each by more than `FACTOR` times its imaginary part's
-    /// first-order change over the tolerance; with `solutions`, the pose's solutions (near-real roots, see
-    /// [`near_real`]) are let be, else one is a failure. `None` on any failure.
+    /// first-order change over the tolerance; with `solutions`, the pose's solutions (near-real
+    /// roots, see [`near_real`]) are let be, else one is a failure. `None` on any failure.
     fn roots_stay_off(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, solutions: bool) -> Option<f64> {
         let (index3, roots) = self.angles(goal, None, solutions)?;
         // The pose's derivatives per metre and per radian, by one step along each axis.
