@@ -1045,7 +1045,7 @@ impl<'a> Ik<'a> {
             Tolerance::ZSymmetric => self.merged_five.as_ref()?,
             Tolerance::Position => return None,
         };
-        let arm = Arc::clone(arm);
+        // Field by field: the caller's goal starts are not the merged arm's, and not cloned.
         let opts = IkOptions {
             seeds: 0,
             branch_starts: 0,
@@ -1061,25 +1061,28 @@ impl<'a> Ik<'a> {
         let mut ik = Ik::build(&arm.model, None, opts, &arm.methods, Everywhere::Own(None));
         ik.proving_only = true;
         let mut result = ik.solve_by_methods(goal, goal_index, None);
+        if result.solutions.iter().any(|s| s.pose_reached) {
+            return None;
+        }
         if result.proof.is_some() && !ik.without_solution {
             // The pose's solutions are certified over the tolerance; a pair born within it, off
             // them all, the numeric cross-check alone would miss (five joints have a thin set
             // of poses: its starts rarely land there).
             let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-            let born = match ik.all.as_ref() {
-                Some((AllSolutions::General(general), _)) => !general.no_solution_appears_within(&pose, search::Radii::REACHED, 0.0),
-                _ => true,
+            let none_appears = match ik.all.as_ref() {
+                Some((AllSolutions::General(general), _)) => general.no_solution_appears_within(&pose, search::Radii::REACHED, 0.0),
+                _ => false,
             };
-            if born {
+            if !none_appears {
                 return None;
             }
             result.proof = result.proof.map(|proof| format!("{proof}; {NONE_APPEARS}"));
         }
-        if result.proof.is_none() && !result.solutions.iter().any(|s| s.pose_reached) {
+        if result.proof.is_none() {
             let in_parts = self.opts.search_boxes >= search::FIRST_ORDER_BUDGET;
             ik.roots_stay_complex(goal, &mut result, in_parts);
         }
-        let proof = result.proof.filter(|_| !result.solutions.iter().any(|s| s.pose_reached))?;
+        let proof = result.proof?;
         let described = if goal.tolerance == Tolerance::Pose {
             merged.describe_six()
         } else {
