@@ -4,6 +4,7 @@
 //! whether the set is known complete. Never fails: an unreachable goal is a result, not an error.
 
 pub mod analytic;
+mod axes;
 mod bilinear;
 mod branches;
 mod cap;
@@ -19,6 +20,7 @@ mod lines;
 mod loss;
 pub mod parallel;
 mod parts;
+mod planar;
 mod prefix;
 mod reach;
 mod reduce;
@@ -33,8 +35,10 @@ mod spd6;
 mod toward;
 pub mod wrist;
 
+pub use axes::turning_axes_out_of_reach;
 pub use error::{angle_between, goal_error, task_error, GoalError};
 pub use loss::{paper_loss_terms, LossTerms, DISTANCE_WEIGHT, HARDWARE_WEIGHT, ROTATION_WEIGHT};
+pub use planar::{planar_group_out_of_reach, planar_numbers, PLANAR_BOXES};
 pub use reach::{beyond_reach, last_joints_beyond_reach, reach_bound, task_beyond_reach, unreachable_proof};
 pub use refine::{Clearance, COLLISION_THRESHOLD_M, COLLISION_WEIGHT};
 
@@ -739,6 +743,11 @@ impl<'a> Ik<'a> {
         if posed && self.checker.is_none() {
             return;
         }
+        // Three numbers or fewer: about a thousand boxes, before every other search.
+        let numbers = planar::planar_numbers(self.model);
+        if !posed && numbers.is_some_and(|n| n <= 3) && self.planar_proof(goal, planar::PLANAR_BOXES, result) {
+            return;
+        }
         if !posed {
             // The numeric solver's other misses too: its closest may lie on a branch whose
             // configurations within the tolerance collide while another's are free.
@@ -847,6 +856,10 @@ impl<'a> Ik<'a> {
         let open = !matches!(outcome, Some(search::Search::Proven { .. } | search::Search::Found { .. }));
         let in_parts = self.opts.search_boxes >= search::FIRST_ORDER_BUDGET;
         if open && !posed && self.roots_stay_complex(goal, result, in_parts) {
+            return;
+        }
+        // Four numbers: a validation's budget, where the searches above leave the goal open.
+        if open && !posed && in_parts && numbers == Some(4) && self.planar_proof(goal, self.opts.search_boxes, result) {
             return;
         }
         let Some(outcome) = outcome else {
@@ -1089,6 +1102,18 @@ impl<'a> Ik<'a> {
             merged.describe()
         };
         Some(format!("{described}: {proof}"))
+    }
+
+    /// The planar run's proof within `budget` boxes, when it proves `goal` out of reach: `result`
+    /// takes it.
+    fn planar_proof(&self, goal: &Goal, budget: usize, result: &mut GoalSolutions) -> bool {
+        let Some(proof) = planar::planar_group_out_of_reach(self.model, goal, budget) else {
+            return false;
+        };
+        result.complete = true;
+        result.undecided = None;
+        result.proof = Some(proof);
+        true
     }
 
     /// Every solution of a world pose by the closed form or the all-solutions method, when the

@@ -77,7 +77,9 @@ pub fn unreachable_proof(model: &Model, world: &CollisionWorld, goal: &Goal) -> 
 pub fn beyond_reach(model: &Model, goal: &Goal) -> Option<String> {
     let first = model.joints.first()?;
     let origin = (model.world_from_base * first.parent_from_joint).translation.vector;
-    tool_beyond_reach(model, goal, &origin).or_else(|| last_joints_beyond_reach(model, goal))
+    tool_beyond_reach(model, goal, &origin)
+        .or_else(|| last_joints_beyond_reach(model, goal))
+        .or_else(|| super::axes::turning_axes_out_of_reach(model, goal))
 }
 
 /// The beyond-reach proof of the tool point for a goal whose own (task) tolerance is wider than

@@ -142,7 +142,9 @@ pub fn validate_with_progress(
                 found
                     .proof
                     .is_none()
-                    .then(|| crate::ik::last_joints_beyond_reach(&model, goal))
+                    .then(|| {
+                        crate::ik::last_joints_beyond_reach(&model, goal).or_else(|| crate::ik::turning_axes_out_of_reach(&model, goal))
+                    })
                     .flatten()
             })
         })

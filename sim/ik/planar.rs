@@ -1,0 +1,232 @@
+//! The planar run's proof: an arm with one run of parallel axes and single joints elsewhere
+//! reaches a pose only where three conditions on a few numbers hold together.
+//!
+//! Joints turning about parallel axes (see [`super::axes`]) move within planes across their
+//! axis: rotations about it and offsets carried by them keep every offset's component along it,
+//! and the run's last axis stays within the reach of its links (the offsets across the axis
+//! between consecutive ones) from its first. With every other revolute joint alone in its
+//! direction, the tool's orientation depends on the run's (signed) sum of angles and the other
+//! joints' angles alone, and so do, for a tool pose, where the run's first joint is (the joints
+//! before it) and where its last joint must be (the pose, less the joints after it). So a pose is
+//! reached only at sums and angles where the orientation is the pose's, the last joint's origin
+//! is at the run's offset along the axis from the first joint's, and across the axis within the
+//! run's reach. A run of four parallel axes in a 6R arm (modular `D-Ls-Ls-Ls-D-D`) has three
+//! numbers for four conditions, and most poses have no solution; a run of three (four numbers)
+//! decides the poses just out of reach that its closed form only finds without solution.
+//!
+//! A branch-and-bound over the numbers proves that none meets the conditions within the goal's
+//! tolerance: each box is dropped by a condition's distance at its centre less how far the box
+//! can change it (the sum of its half-widths for the orientation; levers, the offsets between
+//! the joints, for the positions) and less the tolerance: 1 degree for the orientation, 1 mm for
+//! the positions (the numbers fix the orientation, so the last joint's origin is off where the
+//! goal puts it by the tool's position error alone). Joint limits are left out (wider: still
+//! sound), except a single joint's narrower than a turn.
+
+use super::axes::{joints, parallel_groups};
+use super::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
+use crate::model::{JointKind, Model};
+use crate::scenario::{Goal, Tolerance};
+use nalgebra::Vector3;
+use std::f64::consts::PI;
+
+/// Boxes the search may split before it gives up (each one forward kinematics), with three
+/// numbers or fewer (tried before IK's other searches): a run of four parallel axes in a 6R arm
+/// takes about a thousand. Four numbers (a run of three, or two in a 5R arm) take 25 000 to
+/// 300 000 for goals well out of reach: IK tries them last, with a validation's joint-space
+/// budget, never a sweep's.
+pub const PLANAR_BOXES: usize = 20_000;
+/// Most numbers searched over (the run's sum and the single joints' angles).
+const DIMENSIONS: usize = 4;
+/// Half-width below which a box is not split: a pose this close is not out of reach.
+const SMALLEST: f64 = 1e-9;
+
+/// One number searched over: the joint that carries it, its range, and how far turning it moves
+/// the run's first joint's origin and, in the tool frame, its last joint's origin (per radian).
+struct Dimension {
+    joint: usize,
+    range: [f64; 2],
+    moves_first: f64,
+    moves_last: f64,
+}
+
+/// The run and what the search needs of it.
+struct Run {
+    first: usize,
+    last: usize,
+    /// Its offset along the axis, last origin from first.
+    along: f64,
+    /// Least and most distance across the axis between its first and last axes.
+    across: [f64; 2],
+}
+
+/// Why no configuration of `model` reaches `goal` within the tolerance, when the arm has one run
+/// of parallel axes, single joints elsewhere and at most [`DIMENSIONS`] numbers, and the search
+/// proves it within `budget` boxes (see the module doc).
+pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> Option<String> {
+    let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
+    let revolute = model.joints.iter().all(|j| j.kind != JointKind::Prismatic);
+    if !finite || !revolute || !matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric) {
+        return None;
+    }
+    let groups = parallel_groups(model);
+    let run_index = single_run(&groups)?;
+    let run_index = &run_index;
+    let run = run_of(model, &groups[*run_index]);
+    let offsets: Vec<f64> = model.joints.iter().map(|j| j.parent_from_joint.translation.vector.norm()).collect();
+    // The largest distance between the origins of joints `a` and `b` (a <= b).
+    let apart = |a: usize, b: usize| offsets[a + 1..=b].iter().sum::<f64>();
+    let dimensions: Vec<Dimension> = groups
+        .iter()
+        .map(|group| {
+            let joint = group[0];
+            let limits = model.joints[joint].limits.filter(|[lo, hi]| group.len() == 1 && hi - lo < 2.0 * PI);
+            Dimension {
+                joint,
+                range: limits.unwrap_or([-PI, PI]),
+                moves_first: if joint < run.first { apart(joint, run.first) } else { 0.0 },
+                moves_last: if joint > run.last { apart(run.last, joint) } else { 0.0 },
+            }
+        })
+        .collect();
+    let before = *run_index;
+    let axis = model.joints[run.first].axis.into_inner();
+    let goal_z = goal.rotation * Vector3::z();
+    let mut ws = model.workspace();
+    let mut q = vec![0.0; model.dof()];
+    let mut stack: Vec<([f64; DIMENSIONS], [f64; DIMENSIONS])> = vec![(
+        std::array::from_fn(|k| dimensions.get(k).map_or(0.0, |d| 0.5 * (d.range[0] + d.range[1]))),
+        std::array::from_fn(|k| dimensions.get(k).map_or(0.0, |d| 0.5 * (d.range[1] - d.range[0]))),
+    )];
+    let mut boxes = 0;
+    while let Some((centre, half)) = stack.pop() {
+        boxes += 1;
+        if boxes > budget {
+            return None;
+        }
+        for (d, s) in dimensions.iter().zip(&centre) {
+            q[d.joint] = *s;
+        }
+        model.forward(&q, &mut ws);
+        let rotation = ws.tool_in_world.rotation;
+        let off_orientation = match goal.tolerance {
+            Tolerance::Pose => goal.rotation.angle_to(&rotation),
+            _ => super::angle_between(&goal_z, &(rotation * Vector3::z())),
+        };
+        let turn: f64 = half.iter().sum();
+        if off_orientation - turn >= REACHED_ORIENTATION_RAD {
+            continue;
+        }
+        // Where the last joint's origin must be: the tool at the goal's position, turned as the
+        // arm turns it at these numbers (the orientation is theirs alone).
+        let first = ws.link_in_world[run.first + 1].translation.vector;
+        let from_tool = ws.link_in_world[run.last + 1].translation.vector - ws.tool_in_world.translation.vector;
+        let last = goal.position + from_tool;
+        let direction = ws.link_in_world[run.first + 1].rotation * axis;
+        let d = last - first;
+        let along = direction.dot(&d);
+        let across = (d - direction * along).norm();
+        // How far the box can move the two origins, and turn the axis.
+        let in_tool: f64 = dimensions.iter().zip(&half).map(|(dim, h)| dim.moves_last * h).sum();
+        let lever = from_tool.norm() + in_tool;
+        let moved: f64 = dimensions.iter().zip(&half).map(|(dim, h)| dim.moves_first * h).sum::<f64>() + in_tool + turn * lever;
+        let tilted: f64 = half[..before].iter().sum();
+        let reach = d.norm() + moved;
+        let along_change = tilted * reach + moved;
+        let across_change = 2.0 * tilted * reach + moved;
+        let tolerance = REACHED_POSITION_M;
+        let along_off = (along - run.along).abs() - along_change - tolerance;
+        let across_off = (across - across_change - tolerance - run.across[1]).max(run.across[0] - across - across_change - tolerance);
+        if along_off > 0.0 || across_off > 0.0 {
+            continue;
+        }
+        let exact = (along - run.along).abs() <= REACHED_POSITION_M && across >= run.across[0] && across <= run.across[1];
+        if off_orientation < REACHED_ORIENTATION_RAD && exact {
+            // A centre that meets them all: nothing to prove.
+            return None;
+        }
+        let weight = |k: usize| {
+            half[k] * (1.0 + lever + dimensions[k].moves_first + dimensions[k].moves_last + reach * f64::from(u8::from(k < before)))
+        };
+        let widest = (0..dimensions.len()).max_by(|&a, &b| weight(a).total_cmp(&weight(b)))?;
+        if half[widest] < SMALLEST {
+            return None;
+        }
+        for side in [-0.5, 0.5] {
+            let (mut c, mut h) = (centre, half);
+            h[widest] *= 0.5;
+            c[widest] += side * half[widest];
+            stack.push((c, h));
+        }
+    }
+    let others: Vec<usize> = groups
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| k != run_index)
+        .flat_map(|(_, g)| g.iter().copied())
+        .collect();
+    let orientation = match goal.tolerance {
+        Tolerance::Pose => "the orientation within 1 deg of the goal's",
+        _ => "tool z within 1 deg of the goal's",
+    };
+    let angles = if others.is_empty() {
+        "their sum".to_string()
+    } else {
+        let noun = if others.len() == 1 { "angle" } else { "angles" };
+        format!("their sum and the {noun} of {}", joints(&others))
+    };
+    Some(format!(
+        "{} turn about parallel axes, whose offsets along them add up to {:.3} m and across them reach {:.3} to {:.3} m from joint {}'s axis to joint {}'s; a search of {boxes} boxes over {angles} finds none with {orientation} that puts joint {}'s origin within the tolerance of both",
+        joints(&groups[*run_index]),
+        run.along,
+        run.across[0],
+        run.across[1],
+        run.first + 1,
+        run.last + 1,
+        run.last + 1,
+    ))
+}
+
+/// How many numbers the planar run's search goes over for `model` (its run's sum and its single
+/// joints' angles), when it applies: one run of parallel axes, single joints elsewhere, no
+/// prismatic joint, at most [`DIMENSIONS`] numbers.
+pub fn planar_numbers(model: &Model) -> Option<usize> {
+    if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+        return None;
+    }
+    let groups = parallel_groups(model);
+    single_run(&groups).map(|_| groups.len())
+}
+
+/// The index of the one run of two joints or more, when there is one and at most
+/// [`DIMENSIONS`] groups.
+fn single_run(groups: &[Vec<usize>]) -> Option<usize> {
+    let runs: Vec<usize> = (0..groups.len()).filter(|&k| groups[k].len() >= 2).collect();
+    match runs.as_slice() {
+        [run] if groups.len() <= DIMENSIONS => Some(*run),
+        _ => None,
+    }
+}
+
+/// The run of joints `group` (consecutive, parallel axes): its offsets along and across the axis.
+fn run_of(model: &Model, group: &[usize]) -> Run {
+    let mut ws = model.workspace();
+    model.forward(&vec![0.0; model.dof()], &mut ws);
+    let (first, last) = (group[0], group[group.len() - 1]);
+    let direction = ws.link_in_world[first + 1].rotation * model.joints[first].axis.into_inner();
+    let origin = |j: usize| ws.link_in_world[j + 1].translation.vector;
+    let links: Vec<f64> = group
+        .windows(2)
+        .map(|w| {
+            let step = origin(w[1]) - origin(w[0]);
+            (step - direction * direction.dot(&step)).norm()
+        })
+        .collect();
+    let total: f64 = links.iter().sum();
+    let longest = links.iter().copied().fold(0.0, f64::max);
+    Run {
+        first,
+        last,
+        along: direction.dot(&(origin(last) - origin(first))),
+        across: [(2.0 * longest - total).max(0.0), total],
+    }
+}
