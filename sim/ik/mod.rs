@@ -744,8 +744,7 @@ impl<'a> Ik<'a> {
             return;
         }
         // Three numbers or fewer: about a thousand boxes, before every other search.
-        let numbers = planar::planar_numbers(self.model);
-        if !posed && numbers.is_some_and(|n| n <= 3) && self.planar_proof(goal, planar::PLANAR_BOXES, result) {
+        if !posed && self.planar_proof(goal, 3, planar::PLANAR_BOXES, result) {
             return;
         }
         if !posed {
@@ -858,8 +857,8 @@ impl<'a> Ik<'a> {
         if open && !posed && self.roots_stay_complex(goal, result, in_parts) {
             return;
         }
-        // Four numbers: a validation's budget, where the searches above leave the goal open.
-        if open && !posed && in_parts && numbers == Some(4) && self.planar_proof(goal, self.opts.search_boxes, result) {
+        // Four numbers at most, a validation's budget: where the searches above leave it open.
+        if open && !posed && in_parts && self.planar_proof(goal, 4, self.opts.search_boxes, result) {
             return;
         }
         let Some(outcome) = outcome else {
@@ -1104,10 +1103,10 @@ impl<'a> Ik<'a> {
         Some(format!("{described}: {proof}"))
     }
 
-    /// The planar run's proof within `budget` boxes, when it proves `goal` out of reach: `result`
-    /// takes it.
-    fn planar_proof(&self, goal: &Goal, budget: usize, result: &mut GoalSolutions) -> bool {
-        let Some(proof) = planar::planar_group_out_of_reach(self.model, goal, budget) else {
+    /// The planar run's proof over at most `most` numbers within `budget` boxes, when it proves
+    /// `goal` out of reach: `result` takes it.
+    fn planar_proof(&self, goal: &Goal, most: usize, budget: usize, result: &mut GoalSolutions) -> bool {
+        let Some(proof) = planar::planar_group_out_of_reach(self.model, goal, most, budget) else {
             return false;
         };
         result.complete = true;

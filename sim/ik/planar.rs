@@ -11,16 +11,24 @@
 //! reached only at sums and angles where the orientation is the pose's, the last joint's origin
 //! is at the run's offset along the axis from the first joint's, and across the axis within the
 //! run's reach. A run of four parallel axes in a 6R arm (modular `D-Ls-Ls-Ls-D-D`) has three
-//! numbers for four conditions, and most poses have no solution; a run of three (four numbers)
-//! decides the poses just out of reach that its closed form only finds without solution.
+//! numbers for four conditions, and most poses have no solution; a run of three decides the
+//! poses just out of reach that the closed form only finds without solution.
+//!
+//! A `pose` goal is searched first without the run's sum: the run turns the tool about its axis
+//! alone, so the orientation is reachable exactly where the axis as the joints before the run
+//! turn it agrees with the axis as the goal turns the tool (the joints after the run fix it in
+//! the tool frame), and the last joint's origin is where the goal's pose less the joints after
+//! the run puts it, off by the tolerance (1 mm, and 1 degree times its distance from the tool).
+//! One number fewer; where that fails, the search with the sum (the orientation exact, so the
+//! origin is off by the tool's position error alone, 1 mm) is tighter near the boundary. A
+//! `z_symmetric` goal is searched with the sum, tool z within 1 degree.
 //!
 //! A branch-and-bound over the numbers proves that none meets the conditions within the goal's
 //! tolerance: each box is dropped by a condition's distance at its centre less how far the box
 //! can change it (the sum of its half-widths for the orientation; levers, the offsets between
-//! the joints, for the positions) and less the tolerance: 1 degree for the orientation, 1 mm for
-//! the positions (the numbers fix the orientation, so the last joint's origin is off where the
-//! goal puts it by the tool's position error alone). Joint limits are left out (wider: still
-//! sound), except a single joint's narrower than a turn.
+//! the joints, for the positions; the distance across the axis changes by at most the offset's
+//! length times the axis's turn, `|d x a| - |d x b| <= |d| |a - b|`) and less the tolerance.
+//! Joint limits are left out (wider: still sound), except a single joint's narrower than a turn.
 
 use super::axes::{joints, parallel_groups};
 use super::{REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
@@ -47,6 +55,8 @@ struct Dimension {
     range: [f64; 2],
     moves_first: f64,
     moves_last: f64,
+    /// Whether the joint comes before the run (turning it tilts the run's axis).
+    before: bool,
 }
 
 /// The run and what the search needs of it.
@@ -60,24 +70,41 @@ struct Run {
 }
 
 /// Why no configuration of `model` reaches `goal` within the tolerance, when the arm has one run
-/// of parallel axes, single joints elsewhere and at most [`DIMENSIONS`] numbers, and the search
-/// proves it within `budget` boxes (see the module doc).
-pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> Option<String> {
+/// of parallel axes and single joints elsewhere, and a search over at most `most` numbers (of
+/// [`DIMENSIONS`]) proves it within `budget` boxes (see the module doc). A `pose` goal is
+/// searched first without the run's sum (the axis's direction stands in for the orientation),
+/// then with it (the orientation exact, the tolerance 1 mm: tighter near the boundary).
+pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, most: usize, budget: usize) -> Option<String> {
     let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
-    let revolute = model.joints.iter().all(|j| j.kind != JointKind::Prismatic);
-    if !finite || !revolute || !matches!(goal.tolerance, Tolerance::Pose | Tolerance::ZSymmetric) {
+    if !finite || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) || goal.tolerance == Tolerance::Position {
         return None;
     }
     let groups = parallel_groups(model);
     let run_index = single_run(&groups)?;
-    let run_index = &run_index;
-    let run = run_of(model, &groups[*run_index]);
+    let run = run_of(model, &groups[run_index]);
+    for reduced in [true, false] {
+        let numbers = groups.len() - usize::from(reduced);
+        if (reduced && goal.tolerance != Tolerance::Pose) || numbers > most.min(DIMENSIONS) {
+            continue;
+        }
+        if let Some(boxes) = search(model, goal, &groups, run_index, &run, reduced, budget) {
+            return Some(proof(&groups, run_index, &run, reduced, goal.tolerance, boxes));
+        }
+    }
+    None
+}
+
+/// The branch-and-bound (see the module doc): the boxes it took to drop them all, or `None` when
+/// a box's centre meets every condition, or the budget runs out.
+fn search(model: &Model, goal: &Goal, groups: &[Vec<usize>], run_index: usize, run: &Run, reduced: bool, budget: usize) -> Option<usize> {
     let offsets: Vec<f64> = model.joints.iter().map(|j| j.parent_from_joint.translation.vector.norm()).collect();
     // The largest distance between the origins of joints `a` and `b` (a <= b).
     let apart = |a: usize, b: usize| offsets[a + 1..=b].iter().sum::<f64>();
     let dimensions: Vec<Dimension> = groups
         .iter()
-        .map(|group| {
+        .enumerate()
+        .filter(|(k, _)| !reduced || *k != run_index)
+        .map(|(_, group)| {
             let joint = group[0];
             let limits = model.joints[joint].limits.filter(|[lo, hi]| group.len() == 1 && hi - lo < 2.0 * PI);
             Dimension {
@@ -85,10 +112,10 @@ pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> O
                 range: limits.unwrap_or([-PI, PI]),
                 moves_first: if joint < run.first { apart(joint, run.first) } else { 0.0 },
                 moves_last: if joint > run.last { apart(run.last, joint) } else { 0.0 },
+                before: joint < run.first,
             }
         })
         .collect();
-    let before = *run_index;
     let axis = model.joints[run.first].axis.into_inner();
     let goal_z = goal.rotation * Vector3::z();
     let mut ws = model.workspace();
@@ -107,33 +134,49 @@ pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> O
             q[d.joint] = *s;
         }
         model.forward(&q, &mut ws);
+        let sum = |pick: &dyn Fn(&Dimension) -> f64| dimensions.iter().zip(&half).map(|(d, h)| pick(d) * h).sum::<f64>();
+        let tilted = sum(&|d| f64::from(u8::from(d.before)));
+        let turn = sum(&|_| 1.0);
         let rotation = ws.tool_in_world.rotation;
-        let off_orientation = match goal.tolerance {
-            Tolerance::Pose => goal.rotation.angle_to(&rotation),
-            _ => super::angle_between(&goal_z, &(rotation * Vector3::z())),
+        let direction = ws.link_in_world[run.first + 1].rotation * axis;
+        let first = ws.link_in_world[run.first + 1].translation.vector;
+        let from_tool = ws.link_in_world[run.last + 1].translation.vector - ws.tool_in_world.translation.vector;
+        let in_tool = sum(&|d| d.moves_last);
+        let lever = from_tool.norm() + in_tool;
+        let (off_orientation, last, moved, tolerance) = if reduced {
+            // The run's axis as the joints before it turn it, and as the goal turns the tool
+            // (fixed in the tool frame by the joints after it): the run's sum turns about it
+            // alone, so the two agree within the tolerance. Where the last joint's origin must
+            // be: the goal's pose less the joints after the run, off by the tolerance (1 mm,
+            // and 1 degree times its distance from the tool).
+            let in_tool_frame = rotation.inverse() * direction;
+            let off = super::angle_between(&direction, &(goal.rotation * in_tool_frame));
+            let last = goal.position + goal.rotation * (rotation.inverse() * from_tool);
+            (
+                off,
+                last,
+                sum(&|d| d.moves_first) + in_tool,
+                REACHED_POSITION_M + REACHED_ORIENTATION_RAD * lever,
+            )
+        } else {
+            // The numbers fix the orientation: the last joint's origin is where the tool at the
+            // goal's position, turned as the arm turns it, puts it (off by 1 mm).
+            let off = match goal.tolerance {
+                Tolerance::Pose => goal.rotation.angle_to(&rotation),
+                _ => super::angle_between(&goal_z, &(rotation * Vector3::z())),
+            };
+            let last = goal.position + from_tool;
+            (off, last, sum(&|d| d.moves_first) + in_tool + turn * lever, REACHED_POSITION_M)
         };
-        let turn: f64 = half.iter().sum();
         if off_orientation - turn >= REACHED_ORIENTATION_RAD {
             continue;
         }
-        // Where the last joint's origin must be: the tool at the goal's position, turned as the
-        // arm turns it at these numbers (the orientation is theirs alone).
-        let first = ws.link_in_world[run.first + 1].translation.vector;
-        let from_tool = ws.link_in_world[run.last + 1].translation.vector - ws.tool_in_world.translation.vector;
-        let last = goal.position + from_tool;
-        let direction = ws.link_in_world[run.first + 1].rotation * axis;
         let d = last - first;
         let along = direction.dot(&d);
         let across = (d - direction * along).norm();
-        // How far the box can move the two origins, and turn the axis.
-        let in_tool: f64 = dimensions.iter().zip(&half).map(|(dim, h)| dim.moves_last * h).sum();
-        let lever = from_tool.norm() + in_tool;
-        let moved: f64 = dimensions.iter().zip(&half).map(|(dim, h)| dim.moves_first * h).sum::<f64>() + in_tool + turn * lever;
-        let tilted: f64 = half[..before].iter().sum();
         let reach = d.norm() + moved;
         let along_change = tilted * reach + moved;
-        let across_change = 2.0 * tilted * reach + moved;
-        let tolerance = REACHED_POSITION_M;
+        let across_change = tilted * reach + moved;
         let along_off = (along - run.along).abs() - along_change - tolerance;
         let across_off = (across - across_change - tolerance - run.across[1]).max(run.across[0] - across - across_change - tolerance);
         if along_off > 0.0 || across_off > 0.0 {
@@ -145,9 +188,13 @@ pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> O
             return None;
         }
         let weight = |k: usize| {
-            half[k] * (1.0 + lever + dimensions[k].moves_first + dimensions[k].moves_last + reach * f64::from(u8::from(k < before)))
+            let dim = &dimensions[k];
+            half[k] * (1.0 + lever + dim.moves_first + dim.moves_last + reach * f64::from(u8::from(dim.before)))
         };
-        let widest = (0..dimensions.len()).max_by(|&a, &b| weight(a).total_cmp(&weight(b)))?;
+        let Some(widest) = (0..dimensions.len()).max_by(|&a, &b| weight(a).total_cmp(&weight(b))) else {
+            // Nothing to search over (a run and no other joint): the centre was the whole.
+            return None;
+        };
         if half[widest] < SMALLEST {
             return None;
         }
@@ -158,51 +205,73 @@ pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, budget: usize) -> O
             stack.push((c, h));
         }
     }
+    Some(boxes)
+}
+
+/// The proof's words for a search of `boxes` boxes.
+fn proof(groups: &[Vec<usize>], run_index: usize, run: &Run, reduced: bool, tolerance: Tolerance, boxes: usize) -> String {
     let others: Vec<usize> = groups
         .iter()
         .enumerate()
-        .filter(|(k, _)| k != run_index)
+        .filter(|(k, _)| *k != run_index)
         .flat_map(|(_, g)| g.iter().copied())
         .collect();
-    let orientation = match goal.tolerance {
-        Tolerance::Pose => "the orientation within 1 deg of the goal's",
-        _ => "tool z within 1 deg of the goal's",
-    };
-    let angles = if others.is_empty() {
-        "their sum".to_string()
+    let noun = if others.len() == 1 { "angle" } else { "angles" };
+    let last = run.last + 1;
+    let found = if reduced {
+        let angles = if others.is_empty() {
+            "nothing".to_string()
+        } else {
+            format!("the {noun} of {}", joints(&others))
+        };
+        format!(
+            "a search of {boxes} boxes over {angles} finds none that turns their axis within 1 deg of where the goal's orientation puts it and brings joint {last}'s origin within the tolerance of both"
+        )
     } else {
-        let noun = if others.len() == 1 { "angle" } else { "angles" };
-        format!("their sum and the {noun} of {}", joints(&others))
+        let angles = if others.is_empty() {
+            "their sum".to_string()
+        } else {
+            format!("their sum and the {noun} of {}", joints(&others))
+        };
+        let orientation = match tolerance {
+            Tolerance::Pose => "the orientation",
+            _ => "tool z",
+        };
+        format!("a search of {boxes} boxes over {angles} finds none with {orientation} within 1 deg of the goal's that puts joint {last}'s origin within the tolerance of both")
     };
-    Some(format!(
-        "{} turn about parallel axes, whose offsets along them add up to {:.3} m and across them reach {:.3} to {:.3} m from joint {}'s axis to joint {}'s; a search of {boxes} boxes over {angles} finds none with {orientation} that puts joint {}'s origin within the tolerance of both",
-        joints(&groups[*run_index]),
+    format!(
+        "{} turn about parallel axes, whose offsets along them add up to {:.3} m and across them reach {:.3} to {:.3} m from joint {}'s axis to joint {last}'s; {found}",
+        joints(&groups[run_index]),
         run.along,
         run.across[0],
         run.across[1],
         run.first + 1,
-        run.last + 1,
-        run.last + 1,
-    ))
+    )
 }
 
-/// How many numbers the planar run's search goes over for `model` (its run's sum and its single
-/// joints' angles), when it applies: one run of parallel axes, single joints elsewhere, no
-/// prismatic joint, at most [`DIMENSIONS`] numbers.
-pub fn planar_numbers(model: &Model) -> Option<usize> {
+/// How many numbers the planar run's search goes over for `model` on goals of `tolerance` (the
+/// single joints' angles, and the run's sum unless the goal is a pose), when it applies: one run
+/// of parallel axes, single joints elsewhere, no prismatic joint, a `pose` or `z_symmetric` goal,
+/// at most [`DIMENSIONS`] numbers.
+pub fn planar_numbers(model: &Model, tolerance: Tolerance) -> Option<usize> {
     if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
         return None;
     }
     let groups = parallel_groups(model);
-    single_run(&groups).map(|_| groups.len())
+    single_run(&groups)?;
+    let numbers = match tolerance {
+        Tolerance::Pose => groups.len() - 1,
+        Tolerance::ZSymmetric => groups.len(),
+        Tolerance::Position => return None,
+    };
+    (numbers <= DIMENSIONS).then_some(numbers)
 }
 
-/// The index of the one run of two joints or more, when there is one and at most
-/// [`DIMENSIONS`] groups.
+/// The index of the one run of two joints or more, when there is exactly one.
 fn single_run(groups: &[Vec<usize>]) -> Option<usize> {
     let runs: Vec<usize> = (0..groups.len()).filter(|&k| groups[k].len() >= 2).collect();
     match runs.as_slice() {
-        [run] if groups.len() <= DIMENSIONS => Some(*run),
+        [run] => Some(*run),
         _ => None,
     }
 }
