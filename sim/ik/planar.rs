@@ -1,7 +1,7 @@
 //! The planar run's proof: an arm with one run of parallel axes and single joints elsewhere
 //! reaches a pose only where three conditions on a few numbers hold together.
 //!
-//! Joints turning about parallel axes (see [`super::axes`]) move within planes across their
+//! Joints turning about parallel axes (see `ik::axes`) move within planes across their
 //! axis: rotations about it and offsets carried by them keep every offset's component along it,
 //! and the run's last axis stays within the reach of its links (the offsets across the axis
 //! between consecutive ones) from its first. With every other revolute joint alone in its
@@ -70,8 +70,8 @@ struct Run {
 }
 
 /// Why no configuration of `model` reaches `goal` within the tolerance, when the arm has one run
-/// of parallel axes and single joints elsewhere, and a search over at most `most` numbers (of
-/// [`DIMENSIONS`]) proves it within `budget` boxes (see the module doc). A `pose` goal is
+/// of parallel axes and single joints elsewhere, and a search over at most `most` numbers (four
+/// at most) proves it within `budget` boxes (see the module doc). A `pose` goal is
 /// searched first without the run's sum (the axis's direction stands in for the orientation),
 /// then with it (the orientation exact, the tolerance 1 mm: tighter near the boundary).
 pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, most: usize, budget: usize) -> Option<String> {
@@ -252,7 +252,7 @@ fn proof(groups: &[Vec<usize>], run_index: usize, run: &Run, reduced: bool, tole
 /// How many numbers the planar run's search goes over for `model` on goals of `tolerance` (the
 /// single joints' angles, and the run's sum unless the goal is a pose), when it applies: one run
 /// of parallel axes, single joints elsewhere, no prismatic joint, a `pose` or `z_symmetric` goal,
-/// at most [`DIMENSIONS`] numbers.
+/// at most four numbers.
 pub fn planar_numbers(model: &Model, tolerance: Tolerance) -> Option<usize> {
     if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
         return None;
