@@ -857,7 +857,8 @@ impl<'a> Ik<'a> {
         if open && !posed && self.roots_stay_complex(goal, result, in_parts) {
             return;
         }
-        // Four numbers at most, a validation's budget: where the searches above leave it open.
+        // Four numbers at most, a validation's budget, where the searches above leave it open
+        // (the searches of three or fewer again too: they may need more than their own budget).
         if open && !posed && in_parts && self.planar_proof(goal, 4, self.opts.search_boxes, result) {
             return;
         }

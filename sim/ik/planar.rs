@@ -76,11 +76,10 @@ struct Run {
 /// then with it (the orientation exact, the tolerance 1 mm: tighter near the boundary).
 pub fn planar_group_out_of_reach(model: &Model, goal: &Goal, most: usize, budget: usize) -> Option<String> {
     let finite = goal.position.iter().chain(goal.rotation.coords.iter()).all(|x| x.is_finite());
-    if !finite || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) || goal.tolerance == Tolerance::Position {
+    if !finite {
         return None;
     }
-    let groups = parallel_groups(model);
-    let run_index = single_run(&groups)?;
+    let (groups, run_index) = applies(model, goal.tolerance)?;
     let run = run_of(model, &groups[run_index]);
     for reduced in [true, false] {
         let numbers = groups.len() - usize::from(reduced);
@@ -254,26 +253,23 @@ fn proof(groups: &[Vec<usize>], run_index: usize, run: &Run, reduced: bool, tole
 /// of parallel axes, single joints elsewhere, no prismatic joint, a `pose` or `z_symmetric` goal,
 /// at most four numbers.
 pub fn planar_numbers(model: &Model, tolerance: Tolerance) -> Option<usize> {
-    if model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
-        return None;
-    }
-    let groups = parallel_groups(model);
-    single_run(&groups)?;
-    let numbers = match tolerance {
-        Tolerance::Pose => groups.len() - 1,
-        Tolerance::ZSymmetric => groups.len(),
-        Tolerance::Position => return None,
-    };
+    let (groups, _) = applies(model, tolerance)?;
+    let numbers = groups.len() - usize::from(tolerance == Tolerance::Pose);
     (numbers <= DIMENSIONS).then_some(numbers)
 }
 
-/// The index of the one run of two joints or more, when there is exactly one.
-fn single_run(groups: &[Vec<usize>]) -> Option<usize> {
-    let runs: Vec<usize> = (0..groups.len()).filter(|&k| groups[k].len() >= 2).collect();
-    match runs.as_slice() {
-        [run] => Some(*run),
-        _ => None,
+/// The arm's groups of parallel axes and the index of its one run of two joints or more, when
+/// the planar run's proof applies to it on goals of `tolerance` (no prismatic joint, exactly
+/// one run, a `pose` or `z_symmetric` goal).
+fn applies(model: &Model, tolerance: Tolerance) -> Option<(Vec<Vec<usize>>, usize)> {
+    if tolerance == Tolerance::Position || model.joints.iter().any(|j| j.kind == JointKind::Prismatic) {
+        return None;
     }
+    let groups = parallel_groups(model);
+    let runs: Vec<usize> = (0..groups.len()).filter(|&k| groups[k].len() >= 2).collect();
+    let [run] = runs.as_slice() else { return None };
+    let run = *run;
+    Some((groups, run))
 }
 
 /// The run of joints `group` (consecutive, parallel axes): its offsets along and across the axis.

@@ -138,15 +138,10 @@ pub fn validate_with_progress(
             if crate::ik::task_tolerance_gap(goal).is_some() {
                 return crate::ik::task_beyond_reach(&model, goal);
             }
-            crate::ik::unreachable_proof(&model, &world, goal).or_else(|| {
-                found
-                    .proof
-                    .is_none()
-                    .then(|| {
-                        crate::ik::last_joints_beyond_reach(&model, goal).or_else(|| crate::ik::turning_axes_out_of_reach(&model, goal))
-                    })
-                    .flatten()
-            })
+            // IK's own proof says more where it has one; else the model's reach proofs (the tool's
+            // reach, already tried above, the last joints', the turning axes').
+            crate::ik::unreachable_proof(&model, &world, goal)
+                .or_else(|| found.proof.is_none().then(|| crate::ik::beyond_reach(&model, goal)).flatten())
         })
         .collect();
     let settings = crate::report::Settings {
