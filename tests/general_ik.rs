@@ -414,6 +414,68 @@ fn solutions_born_within_the_tolerance_are_no_proof() {
     assert_eq!(goal.outcome, "reached", "{:?}", goal.proven);
 }
 
+/// A pose whose roots barely move at the centre of its tolerance and turn real near its edge:
+/// on this modular catalog arm the first-order bound alone (the roots' rates at the centre, four
+/// times over) claimed "none appears within 1 mm and 1 deg" of a pose 0.95 mm and 0.95 deg from
+/// one with solutions (FK-checked here). The bound's check at the tolerance's edges
+/// refuses it; cut into parts it is not proven either.
+#[test]
+fn roots_that_turn_real_near_the_edge_of_the_tolerance_are_no_proof() {
+    use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
+    use proving_ground::ik::search::Radii;
+    use proving_ground::scenario::{Goal, Tolerance};
+    use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+    let index = (0..15_625)
+        .find(|&i| catalog_entry(&modular6_slots(i)).id == "modular6/D-D-D-Ls-Ll-Ls")
+        .expect("a catalog arm");
+    let model = catalog_entry(&modular6_slots(index)).load().model;
+    let solver = General6R::new(&model).expect("the elimination holds");
+    let pose = |p: [f64; 3], q: [f64; 4]| {
+        Isometry3::from_parts(
+            Translation3::from(Vector3::from(p)),
+            UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2])),
+        )
+    };
+    let centre = pose(
+        [-0.393_837_074_203_161_8, -0.500_812_481_053_439_3, 0.182_619_212_251_307_73],
+        [
+            -0.416_089_553_175_637_8,
+            -0.590_221_044_850_429_9,
+            0.468_357_408_637_410_9,
+            -0.509_067_716_250_22,
+        ],
+    );
+    // 1.0 mm and 1.0 deg away, four solutions; 0.95 of the way, two.
+    let edge = pose(
+        [-0.393_363_446_366_926_1, -0.501_692_808_069_965_1, 0.182_592_735_531_012],
+        [
+            -0.411_376_459_187_831_33,
+            -0.587_715_385_674_428_2,
+            0.468_121_358_837_624_24,
+            -0.515_967_467_644_673_6,
+        ],
+    );
+    let inside = centre.lerp_slerp(&edge, 0.95);
+    let offset_mm = (centre.translation.vector - inside.translation.vector).norm() * 1e3;
+    let offset_deg = centre.rotation.angle_to(&inside.rotation).to_degrees();
+    assert!(offset_mm < 0.96 && offset_deg < 0.96, "{offset_mm} mm, {offset_deg} deg");
+    assert!(solver.solve(&centre).configurations.is_empty());
+    let found = solver.solve(&inside).configurations;
+    assert!(!found.is_empty());
+    assert!(found.iter().all(|q| fk_error(&model, q, &inside) < 1e-9));
+    let claim = solver.out_of_reach_within(&centre, Radii::REACHED, 0.0);
+    assert!(claim.is_none(), "{claim:?}");
+    let goal = Goal {
+        name: "edge".into(),
+        position: centre.translation.vector,
+        rotation: centre.rotation,
+        tolerance: Tolerance::Pose,
+        task: None,
+    };
+    let parts = solver.out_of_reach_in_parts(&goal, &mut 256);
+    assert!(parts.is_none(), "{parts:?}");
+}
+
 /// Modular catalog arms: every pair of consecutive axes meets or is parallel, which makes
 /// Raghavan and Roth's own choice of kept joints degenerate for all of them; another choice
 /// holds for most, and three consecutive parallel axes have their own method. Through the

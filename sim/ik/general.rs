@@ -102,6 +102,15 @@ fn eliminated(block: usize) -> [usize; 2] {
     }
 }
 
+/// The poses about a goal over which [`General6R::roots_stay_off`] bounds its roots' motion: a
+/// ball (`turn` more about tool z), or a box of offsets (see
+/// [`General6R::out_of_reach_over_box`]).
+#[derive(Debug, Clone, Copy)]
+enum Region {
+    Ball { radii: super::search::Radii, turn: f64 },
+    Box { half: [f64; 6], local: bool },
+}
+
 /// A root of the determinant as joint 3's complex angle `(re, im)`, and whether
 /// [`General6R::solve`] takes it as a solution (near the real line).
 #[derive(Debug, Clone, Copy)]
@@ -191,13 +200,44 @@ impl General6R {
     /// roots matched to their nearest. `None` when the pose has a real root, the system
     /// degenerates at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let closest = self.roots_stay_off(goal, radii, turn, false)?;
-        Some(format!(
-            "the pose has no solution and none appears within {:.1} mm and {:.2} deg of it: joint {}'s angle at every root of the determinant is at least {closest:.3} rad (imaginary part) off the real angles, more than four times what the tolerance can move it (first order)",
+        let closest = self.roots_stay_off(goal, Region::Ball { radii, turn }, false).ok()?;
+        let within = format!(
+            "within {:.1} mm and {:.2} deg of it",
             radii.position_m * 1e3,
-            (radii.orientation_rad + turn).to_degrees(),
+            (radii.orientation_rad + turn).to_degrees()
+        );
+        Some(self.no_root_appears(closest, &within))
+    }
+
+    /// The proof's words: how far the roots stay off the real angles over the poses `within`
+    /// names.
+    fn no_root_appears(&self, closest: f64, within: &str) -> String {
+        format!(
+            "the pose has no solution and none appears {within}: joint {}'s angle at every root of the determinant is at least {closest:.3} rad (imaginary part) off the real angles, more than four times what the tolerance can move it (first order)",
             if self.reversed { 6 - self.elimination.block } else { self.elimination.block + 1 }
-        ))
+        )
+    }
+
+    /// [`Self::out_of_reach_within`] over a box of poses about `goal` rather than a ball: the
+    /// offsets along the position's world axes (m), then about the rotation's axes (rad; the
+    /// goal's own axes with `local`, else the world's) up to `half` either side. Its roots'
+    /// first-order motion is each offset's rate times its half-width, summed: where one offset
+    /// moves a root most, a box thin along it proves what the ball about it cannot. On failure,
+    /// the offset whose half-width added most to the failing root's motion (where known): the
+    /// one to halve.
+    pub(crate) fn out_of_reach_over_box(&self, goal: &Isometry3<f64>, half: &[f64; 6], local: bool) -> Result<String, Option<usize>> {
+        let closest = self.roots_stay_off(goal, Region::Box { half: *half, local }, false)?;
+        let within = format!(
+            "within ({:.2}, {:.2}, {:.2}) mm and ({:.2}, {:.2}, {:.2}) deg either side of it ({} axes)",
+            half[0] * 1e3,
+            half[1] * 1e3,
+            half[2] * 1e3,
+            half[3].to_degrees(),
+            half[4].to_degrees(),
+            half[5].to_degrees(),
+            if local { "the goal's" } else { "world" }
+        );
+        Ok(self.no_root_appears(closest, &within))
     }
 
     /// Whether no solution appears within `radii` of world pose `goal` (turned by up to `turn`
@@ -206,30 +246,52 @@ impl General6R {
     /// take as solutions. A proof from the pose's solutions (each certified over the tolerance)
     /// holds only with it: the tolerance may hold a branch pair born off every one of them.
     pub fn no_solution_appears_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> bool {
-        self.roots_stay_off(goal, radii, turn, true).is_some()
+        self.roots_stay_off(goal, Region::Ball { radii, turn }, true).is_ok()
     }
 
     /// The core of [`Self::out_of_reach_within`]: the smallest imaginary part of the roots that
     /// stay off the real angles, each by more than `FACTOR` times its imaginary part's
-    /// first-order change over the tolerance; with `solutions`, the pose's solutions (near-real
-    /// roots, see [`near_real`]) are let be, else one is a failure. `None` on any failure.
-    fn roots_stay_off(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, solutions: bool) -> Option<f64> {
-        let (index3, roots) = self.angles(goal, None, solutions)?;
+    /// first-order change over `region`; with `solutions`, the pose's solutions (near-real
+    /// roots, see [`near_real`]) are let be, else one is a failure. On any failure, the box's
+    /// offset that moved the failing root most, where there is one.
+    fn roots_stay_off(&self, goal: &Isometry3<f64>, region: Region, solutions: bool) -> Result<f64, Option<usize>> {
+        let (index3, roots) = self.angles(goal, None, solutions).ok_or(None)?;
         // The pose's derivatives per metre and per radian, by one step along each axis.
+        let local = match region {
+            Region::Ball { .. } => true,
+            Region::Box { local, .. } => local,
+        };
         let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| {
             let mut unit = Vector3::zeros();
             unit[axis % 3] = 1.0;
-            if axis < 3 {
-                Isometry3::from_parts(Translation3::from(goal.translation.vector + unit * POSE_STEP), goal.rotation)
-            } else {
-                goal * UnitQuaternion::from_scaled_axis(unit * POSE_STEP)
+            let turn = UnitQuaternion::from_scaled_axis(unit * POSE_STEP);
+            match axis {
+                0..3 => Isometry3::from_parts(Translation3::from(goal.translation.vector + unit * POSE_STEP), goal.rotation),
+                _ if local => goal * turn,
+                _ => Isometry3::from_parts(goal.translation, turn * goal.rotation),
             }
         });
         // A tolerance on the real tool moves the chain's (a held joint's frame) by the lever
         // times its angle on top; a turn about the chain tool's own z moves only its rotation.
-        let position = radii.position_m + self.arm.tool_lever * radii.orientation_rad;
-        let rotation = radii.orientation_rad + turn;
-        let motion = |rate: &[f64; 2]| rate[0].sqrt() * position + rate[1].sqrt() * rotation;
+        let lever = self.arm.tool_lever;
+        // Each offset's share of a root's first-order motion, from its rates of change.
+        let shares = |rates: &[f64; 6]| -> [f64; 6] {
+            match region {
+                Region::Ball { radii, turn } => {
+                    let position = radii.position_m + lever * radii.orientation_rad;
+                    let rotation = radii.orientation_rad + turn;
+                    let norm = |first: usize| rates[first..first + 3].iter().map(|r| r * r).sum::<f64>().sqrt();
+                    [norm(0) * position, 0.0, 0.0, norm(3) * rotation, 0.0, 0.0]
+                }
+                Region::Box { half, .. } => {
+                    let position = rates[..3].iter().map(|r| r * r).sum::<f64>().sqrt();
+                    let turned = half[3..].iter().map(|h| h * h).sum::<f64>().sqrt();
+                    let mut shares: [f64; 6] = std::array::from_fn(|k| rates[k].abs() * half[k]);
+                    shares[0] += position * lever * turned;
+                    shares
+                }
+            }
+        };
         let points: Vec<(f64, f64)> = roots.iter().map(|root| root.angle).collect();
         // Roots within a rounding split of one another are one multiple root (a factor of the
         // determinant that is the geometry's): it moves as their centroid, which rounding
@@ -246,35 +308,84 @@ impl General6R {
                 (members.len(), centre, spread, off_real)
             })
             .collect();
-        let mut rates = vec![[0.0; 2]; clusters.len()];
+        let mut rates = vec![[0.0; 6]; clusters.len()];
         // Rotations first: they move the roots most, so a failing proof ends soonest.
         for axis in [3, 4, 5, 0, 1, 2] {
-            let (_, moved) = self.angles(&steps[axis], Some(index3), solutions)?;
+            let (_, moved) = self.angles(&steps[axis], Some(index3), solutions).ok_or(None)?;
             for (&(count, centre, spread, off_real), rate) in clusters.iter().zip(rates.iter_mut()) {
                 let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, &m.angle), m.angle)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let (farthest, next) = (near.get(count - 1)?.0, near.get(count).map_or(f64::INFINITY, |n| n.0));
+                let (farthest, next) = (near.get(count - 1).ok_or(None)?.0, near.get(count).map_or(f64::INFINITY, |n| n.0));
                 // False for NaN too: no proof from a root that is not a number.
                 let matched = farthest * MATCH_MARGIN < next;
                 if !matched {
-                    return None;
+                    return Err(None);
                 }
                 let copies: Vec<(f64, f64)> = near[..count].iter().map(|n| n.1).collect();
                 let (moved_centre, moved_spread) = centroid(&copies);
                 // A multiple root that is the pose's alone splits under a step far more than
                 // rounding spreads it.
                 if moved_spread > SPLIT_GROWTH * spread + ROUNDING_SPREAD {
-                    return None;
+                    return Err(None);
                 }
                 // Off the real angles is the imaginary part alone.
-                rate[usize::from(axis >= 3)] += ((centre.1.abs() - moved_centre.1.abs()) / POSE_STEP).powi(2);
-                let stays_off = off_real > FACTOR * motion(rate);
+                rate[axis] = (centre.1.abs() - moved_centre.1.abs()) / POSE_STEP;
+                let shares = shares(rate);
+                let stays_off = off_real > FACTOR * shares.iter().sum::<f64>();
                 if !stays_off {
-                    return None;
+                    let most = (0..6).max_by(|&a, &b| shares[a].total_cmp(&shares[b]));
+                    return Err(most.filter(|_| matches!(region, Region::Box { .. })));
                 }
             }
         }
-        Some(clusters.iter().map(|cluster| cluster.3 + cluster.2).fold(f64::INFINITY, f64::min))
+        let closest = clusters.iter().map(|cluster| cluster.3 + cluster.2).fold(f64::INFINITY, f64::min);
+        let real = roots.iter().filter(|root| root.solution).count();
+        if !self.roots_stay_off_at_the_edges(goal, region, index3, closest, real) {
+            return Err(None);
+        }
+        Ok(closest)
+    }
+
+    /// The first-order bound's check at the region's edges: at the pose offset by the whole
+    /// region along each of its six offsets, either side, as many roots are real as at the
+    /// centre (`real`, the pose's solutions), and no other is nearer the real angles than half
+    /// the closest at the centre (the bound lets a root come a quarter nearer). A root whose
+    /// motion is far from linear over the region fails it: found on a modular catalog arm
+    /// whose roots barely move at the centre of a goal's tolerance and turn real at 0.9 of its
+    /// radius, where two solutions appear.
+    fn roots_stay_off_at_the_edges(&self, goal: &Isometry3<f64>, region: Region, index3: usize, closest: f64, real: usize) -> bool {
+        let (half, local) = match region {
+            Region::Ball { radii, turn } => {
+                let position = radii.position_m;
+                let rotation = radii.orientation_rad;
+                ([position, position, position, rotation, rotation, rotation + turn], true)
+            }
+            Region::Box { half, local } => (half, local),
+        };
+        (0..12).all(|k| {
+            let (axis, sign) = (k / 2, if k % 2 == 0 { 1.0 } else { -1.0 });
+            if half[axis] == 0.0 {
+                return true;
+            }
+            let mut unit = Vector3::zeros();
+            unit[axis % 3] = sign * half[axis];
+            let turn = UnitQuaternion::from_scaled_axis(unit);
+            let edge = match axis {
+                0..3 => Isometry3::from_parts(Translation3::from(goal.translation.vector + unit), goal.rotation),
+                _ if local => goal * turn,
+                _ => Isometry3::from_parts(goal.translation, turn * goal.rotation),
+            };
+            let Some((_, roots)) = self.angles(&edge, Some(index3), real > 0) else {
+                return false;
+            };
+            let nearest = roots
+                .iter()
+                .filter(|root| !root.solution)
+                .map(|root| root.angle.1.abs())
+                .filter(|im| *im <= FAR_FROM_REAL)
+                .fold(f64::INFINITY, f64::min);
+            roots.iter().filter(|root| root.solution).count() == real && nearest >= 0.5 * closest
+        })
     }
 
     /// [`Self::out_of_reach_within`] part by part over `goal`'s tolerance (see
@@ -289,7 +400,7 @@ impl General6R {
             goal,
             budget,
             PARTS_LEVER_M,
-            |part, radii| self.out_of_reach_within(&pose_of(part), radii, 0.0),
+            |part, extent| self.out_of_reach_over_box(&pose_of(part), &extent.half, extent.local),
             |part| !self.solve(&pose_of(part)).configurations.is_empty(),
         )
     }

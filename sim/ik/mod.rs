@@ -927,14 +927,14 @@ impl<'a> Ik<'a> {
     /// solutions has roots nearer the real angles than four times their motion over the whole
     /// tolerance, but not over a part of it.
     fn roots_stay_complex(&self, goal: &Goal, result: &mut GoalSolutions, in_parts: bool) -> bool {
-        let Some((method @ AllSolutions::General(general), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
+        let Some((AllSolutions::General(general), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
             return false;
         };
         if !self.without_solution || reach::last_joints_beyond_reach(self.model, goal).is_some() {
             return false;
         }
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-        let whole = method.out_of_reach_within(&pose, search::Radii::REACHED, 0.0, 0);
+        let whole = general.out_of_reach_within(&pose, search::Radii::REACHED, 0.0);
         let proof = whole.or_else(|| {
             let mut budget = GENERAL_PARTS;
             in_parts.then(|| general.out_of_reach_in_parts(goal, &mut budget)).flatten()
@@ -1161,7 +1161,7 @@ impl<'a> Ik<'a> {
             goal,
             &mut budget,
             parts::LEVER_M,
-            |part, radii| arm.out_of_reach_within(&pose_of(part), radii, 0.0),
+            |part, extent| arm.out_of_reach_within(&pose_of(part), extent.radii, 0.0).ok_or(None),
             |part| !arm.solve(&pose_of(part)).configurations.is_empty(),
         );
         self.reach_parts_left = budget;

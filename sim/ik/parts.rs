@@ -48,6 +48,16 @@ const SMALLEST_HALF: f64 = 1.0 / 32.0;
 /// 0.3 m needs 1 607 596 parts, 0.1 m 187 055, 0.03 m 77 663, 0.01 m 46 163, 0.001 m 203 379.
 pub(super) const LEVER_M: f64 = 0.03;
 
+/// One part's poses, as a proof sees them: the ball about its centre pose that holds them, and
+/// its box of offsets about that pose, position along the world axes (m), then rotation (rad)
+/// about the goal's own axes where `local` (a `z_symmetric` goal's), else the world's.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Extent {
+    pub radii: Radii,
+    pub half: [f64; 6],
+    pub local: bool,
+}
+
 /// A box of pose offsets in units of the tolerance: position (mm, world axes), then rotation
 /// (degrees, world axes; a `z_symmetric` goal's along goal x and y, the last one 0).
 #[derive(Debug, Clone, Copy)]
@@ -74,6 +84,20 @@ impl Part {
         }
     }
 
+    /// The part's extent about its centre pose.
+    fn extent(&self, tolerance: Tolerance) -> Extent {
+        Extent {
+            radii: self.radii(),
+            half: std::array::from_fn(|k| self.half[k] * if k < 3 { REACHED_POSITION_M } else { REACHED_ORIENTATION_RAD }),
+            local: tolerance == Tolerance::ZSymmetric,
+        }
+    }
+
+    /// Whether offset `k` may still be halved.
+    fn halvable(&self, k: usize) -> bool {
+        self.half[k] / 2.0 >= SMALLEST_HALF
+    }
+
     /// The offset to halve: the one whose half-width adds most to the slack, a rotation's
     /// weighed as `lever` (m per rad) times it; `None` when every one is at its smallest.
     fn widest(&self, lever: f64) -> Option<usize> {
@@ -85,7 +109,7 @@ impl Part {
             }
         };
         (0..6)
-            .filter(|&k| self.half[k] / 2.0 >= SMALLEST_HALF)
+            .filter(|&k| self.halvable(k))
             .max_by(|&a, &b| weight(a).total_cmp(&weight(b)).then(b.cmp(&a)))
     }
 
@@ -100,16 +124,17 @@ impl Part {
 }
 
 /// Why no pose within `goal`'s tolerance is reachable, when `prove` (a method's proof for the
-/// poses within the given radii of a goal's pose) proves it of every part of the tolerance;
-/// `None` when a part stays unproven at the smallest size, `solvable` (whether a goal's pose
-/// has solutions) finds a small part's centre reachable, or `budget` (boxes, taken as used)
-/// runs out. `lever` (m per rad) weighs a rotation offset against a position one when a part
-/// is split (the proof's own slack: [`LEVER_M`] for a wrist centre's).
+/// poses of a part about its centre pose) proves it of every part of the tolerance; `None`
+/// when a part stays unproven at the smallest size, `solvable` (whether a goal's pose has
+/// solutions) finds a small part's centre reachable, or `budget` (boxes, taken as used) runs
+/// out. A failing proof may name the offset to halve (the one that moved it most); else
+/// `lever` (m per rad) weighs a rotation offset against a position one (the proof's own slack:
+/// [`LEVER_M`] for a wrist centre's).
 pub(super) fn out_of_reach_by_parts(
     goal: &Goal,
     budget: &mut usize,
     lever: f64,
-    prove: impl Fn(&Goal, Radii) -> Option<String>,
+    prove: impl Fn(&Goal, &Extent) -> Result<String, Option<usize>>,
     solvable: impl Fn(&Goal) -> bool,
 ) -> Option<String> {
     let rotations = if goal.tolerance == Tolerance::ZSymmetric { 2 } else { 3 };
@@ -128,17 +153,18 @@ pub(super) fn out_of_reach_by_parts(
         (part.centre, part.half) = (centre, half);
         *budget = budget.checked_sub(1)?;
         let centre = super::cells::offset_goal(goal, &part.centre);
-        match prove(&centre, part.radii()) {
-            Some(proof) => {
+        match prove(&centre, &part.extent(goal.tolerance)) {
+            Ok(proof) => {
                 proven += 1;
                 first.get_or_insert(proof);
             }
-            None => {
+            Err(hint) => {
                 let small = part.half.iter().all(|h| *h <= SOLVED_BELOW);
                 if small && part.is_within() && solvable(&centre) {
                     return None;
                 }
-                stack.extend(part.halves(part.widest(lever)?));
+                let halve = hint.filter(|&k| part.halvable(k)).or_else(|| part.widest(lever))?;
+                stack.extend(part.halves(halve));
             }
         }
     }
@@ -175,9 +201,9 @@ mod tests {
             let far_from = |point: Vector3<f64>| {
                 // The shape of the real proofs' slack: the position's radius and a lever's share
                 // of the rotation's.
-                move |part: &Goal, radii: Radii| {
-                    let slack = radii.position_m + LEVER_M * radii.orientation_rad;
-                    ((part.position - point).norm() > slack).then(|| "away".to_string())
+                move |part: &Goal, extent: &Extent| {
+                    let slack = extent.radii.position_m + LEVER_M * extent.radii.orientation_rad;
+                    ((part.position - point).norm() > slack).then(|| "away".to_string()).ok_or(None)
                 }
             };
             let never = |_: &Goal| false;

@@ -172,7 +172,7 @@ impl Ik<'_> {
             &mut budget,
             super::parts::LEVER_M,
             // The ball bounds alone: a cap's evaluations per part would cost seconds a goal.
-            |part, radii| self.part_out_of_reach(part, parameter, value, slack, radii, 0),
+            |part, extent| self.part_out_of_reach(part, parameter, value, slack, extent.radii, 0).ok_or(None),
             |part| self.sample(part, parameter, value).is_some_and(|(_, found, _)| !found.is_empty()),
         );
         self.reach_parts_left = budget;
