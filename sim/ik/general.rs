@@ -261,16 +261,7 @@ impl General6R {
             Region::Ball { .. } => true,
             Region::Box { local, .. } => local,
         };
-        let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| {
-            let mut unit = Vector3::zeros();
-            unit[axis % 3] = 1.0;
-            let turn = UnitQuaternion::from_scaled_axis(unit * POSE_STEP);
-            match axis {
-                0..3 => Isometry3::from_parts(Translation3::from(goal.translation.vector + unit * POSE_STEP), goal.rotation),
-                _ if local => goal * turn,
-                _ => Isometry3::from_parts(goal.translation, turn * goal.rotation),
-            }
-        });
+        let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| offset_pose(goal, axis, POSE_STEP, local));
         // A tolerance on the real tool moves the chain's (a held joint's frame) by the lever
         // times its angle on top; a turn about the chain tool's own z moves only its rotation.
         let lever = self.arm.tool_lever;
@@ -347,10 +338,11 @@ impl General6R {
     }
 
     /// The first-order bound's check at the region's edges: at the pose offset by the whole
-    /// region along each of its six offsets (a ball's three rotations), either side, no more roots are real than at the
-    /// centre (`real`, the pose's solutions), and no other is nearer the real angles than half
-    /// the closest at the centre (the bound lets a root come a quarter nearer), the pairs of
-    /// the pose's solutions that met and left the real line before the edge aside. A root whose
+    /// region along each of its six offsets (a ball's three rotations), either side, no more
+    /// roots are real than at the centre (`real`, the pose's solutions), and no other is nearer
+    /// the real angles than half the closest at the centre (the bound lets a root come a
+    /// quarter nearer), the pairs of the pose's solutions that met and left the real line
+    /// before the edge aside. A root whose
     /// motion is far from linear over the region fails it: found on a modular catalog arm
     /// whose roots barely move at the centre of a goal's tolerance and turn real at 0.9 of its
     /// radius, where two solutions appear.
@@ -371,14 +363,7 @@ impl General6R {
             if half[axis] == 0.0 {
                 return true;
             }
-            let mut unit = Vector3::zeros();
-            unit[axis % 3] = sign * half[axis];
-            let turn = UnitQuaternion::from_scaled_axis(unit);
-            let edge = match axis {
-                0..3 => Isometry3::from_parts(Translation3::from(goal.translation.vector + unit), goal.rotation),
-                _ if local => goal * turn,
-                _ => Isometry3::from_parts(goal.translation, turn * goal.rotation),
-            };
+            let edge = offset_pose(goal, axis, sign * half[axis], local);
             let Some((_, roots)) = self.angles(&edge, Some(index3), real > 0) else {
                 return false;
             };
@@ -689,6 +674,20 @@ impl Elimination {
         q[b] = tb;
         q[block + 3] = self.chain.angle_of(block + 3, &q, rotation);
         Some(q.map(super::wrap_angle))
+    }
+}
+
+/// `goal` offset by `amount` along offset `axis` of [`Region`]'s: a shift along world axis
+/// `axis` (m), or from 3 a turn (rad) about the goal's own axis `axis - 3` with `local`, else
+/// the world's.
+fn offset_pose(goal: &Isometry3<f64>, axis: usize, amount: f64, local: bool) -> Isometry3<f64> {
+    let mut offset = Vector3::zeros();
+    offset[axis % 3] = amount;
+    let turn = UnitQuaternion::from_scaled_axis(offset);
+    match axis {
+        0..3 => Isometry3::from_parts(Translation3::from(goal.translation.vector + offset), goal.rotation),
+        _ if local => goal * turn,
+        _ => Isometry3::from_parts(goal.translation, turn * goal.rotation),
     }
 }
 
