@@ -476,6 +476,94 @@ fn roots_that_turn_real_near_the_edge_of_the_tolerance_are_no_proof() {
     assert!(parts.is_none(), "{parts:?}");
 }
 
+/// First-order proofs the exact solver refutes (`examples/proof_audit.rs`, seeds 0 and 1):
+/// poses a little past the workspace boundary whose tolerance holds poses with solutions
+/// (found here by sampling, FK-checked), where the roots' rates at the centre said none can
+/// turn real. A modular arm whose roots 1.6 rad off the real angles turn real inside the
+/// tolerance and leave them again at its boundary (the probes' linearity check); an economic
+/// arm and a modular one where roots turn real only near a corner of the tolerance, its shift
+/// and turn both near whole (the corner search). Each proof is refused, in a sweep and in a
+/// validation.
+#[test]
+fn roots_that_turn_real_far_from_linearly_are_no_proof() {
+    use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
+    use proving_ground::ik::search::Radii;
+    use proving_ground::sweep::inputs::{catalog_entry, modular6_slots};
+    let catalog = |id: &str| {
+        let index = (0..15_625)
+            .find(|&i| catalog_entry(&modular6_slots(i)).id == id)
+            .expect("a catalog arm");
+        catalog_entry(&modular6_slots(index)).load().model
+    };
+    let half_turn = PI / 2.0;
+    let economic = common::dh_design(
+        "economic-547",
+        &[
+            [0.0, 0.0, half_turn],
+            [0.2, 0.4, -half_turn],
+            [0.1, 0.2, half_turn],
+            [0.0, 0.0, -half_turn],
+            [0.3, 0.2, -half_turn],
+            [0.2, 0.0, half_turn],
+        ],
+    );
+    let cases = [
+        (
+            catalog("modular6/D-D-Is-Ls-Ll-Is"),
+            [0.621_441_655_517_782_7, 0.648_624_967_272_875_3, 0.262_587_657_304_180_3],
+            [
+                0.113_252_003_127_323_31,
+                -0.073_848_722_317_965_7,
+                0.989_441_896_722_451_2,
+                0.052_202_327_629_433_984,
+            ],
+        ),
+        (
+            economic,
+            [-0.883_605_498_293_199_6, 0.253_116_983_124_883_6, -0.464_503_198_098_206_2],
+            [
+                -0.485_041_957_532_536_6,
+                0.790_848_167_939_232_5,
+                -0.241_348_528_202_308_12,
+                -0.284_682_915_951_667_06,
+            ],
+        ),
+        (
+            catalog("modular6/Is-Is-D-Ll-Is-Ll"),
+            [0.219_598_117_935_102_62, 0.389_392_008_758_686_7, 0.956_991_753_884_512_6],
+            [
+                -0.339_239_993_659_183_8,
+                0.196_250_223_434_691_9,
+                0.692_662_689_849_341_2,
+                0.605_491_927_769_996_2,
+            ],
+        ),
+    ];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    for (model, p, [w, i, j, k]) in cases {
+        let solver = General6R::new(&model).expect("the elimination holds");
+        let centre = Isometry3::from_parts(
+            Translation3::from(Vector3::from(p)),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, i, j, k)),
+        );
+        assert!(solver.solve(&centre).configurations.is_empty(), "{}", model.name);
+        // A pose within the tolerance (on its boundary, where these are likeliest) with a solution.
+        let witness = (0..20_000).find_map(|_| {
+            let sample = Isometry3::from_parts(
+                Translation3::from(centre.translation.vector + unit_vector(&mut rng) * 0.999e-3),
+                centre.rotation * UnitQuaternion::from_scaled_axis(unit_vector(&mut rng) * 0.999f64.to_radians()),
+            );
+            let solutions = solver.solve(&sample).configurations;
+            solutions.iter().any(|q| fk_error(&model, q, &sample) < 1e-9).then_some(sample)
+        });
+        assert!(witness.is_some(), "{}: no pose of the tolerance sampled has a solution", model.name);
+        let sweep = solver.out_of_reach_within(&centre, Radii::REACHED, 0.0);
+        assert!(sweep.is_none(), "{}: {sweep:?}", model.name);
+        let validation = solver.out_of_reach_checked(&centre, Radii::REACHED, 0.0);
+        assert!(validation.is_none(), "{}: {validation:?}", model.name);
+    }
+}
+
 /// Modular catalog arms: every pair of consecutive axes meets or is parallel, which makes
 /// Raghavan and Roth's own choice of kept joints degenerate for all of them; another choice
 /// holds for most, and three consecutive parallel axes have their own method. Through the

@@ -64,6 +64,11 @@ const CLUSTER: f64 = 1e-3;
 /// How much a multiple root's split may grow over a step and still be rounding's, as a factor
 /// and a floor (rad): one that is the pose's splits by the square root of the step or more.
 const SPLIT_GROWTH: f64 = 10.0;
+/// How many times its first-order motion over a region a followed root may have moved at a
+/// probe of the region (see [`General6R::roots_stay_off`]).
+const LINEAR: f64 = 2.0;
+/// The least distance (rad) a root may have moved at a probe: rounding's, at most.
+const LINEAR_FLOOR: f64 = 1e-6;
 const ROUNDING_SPREAD: f64 = 1e-7;
 /// Imaginary part (rad) of a root's angle beyond which it is the formulation's own (joint 3's
 /// tangent at +-i, to rounding: the determinant's factor that is no solution) and moves no
@@ -84,6 +89,28 @@ const PARTS_LEVER_M: f64 = 0.5;
 /// `|w^T Q'(x0) v|` (unit null vectors) relative to `|Q'(x0)|` at or below which a root counts
 /// as double: its first-order rate is not defined.
 const DOUBLE_ROOT: f64 = 1e-9;
+/// The poses beside the edges at which an out-of-reach proof solves the roots again: a sweep's
+/// and a validation's (see [`General6R::out_of_reach_checked`]).
+const SWEEP_CHECKS: Checks = Checks {
+    turns: 0,
+    corners: 1,
+    steps: 2,
+    tight: 0.5,
+};
+const VALIDATION_CHECKS: Checks = Checks {
+    turns: 32,
+    corners: 4,
+    steps: 4,
+    tight: 0.0,
+};
+/// A part's (see [`General6R::out_of_reach_in_parts`], a validation's only): its two corners
+/// nearest to failing beside its twelve faces.
+const PART_CHECKS: Checks = Checks {
+    turns: 0,
+    corners: 2,
+    steps: 2,
+    tight: 0.0,
+};
 /// Ratio of smallest to largest singular value below which a matrix counts as singular.
 const SINGULAR: f64 = 1e-10;
 
@@ -112,6 +139,25 @@ fn eliminated(block: usize) -> [usize; 2] {
 enum Region {
     Ball { radii: super::search::Radii, turn: f64 },
     Box { half: [f64; 6], local: bool },
+}
+
+/// Poses of a region's boundary beside its edges at which [`General6R::roots_stay_off`] solves
+/// the roots again: `turns` turns of the whole rotation about axes spread over the sphere (a
+/// ball's), and the corners of the region that the `corners` roots nearest to failing point
+/// to by their first-order rates (the whole shift and the whole turn along which first order
+/// brings each nearest the real angles, together). On 600 arms (`examples/proof_audit.rs`,
+/// seed 0) three first-order proofs the exact solver refutes were refuted only where the
+/// shift and the turn were both near their whole; one corner refuses all three and no other.
+#[derive(Debug, Clone, Copy)]
+struct Checks {
+    turns: usize,
+    corners: usize,
+    /// Corners visited per root at most (see [`General6R::worst_corner_holds`]).
+    steps: usize,
+    /// The share of its allowed motion (a quarter of its distance from the real angles) a
+    /// root's first-order motion must use for its corners to be searched: 0 searches them
+    /// whatever it is.
+    tight: f64,
 }
 
 /// A root of the determinant as joint 3's complex angle `(re, im)`, and whether
@@ -382,7 +428,22 @@ impl General6R {
     /// roots matched to their nearest. `None` when the pose has a real root, the system
     /// degenerates at it or next to it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let closest = self.roots_stay_off(goal, Region::Ball { radii, turn }, false).ok()?;
+        let closest = self.roots_stay_off(goal, Region::Ball { radii, turn }, false, SWEEP_CHECKS).ok()?;
+        let within = format!(
+            "within {:.1} mm and {:.2} deg of it",
+            radii.position_m * 1e3,
+            (radii.orientation_rad + turn).to_degrees()
+        );
+        Some(self.no_root_appears(closest, &within))
+    }
+
+    /// [`Self::out_of_reach_within`] with a validation's checks: beside the edges, the roots
+    /// are solved again at 32 turns of the whole tolerance about axes spread over the sphere, where two roots may meet and turn real between the edges' axes (a
+    /// first-order proof refuted by the exact solver on economic arms, `examples/proof_audit.rs`).
+    pub fn out_of_reach_checked(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
+        let closest = self
+            .roots_stay_off(goal, Region::Ball { radii, turn }, false, VALIDATION_CHECKS)
+            .ok()?;
         let within = format!(
             "within {:.1} mm and {:.2} deg of it",
             radii.position_m * 1e3,
@@ -408,7 +469,7 @@ impl General6R {
     /// the offset whose half-width added most to the failing root's motion (where known): the
     /// one to halve.
     pub(crate) fn out_of_reach_over_box(&self, goal: &Isometry3<f64>, half: &[f64; 6], local: bool) -> Result<String, Option<usize>> {
-        let closest = self.roots_stay_off(goal, Region::Box { half: *half, local }, false)?;
+        let closest = self.roots_stay_off(goal, Region::Box { half: *half, local }, false, PART_CHECKS)?;
         let within = format!(
             "within ({:.2}, {:.2}, {:.2}) mm and ({:.2}, {:.2}, {:.2}) deg either side of it ({} axes)",
             half[0] * 1e3,
@@ -428,7 +489,7 @@ impl General6R {
     /// take as solutions. A proof from the pose's solutions (each certified over the tolerance)
     /// holds only with it: the tolerance may hold a branch pair born off every one of them.
     pub fn no_solution_appears_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> bool {
-        self.roots_stay_off(goal, Region::Ball { radii, turn }, true).is_ok()
+        self.roots_stay_off(goal, Region::Ball { radii, turn }, true, SWEEP_CHECKS).is_ok()
     }
 
     /// The core of [`Self::out_of_reach_within`]: the smallest imaginary part of the roots that
@@ -436,7 +497,7 @@ impl General6R {
     /// first-order change over `region`; with `solutions`, the pose's solutions (near-real
     /// roots, see [`near_real`]) are let be, else one is a failure. On any failure, the box's
     /// offset that moved the failing root most, where there is one.
-    fn roots_stay_off(&self, goal: &Isometry3<f64>, region: Region, solutions: bool) -> Result<f64, Option<usize>> {
+    fn roots_stay_off(&self, goal: &Isometry3<f64>, region: Region, solutions: bool, checks: Checks) -> Result<f64, Option<usize>> {
         let found = self.angles_of_system(goal, None, solutions).ok_or(None)?;
         let (index3, roots) = (found.index, &found.roots);
         // The pose's derivatives per metre and per radian, by one step along each axis.
@@ -488,6 +549,9 @@ impl General6R {
             })
             .collect();
         let mut rates = vec![[0.0; 6]; clusters.len()];
+        // Each cluster's whole (complex) motion per offset, for the probes' check that the roots
+        // moved as first order says.
+        let mut speeds = vec![[0.0; 6]; clusters.len()];
         // Whether a root with rates `rate` (so far) stays off by enough, else the offset to halve.
         let judge = |rate: &[f64; 6], off_real: f64| -> Result<(), Option<usize>> {
             let shares = shares(rate);
@@ -518,10 +582,13 @@ impl General6R {
                     .system_near(&rotation, &translation, &found.system, OFFSETS3[index3])
                     .ok_or(None)?;
                 let delta: Quadratic = std::array::from_fn(|k| (stepped[k] - found.quadratic[k]) / POSE_STEP);
-                for ((cluster, perturbation), rate) in clusters.iter().zip(perturbations).zip(rates.iter_mut()) {
+                for (((cluster, perturbation), rate), speed) in
+                    clusters.iter().zip(perturbations).zip(rates.iter_mut()).zip(speeds.iter_mut())
+                {
                     // Off the real angles is the imaginary part alone; a rate is its approach.
                     let turn = perturbation.angle_rate(&delta);
                     rate[axis] = -cluster.centre.1.signum() * turn.im;
+                    speed[axis] = turn.norm();
                     if !rate[axis].is_finite() {
                         return Err(None);
                     }
@@ -538,8 +605,8 @@ impl General6R {
                     off_real,
                     ..
                 },
-                rate,
-            ) in clusters.iter().zip(rates.iter_mut())
+                (rate, speed),
+            ) in clusters.iter().zip(rates.iter_mut().zip(speeds.iter_mut()))
             {
                 let mut near: Vec<(f64, (f64, f64))> = moved.iter().map(|m| (angle_distance(&centre, &m.angle), m.angle)).collect();
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -558,6 +625,7 @@ impl General6R {
                 }
                 // Off the real angles is the imaginary part alone.
                 rate[axis] = (centre.1.abs() - moved_centre.1.abs()) / POSE_STEP;
+                speed[axis] = angle_distance(&centre, &moved_centre) / POSE_STEP;
                 judge(rate, off_real)?;
             }
         }
@@ -566,7 +634,50 @@ impl General6R {
             .map(|cluster| cluster.off_real + cluster.spread)
             .fold(f64::INFINITY, f64::min);
         let real = roots.iter().filter(|root| root.solution).count();
-        if !self.roots_stay_off_at_the_edges(goal, region, index3, closest, real) {
+        // The corners the roots nearest to failing point to.
+        let mut order: Vec<(f64, usize)> = rates
+            .iter()
+            .zip(&clusters)
+            .enumerate()
+            .map(|(i, (rate, cluster))| (shares(rate).iter().sum::<f64>() / cluster.off_real, i))
+            .collect();
+        order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let corners: Vec<([f64; 6], (f64, f64))> = order
+            .iter()
+            .take(checks.corners)
+            .filter(|(ratio, _)| FACTOR * ratio >= checks.tight)
+            .map(|&(_, i)| (rates[i], clusters[i].centre))
+            .collect();
+        // Two roots that may meet within the region (their whole first-order motions reach
+        // across the distance between them; a root and its conjugate meet only on the real
+        // angles, which its own rate bounds) may part at right angles to their approach, so
+        // toward the real angles as fast as they move at all: each must stay off by four times
+        // its whole motion (on a modular arm four roots 1.6 rad off the real angles, symmetric
+        // about an angle, met in pairs on it and parted, one of each pair onto the real angles).
+        let motions: Vec<f64> = speeds.iter().map(|speed| shares(speed).iter().sum::<f64>()).collect();
+        for (i, a) in clusters.iter().enumerate() {
+            let may_meet = clusters.iter().enumerate().any(|(j, b)| {
+                let conjugate = (a.centre.0, -a.centre.1);
+                j != i && angle_distance(&conjugate, &b.centre) > CLUSTER && angle_distance(&a.centre, &b.centre) < motions[i] + motions[j]
+            });
+            // False for NaN too.
+            let stays_off = a.off_real > FACTOR * motions[i];
+            if may_meet && !stays_off {
+                return Err(None);
+            }
+        }
+        // Where each followed root may be at a probe: within twice its whole first-order motion.
+        let reach: Vec<((f64, f64), f64)> = clusters
+            .iter()
+            .zip(&speeds)
+            .map(|(cluster, speed)| {
+                (
+                    cluster.centre,
+                    LINEAR * shares(speed).iter().sum::<f64>() + 2.0 * cluster.spread + LINEAR_FLOOR,
+                )
+            })
+            .collect();
+        if !self.roots_stay_off_at_the_edges(goal, region, index3, closest, real, checks, &corners, &reach) {
             return Err(None);
         }
         Ok(closest)
@@ -581,7 +692,18 @@ impl General6R {
     /// motion is far from linear over the region fails it: found on a modular catalog arm
     /// whose roots barely move at the centre of a goal's tolerance and turn real at 0.9 of its
     /// radius, where two solutions appear.
-    fn roots_stay_off_at_the_edges(&self, goal: &Isometry3<f64>, region: Region, index3: usize, closest: f64, real: usize) -> bool {
+    #[allow(clippy::too_many_arguments)]
+    fn roots_stay_off_at_the_edges(
+        &self,
+        goal: &Isometry3<f64>,
+        region: Region,
+        index3: usize,
+        closest: f64,
+        real: usize,
+        checks: Checks,
+        corners: &[([f64; 6], (f64, f64))],
+        reach: &[((f64, f64), f64)],
+    ) -> bool {
         let (half, local) = match region {
             // The ball's rotation edges alone: a degree turns the tool's end by the arm's
             // size times it, ten times a millimetre's shift; on the brute force of task 00 and
@@ -593,30 +715,99 @@ impl General6R {
             }
             Region::Box { half, local } => (half, local),
         };
-        (0..12).all(|k| {
+        let edges = (0..12).filter_map(|k| {
             let (axis, sign) = (k / 2, if k % 2 == 0 { 1.0 } else { -1.0 });
-            if half[axis] == 0.0 {
+            (half[axis] != 0.0).then(|| offset_pose(goal, axis, sign * half[axis], local))
+        });
+        // The turns between the edges' axes: `checks.turns` axes spread evenly over the sphere (a
+        // Fibonacci lattice), each turned by the whole rotation the edges have along it.
+        let turns = (0..checks.turns).map(|k| {
+            let z = 1.0 - (2 * k + 1) as f64 / checks.turns as f64;
+            let across = (1.0 - z * z).max(0.0).sqrt();
+            let longitude = k as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+            let axis = Vector3::new(across * longitude.cos(), across * longitude.sin(), z);
+            let turn = UnitQuaternion::from_scaled_axis(axis.component_mul(&Vector3::new(half[3], half[4], half[5])));
+            if local {
+                goal * turn
+            } else {
+                Isometry3::from_parts(goal.translation, turn * goal.rotation)
+            }
+        });
+        edges.chain(turns).all(|edge| {
+            self.angles(&edge, Some(index3), real > 0)
+                .is_some_and(|(_, roots)| probe_holds(&roots, real, closest, reach))
+        }) && corners
+            .iter()
+            .all(|(rates, start)| self.worst_corner_holds(goal, region, index3, (real, closest), reach, *rates, *start, checks.steps))
+    }
+
+    /// The check of [`Self::roots_stay_off_at_the_edges`] at the corner of `region` a root's
+    /// `rates` point to, then at the corner its rates there point to, and so on
+    /// (`steps` corners at most, until one repeats): a search for the pose where that
+    /// root comes nearest the real angles when first order at the centre misjudges the
+    /// direction (on an economic arm a root 0.011 rad off them turns real only near one corner
+    /// of the tolerance, its shift and turn both whole). The root is followed from `start` to
+    /// its nearest at each corner.
+    #[allow(clippy::too_many_arguments)]
+    fn worst_corner_holds(
+        &self,
+        goal: &Isometry3<f64>,
+        region: Region,
+        index3: usize,
+        (real, closest): (usize, f64),
+        reach: &[((f64, f64), f64)],
+        mut rates: [f64; 6],
+        mut at: (f64, f64),
+        steps: usize,
+    ) -> bool {
+        let local = match region {
+            Region::Ball { .. } => true,
+            Region::Box { local, .. } => local,
+        };
+        let lever = self.arm.tool_lever;
+        let mut previous: Option<Isometry3<f64>> = None;
+        for _ in 0..steps {
+            let pose = corner(goal, region, lever, &rates);
+            if previous.is_some_and(|p| {
+                (p.translation.vector - pose.translation.vector).norm() < 1e-12 && p.rotation.angle_to(&pose.rotation) < 1e-12
+            }) {
                 return true;
             }
-            let edge = offset_pose(goal, axis, sign * half[axis], local);
-            let Some((_, roots)) = self.angles(&edge, Some(index3), real > 0) else {
+            let Some(found) = self.angles_of_system(&pose, Some(index3), real > 0) else {
                 return false;
             };
-            let at_edge = roots.iter().filter(|root| root.solution).count();
-            if at_edge > real {
+            if !probe_holds(&found.roots, real, closest, reach) {
                 return false;
             }
-            // Solutions of the pose that meet within the region leave the real line there as
-            // a pair near it: theirs, not another root's approach.
-            let mut off: Vec<f64> = roots
+            // The followed root there, and its rates of approach there.
+            let Some(root) = found
+                .roots
                 .iter()
-                .filter(|root| !root.solution)
-                .map(|root| root.angle.1.abs())
-                .filter(|im| *im <= FAR_FROM_REAL)
-                .collect();
-            off.sort_by(f64::total_cmp);
-            off.get(real - at_edge).is_none_or(|nearest| *nearest >= 0.5 * closest)
-        })
+                .min_by(|a, b| angle_distance(&a.angle, &at).total_cmp(&angle_distance(&b.angle, &at)))
+            else {
+                return false;
+            };
+            let Some(perturbation) = Perturbation::of(&found.quadratic, root.tangent) else {
+                return true;
+            };
+            for (axis, rate) in rates.iter_mut().enumerate() {
+                let (rotation, translation) = self.arm.goal(&offset_pose(&pose, axis, POSE_STEP, local), self.reversed);
+                let Some(stepped) = self
+                    .elimination
+                    .system_near(&rotation, &translation, &found.system, OFFSETS3[index3])
+                else {
+                    return false;
+                };
+                let delta: Quadratic = std::array::from_fn(|k| (stepped[k] - found.quadratic[k]) / POSE_STEP);
+                *rate = -root.angle.1.signum() * perturbation.angle_rate(&delta).im;
+            }
+            if !rates.iter().all(|r| r.is_finite()) {
+                return false;
+            }
+            at = root.angle;
+            previous = Some(pose);
+        }
+        true
     }
 
     /// [`Self::out_of_reach_within`] part by part over `goal`'s tolerance (see
@@ -945,6 +1136,73 @@ impl Elimination {
         q[b] = tb;
         q[block + 3] = self.chain.angle_of(block + 3, &q, rotation);
         Some(q.map(super::wrap_angle))
+    }
+}
+
+/// Whether the roots at a probe of a region keep what its centre's proof needs: no more real
+/// than the centre's `real`; each followed root of `reach` (centre, how far it may move) with
+/// one within its reach (a root that moved further than first order allows, twice over, moves
+/// far from linearly and its bound says nothing: on a modular arm roots 1.6 rad off the real
+/// angles turn real inside a tolerance and leave them again at its boundary); and no other
+/// nearer the real angles than half the centre's `closest`, the pairs of the pose's solutions
+/// that met and left the real line before the probe aside.
+fn probe_holds(roots: &[Root], real: usize, closest: f64, reach: &[((f64, f64), f64)]) -> bool {
+    let at_probe = roots.iter().filter(|root| root.solution).count();
+    if at_probe > real {
+        return false;
+    }
+    let linear = reach
+        .iter()
+        .all(|(centre, within)| roots.iter().any(|root| angle_distance(centre, &root.angle) <= *within));
+    if !linear {
+        return false;
+    }
+    let mut off: Vec<f64> = roots
+        .iter()
+        .filter(|root| !root.solution)
+        .map(|root| root.angle.1.abs())
+        .filter(|im| *im <= FAR_FROM_REAL)
+        .collect();
+    off.sort_by(f64::total_cmp);
+    off.get(real - at_probe).is_none_or(|nearest| *nearest >= 0.5 * closest)
+}
+
+/// The corner of `region` about `goal` that a root's first-order `rates` (of approach to the real
+/// angles, per offset) point to: a ball's whole shift and whole turn along the rates' position
+/// and rotation parts, a box's half-width along each offset with its rate's sign.
+fn corner(goal: &Isometry3<f64>, region: Region, lever: f64, rates: &[f64; 6]) -> Isometry3<f64> {
+    let (shift, turn, local) = match region {
+        Region::Ball { radii, turn } => {
+            let along = |first: usize, length: f64| {
+                let direction = Vector3::new(rates[first], rates[first + 1], rates[first + 2]);
+                let norm = direction.norm();
+                if norm > 0.0 && norm.is_finite() {
+                    direction * (length / norm)
+                } else {
+                    Vector3::zeros()
+                }
+            };
+            (
+                along(0, radii.position_m + lever * radii.orientation_rad),
+                along(3, radii.orientation_rad + turn),
+                true,
+            )
+        }
+        Region::Box { half, local } => {
+            let offset: [f64; 6] = std::array::from_fn(|k| half[k].copysign(rates[k]));
+            (
+                Vector3::new(offset[0], offset[1], offset[2]),
+                Vector3::new(offset[3], offset[4], offset[5]),
+                local,
+            )
+        }
+    };
+    let turn = UnitQuaternion::from_scaled_axis(turn);
+    let translation = Translation3::from(goal.translation.vector + shift);
+    if local {
+        Isometry3::from_parts(translation, goal.rotation * turn)
+    } else {
+        Isometry3::from_parts(translation, turn * goal.rotation)
     }
 }
 

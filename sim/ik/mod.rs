@@ -925,7 +925,9 @@ impl<'a> Ik<'a> {
     /// proof over the whole tolerance fails, the tolerance is cut ([`parts`], at most
     /// [`GENERAL_PARTS`] parts): a pose a millimetre or two beyond a fold of the arm's
     /// solutions has roots nearer the real angles than four times their motion over the whole
-    /// tolerance, but not over a part of it.
+    /// tolerance, but not over a part of it; and the proof over the whole tolerance is
+    /// [`general::General6R::out_of_reach_checked`], which solves the roots again at more poses
+    /// of the tolerance's boundary.
     fn roots_stay_complex(&self, goal: &Goal, result: &mut GoalSolutions, in_parts: bool) -> bool {
         let Some((AllSolutions::General(general), Tolerance::Pose | Tolerance::ZSymmetric)) = self.all.as_ref() else {
             return false;
@@ -934,7 +936,12 @@ impl<'a> Ik<'a> {
             return false;
         }
         let pose = Isometry3::from_parts(Translation3::from(goal.position), goal.rotation);
-        let whole = general.out_of_reach_within(&pose, search::Radii::REACHED, 0.0);
+        // A validation's proof checks more poses on the tolerance's boundary.
+        let whole = if in_parts {
+            general.out_of_reach_checked(&pose, search::Radii::REACHED, 0.0)
+        } else {
+            general.out_of_reach_within(&pose, search::Radii::REACHED, 0.0)
+        };
         let proof = whole.or_else(|| {
             let mut budget = GENERAL_PARTS;
             in_parts.then(|| general.out_of_reach_in_parts(goal, &mut budget)).flatten()
