@@ -141,6 +141,16 @@ enum Region {
     Box { half: [f64; 6], local: bool },
 }
 
+impl Region {
+    /// Whether its rotation offsets are about the goal's own axes (a ball's always are).
+    fn local(self) -> bool {
+        match self {
+            Region::Ball { .. } => true,
+            Region::Box { local, .. } => local,
+        }
+    }
+}
+
 /// Poses of a region's boundary beside its edges at which [`General6R::roots_stay_off`] solves
 /// the roots again: `turns` turns of the whole rotation about axes spread over the sphere (a
 /// ball's), and the corners of the region that the `corners` roots nearest to failing point
@@ -424,26 +434,23 @@ impl General6R {
     /// each of the determinant's complex roots (joint 3's angle, complex) stays off the real
     /// angles by more than `FACTOR` (4) times the first-order change the tolerance can give its
     /// imaginary part (its real part may move freely: only the imaginary part reaching 0 makes
-    /// it real); each root's rate of change with the pose is taken by finite differences, the
-    /// roots matched to their nearest. `None` when the pose has a real root, the system
-    /// degenerates at it or next to it, or a root's motion or its match is in doubt.
+    /// it real); each simple root's rate of change with the pose is its perturbation's (see
+    /// [`Perturbation`]), a multiple root's by finite differences, the roots matched to their
+    /// nearest; the bound is then checked at probes of the tolerance (see [`Checks`]: a
+    /// sweep's). `None` when the pose has a real root, the system degenerates at it or next to
+    /// it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let closest = self.roots_stay_off(goal, Region::Ball { radii, turn }, false, SWEEP_CHECKS).ok()?;
-        let within = format!(
-            "within {:.1} mm and {:.2} deg of it",
-            radii.position_m * 1e3,
-            (radii.orientation_rad + turn).to_degrees()
-        );
-        Some(self.no_root_appears(closest, &within))
+        self.out_of_reach_in_ball(goal, radii, turn, SWEEP_CHECKS)
     }
 
-    /// [`Self::out_of_reach_within`] with a validation's checks: beside the edges, the roots
-    /// are solved again at 32 turns of the whole tolerance about axes spread over the sphere, where two roots may meet and turn real between the edges' axes (a
-    /// first-order proof refuted by the exact solver on economic arms, `examples/proof_audit.rs`).
+    /// [`Self::out_of_reach_within`] with a validation's checks: more roots' corners, and 32
+    /// turns of the whole tolerance about axes spread over the sphere (see [`Checks`]).
     pub fn out_of_reach_checked(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
-        let closest = self
-            .roots_stay_off(goal, Region::Ball { radii, turn }, false, VALIDATION_CHECKS)
-            .ok()?;
+        self.out_of_reach_in_ball(goal, radii, turn, VALIDATION_CHECKS)
+    }
+
+    fn out_of_reach_in_ball(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64, checks: Checks) -> Option<String> {
+        let closest = self.roots_stay_off(goal, Region::Ball { radii, turn }, false, checks).ok()?;
         let within = format!(
             "within {:.1} mm and {:.2} deg of it",
             radii.position_m * 1e3,
@@ -501,10 +508,7 @@ impl General6R {
         let found = self.angles_of_system(goal, None, solutions).ok_or(None)?;
         let (index3, roots) = (found.index, &found.roots);
         // The pose's derivatives per metre and per radian, by one step along each axis.
-        let local = match region {
-            Region::Ball { .. } => true,
-            Region::Box { local, .. } => local,
-        };
+        let local = region.local();
         let steps: [Isometry3<f64>; 6] = std::array::from_fn(|axis| offset_pose(goal, axis, POSE_STEP, local));
         // A tolerance on the real tool moves the chain's (a held joint's frame) by the lever
         // times its angle on top; a turn about the chain tool's own z moves only its rotation.
@@ -576,12 +580,7 @@ impl General6R {
         // Rotations first: they move the roots most, so a failing proof ends soonest.
         for axis in [3, 4, 5, 0, 1, 2] {
             if let Some(perturbations) = &perturbations {
-                let (rotation, translation) = self.arm.goal(&steps[axis], self.reversed);
-                let stepped = self
-                    .elimination
-                    .system_near(&rotation, &translation, &found.system, OFFSETS3[index3])
-                    .ok_or(None)?;
-                let delta: Quadratic = std::array::from_fn(|k| (stepped[k] - found.quadratic[k]) / POSE_STEP);
+                let delta = self.quadratic_rate(&found, &steps[axis]).ok_or(None)?;
                 for (((cluster, perturbation), rate), speed) in
                     clusters.iter().zip(perturbations).zip(rates.iter_mut()).zip(speeds.iter_mut())
                 {
@@ -760,10 +759,7 @@ impl General6R {
         mut at: (f64, f64),
         steps: usize,
     ) -> bool {
-        let local = match region {
-            Region::Ball { .. } => true,
-            Region::Box { local, .. } => local,
-        };
+        let local = region.local();
         let lever = self.arm.tool_lever;
         let mut previous: Option<Isometry3<f64>> = None;
         for _ in 0..steps {
@@ -791,14 +787,9 @@ impl General6R {
                 return true;
             };
             for (axis, rate) in rates.iter_mut().enumerate() {
-                let (rotation, translation) = self.arm.goal(&offset_pose(&pose, axis, POSE_STEP, local), self.reversed);
-                let Some(stepped) = self
-                    .elimination
-                    .system_near(&rotation, &translation, &found.system, OFFSETS3[index3])
-                else {
+                let Some(delta) = self.quadratic_rate(&found, &offset_pose(&pose, axis, POSE_STEP, local)) else {
                     return false;
                 };
-                let delta: Quadratic = std::array::from_fn(|k| (stepped[k] - found.quadratic[k]) / POSE_STEP);
                 *rate = -root.angle.1.signum() * perturbation.angle_rate(&delta).im;
             }
             if !rates.iter().all(|r| r.is_finite()) {
@@ -877,6 +868,16 @@ impl General6R {
             });
         }
         None
+    }
+
+    /// The rate of change of `found`'s matrix quadratic toward `stepped`, a pose [`POSE_STEP`]
+    /// from `found`'s (see [`Elimination::system_near`]).
+    fn quadratic_rate(&self, found: &Angles, stepped: &Isometry3<f64>) -> Option<Quadratic> {
+        let (rotation, translation) = self.arm.goal(stepped, self.reversed);
+        let near = self
+            .elimination
+            .system_near(&rotation, &translation, &found.system, OFFSETS3[found.index])?;
+        Some(std::array::from_fn(|k| (near[k] - found.quadratic[k]) / POSE_STEP))
     }
 
     /// Every configuration whose tool frame is at world pose `goal`, unpolished.
@@ -996,19 +997,13 @@ impl Elimination {
     /// dependent.
     fn system_near(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>, base: &System, offset3: f64) -> Option<Quadratic> {
         let (right, q, r) = self.products(rotation, translation);
-        let r_inverse = independent(&r)?;
+        independent(&r)?;
         let complement: [[f64; 14]; 6] = base.complement.map(|row| {
             let row = SVector::<f64, 14>::from(row);
             let projected = row - q * (q.transpose() * row);
             projected.into()
         });
-        let near = System {
-            equations: self.equations(&complement, &right),
-            products_inverse: r_inverse * q.transpose(),
-            right,
-            complement,
-        };
-        Some(near.quadratic(offset3))
+        Some(quadratic_of(&self.equations(&complement, &right), offset3))
     }
 
     /// The right side's coefficients at a pose, the constant first, and a QR of its eight
@@ -1206,6 +1201,42 @@ fn corner(goal: &Isometry3<f64>, region: Region, lever: f64, rates: &[f64; 6]) -
     }
 }
 
+/// The 12 x 12 matrix's coefficients of `x3^0, x3^1, x3^2` for joint 3's tangent offset, from six
+/// equations `[equation][{1, s3, c3}][{1, s4, c4} x {1, s5, c5}]`.
+fn quadratic_of(equations: &[[[f64; 9]; 3]; 6], offset3: f64) -> Quadratic {
+    let (h3, h4, h5) = (half_angle(offset3), half_angle(OFFSETS[1]), half_angle(OFFSETS[2]));
+    let mut out = [Matrix12::zeros(); 3];
+    // The change of basis one joint at a time (it is a product of three): 5, then 4, then 3.
+    for (i, equation) in equations.iter().enumerate() {
+        let mut by5 = [[[0.0; 3]; 3]; 3];
+        for (f3, by3) in equation.iter().enumerate() {
+            for f4 in 0..3 {
+                for p5 in 0..3 {
+                    by5[f3][f4][p5] = (0..3).map(|f5| by3[f4 * 3 + f5] * h5[(f5, p5)]).sum();
+                }
+            }
+        }
+        let mut by4 = [[[0.0; 3]; 3]; 3];
+        for f3 in 0..3 {
+            for p4 in 0..3 {
+                for p5 in 0..3 {
+                    by4[f3][p4][p5] = (0..3).map(|f4| by5[f3][f4][p5] * h4[(f4, p4)]).sum();
+                }
+            }
+        }
+        for (p3, matrix) in out.iter_mut().enumerate() {
+            for p4 in 0..3 {
+                for p5 in 0..3 {
+                    let v: f64 = (0..3).map(|f3| by4[f3][p4][p5] * h3[(f3, p3)]).sum();
+                    matrix[(i, p4 * 3 + p5)] = v;
+                    matrix[(6 + i, (p4 + 1) * 3 + p5)] = v;
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The inverse of the products' `R`, where they are independent: the condition number, bounded
 /// from above by Frobenius norms, below `1 / SINGULAR`.
 fn independent(r: &Matrix8) -> Option<Matrix8> {
@@ -1365,37 +1396,7 @@ type Quadratic = [Matrix12; 3];
 impl System {
     /// The 12 x 12 matrix's coefficients of `x3^0, x3^1, x3^2` for joint 3's tangent offset.
     fn quadratic(&self, offset3: f64) -> Quadratic {
-        let (h3, h4, h5) = (half_angle(offset3), half_angle(OFFSETS[1]), half_angle(OFFSETS[2]));
-        let mut out = [Matrix12::zeros(); 3];
-        // The change of basis one joint at a time (it is a product of three): 5, then 4, then 3.
-        for (i, equation) in self.equations.iter().enumerate() {
-            let mut by5 = [[[0.0; 3]; 3]; 3];
-            for (f3, by3) in equation.iter().enumerate() {
-                for f4 in 0..3 {
-                    for p5 in 0..3 {
-                        by5[f3][f4][p5] = (0..3).map(|f5| by3[f4 * 3 + f5] * h5[(f5, p5)]).sum();
-                    }
-                }
-            }
-            let mut by4 = [[[0.0; 3]; 3]; 3];
-            for f3 in 0..3 {
-                for p4 in 0..3 {
-                    for p5 in 0..3 {
-                        by4[f3][p4][p5] = (0..3).map(|f4| by5[f3][f4][p5] * h4[(f4, p4)]).sum();
-                    }
-                }
-            }
-            for (p3, matrix) in out.iter_mut().enumerate() {
-                for p4 in 0..3 {
-                    for p5 in 0..3 {
-                        let v: f64 = (0..3).map(|f3| by4[f3][p4][p5] * h3[(f3, p3)]).sum();
-                        matrix[(i, p4 * 3 + p5)] = v;
-                        matrix[(6 + i, (p4 + 1) * 3 + p5)] = v;
-                    }
-                }
-            }
-        }
-        out
+        quadratic_of(&self.equations, offset3)
     }
 
     /// The matrix at `x3` for the first offset.
@@ -1538,12 +1539,9 @@ mod tests {
                 let points: Vec<(f64, f64)> = found.roots.iter().map(|r| r.angle).collect();
                 for axis in 0..6 {
                     let step = 1e-5;
-                    let (rotation, translation) = solver.arm.goal(&offset_pose(&goal, axis, 1e-6, true), solver.reversed);
-                    let stepped = solver
-                        .elimination
-                        .system_near(&rotation, &translation, &found.system, OFFSETS3[found.index])
+                    let delta = solver
+                        .quadratic_rate(&found, &offset_pose(&goal, axis, POSE_STEP, true))
                         .expect("a regular pose");
-                    let delta: Quadratic = std::array::from_fn(|k| (stepped[k] - found.quadratic[k]) / 1e-6);
                     let either = [step, -step].map(|amount| {
                         solver
                             .angles(&offset_pose(&goal, axis, amount, true), Some(found.index), true)
