@@ -435,8 +435,8 @@ impl General6R {
     /// angles by more than `FACTOR` (4) times the first-order change the tolerance can give its
     /// imaginary part (its real part may move freely: only the imaginary part reaching 0 makes
     /// it real); each simple root's rate of change with the pose is its perturbation's (see
-    /// [`Perturbation`]), a multiple root's by finite differences, the roots matched to their
-    /// nearest; the bound is then checked at probes of the tolerance (see [`Checks`]: a
+    /// `Perturbation`), a multiple root's by finite differences, the roots matched to their
+    /// nearest; the bound is then checked at probes of the tolerance (see `Checks`: a
     /// sweep's). `None` when the pose has a real root, the system degenerates at it or next to
     /// it, or a root's motion or its match is in doubt.
     pub fn out_of_reach_within(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
@@ -444,7 +444,7 @@ impl General6R {
     }
 
     /// [`Self::out_of_reach_within`] with a validation's checks: more roots' corners, and 32
-    /// turns of the whole tolerance about axes spread over the sphere (see [`Checks`]).
+    /// turns of the whole tolerance about axes spread over the sphere (see `Checks`).
     pub fn out_of_reach_checked(&self, goal: &Isometry3<f64>, radii: super::search::Radii, turn: f64) -> Option<String> {
         self.out_of_reach_in_ball(goal, radii, turn, VALIDATION_CHECKS)
     }
