@@ -279,6 +279,12 @@ pub(crate) const NODES: [f64; 3] = [0.0, 2.0 * PI / 3.0, 4.0 * PI / 3.0];
 
 /// The inverse of the `{1, sin, cos}` values at [`NODES`]: coefficients from node values.
 pub(crate) fn node_inverse() -> Matrix3<f64> {
+    // Once per process: the closed forms ask for it a few times per pose.
+    static INVERSE: std::sync::LazyLock<Matrix3<f64>> = std::sync::LazyLock::new(node_inverse_now);
+    *INVERSE
+}
+
+fn node_inverse_now() -> Matrix3<f64> {
     let v = Matrix3::from_fn(|i, f| match f {
         0 => 1.0,
         1 => NODES[i].sin(),

@@ -286,7 +286,7 @@ impl SphericalWrist {
         let mut out = Vec::with_capacity(4);
         match decoupled {
             Decoupled::Shoulder(relation) => {
-                let (kept, other) = invariants(relation, l1);
+                let (kept, other) = (|p: &Vector3<f64>| relation.kept(l1, p), |p: &Vector3<f64>| relation.other(l1, p));
                 for t3 in trig_roots(|t| kept(&l3.turn(t, c)), kept(target))? {
                     let moved = l3.turn(t3, c);
                     for t2 in trig_roots(|t| other(&l2.turn(t, &moved)), other(target))? {
@@ -297,7 +297,7 @@ impl SphericalWrist {
                 }
             }
             Decoupled::Elbow(relation) => {
-                let (kept, other) = invariants(relation, l2);
+                let (kept, other) = (|p: &Vector3<f64>| relation.kept(l2, p), |p: &Vector3<f64>| relation.other(l2, p));
                 // Joint 1 turned back, the target is where joints 2 and 3 must put the centre.
                 for t1 in trig_roots(|t| kept(&l1.turn(-t, target)), kept(c))? {
                     let goal = l1.turn(-t1, target);
@@ -402,29 +402,32 @@ fn pair(a: &super::lines::Line, b: &super::lines::Line) -> Option<Pair> {
     }
 }
 
-/// For two axes so related (`a` the first): what turning about either keeps (distance from the
-/// meeting point, or height along the axes), and what turning about `a` alone keeps besides
-/// (height along `a` from the meeting point, or the distance from `a`).
-type Invariant<'a> = Box<dyn Fn(&Vector3<f64>) -> f64 + 'a>;
-fn invariants(relation: Pair, a: &super::lines::Line) -> (Invariant<'_>, Invariant<'_>) {
-    match relation {
-        Pair::Meet(m) => (
-            Box::new(move |p: &Vector3<f64>| (p - m).norm_squared()),
-            Box::new(move |p: &Vector3<f64>| a.axis.dot(&(p - m))),
-        ),
-        Pair::Parallel => (
-            Box::new(move |p: &Vector3<f64>| a.axis.dot(&(p - a.point))),
-            Box::new(move |p: &Vector3<f64>| {
+impl Pair {
+    /// What turning about either of two axes so related keeps (`a` the first): the squared
+    /// distance from the meeting point, or the height along the axes.
+    fn kept(self, a: &super::lines::Line, p: &Vector3<f64>) -> f64 {
+        match self {
+            Pair::Meet(m) => (p - m).norm_squared(),
+            Pair::Parallel => a.axis.dot(&(p - a.point)),
+        }
+    }
+
+    /// What turning about `a` alone keeps besides: the height along `a` from the meeting point,
+    /// or the squared distance from `a`.
+    fn other(self, a: &super::lines::Line, p: &Vector3<f64>) -> f64 {
+        match self {
+            Pair::Meet(m) => a.axis.dot(&(p - m)),
+            Pair::Parallel => {
                 let v = p - a.point;
                 (v - a.axis * a.axis.dot(&v)).norm_squared()
-            }),
-        ),
+            }
+        }
     }
 }
 
 /// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`; `None` when `f` is
 /// constant and equal to it (every angle).
-pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<Vec<f64>> {
+pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<TrigRoots> {
     let samples = NODES.map(&f);
     let inverse = super::lines::node_inverse();
     let [a, b, c] = [0, 1, 2].map(|row| (0..3).map(|k| inverse[(row, k)] * samples[k]).sum::<f64>());
@@ -433,19 +436,46 @@ pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<Vec<f64>>
     let size = a.abs().max(value.abs()).max(r).max(1e-300);
     let rest = value - a;
     if r <= 1e-12 * size {
-        return if rest.abs() <= 1e-12 * size { None } else { Some(Vec::new()) };
+        return if rest.abs() <= 1e-12 * size { None } else { Some(TrigRoots::NONE) };
     }
     let ratio = rest / r;
     if ratio.abs() > 1.0 + 1e-12 {
-        return Some(Vec::new());
+        return Some(TrigRoots::NONE);
     }
     let phi = b.atan2(c);
     let spread = ratio.clamp(-1.0, 1.0).acos();
     Some(if spread == 0.0 {
-        vec![phi]
+        TrigRoots {
+            angles: [phi, phi],
+            len: 1,
+        }
     } else {
-        vec![phi + spread, phi - spread]
+        TrigRoots {
+            angles: [phi + spread, phi - spread],
+            len: 2,
+        }
     })
+}
+
+/// [`trig_roots`]'s angles, none to two, without an allocation: the closed forms call it a few
+/// times per pose.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TrigRoots {
+    angles: [f64; 2],
+    len: usize,
+}
+
+impl TrigRoots {
+    const NONE: TrigRoots = TrigRoots { angles: [0.0; 2], len: 0 };
+}
+
+impl IntoIterator for TrigRoots {
+    type Item = f64;
+    type IntoIter = std::iter::Take<std::array::IntoIter<f64, 2>>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.angles.into_iter().take(self.len)
+    }
 }
 
 /// Boxes the branch and bound may evaluate before it gives up.
