@@ -27,6 +27,10 @@ pub struct StaticLoad {
     pub cross_checked_by: Option<&'static str>,
 }
 
+/// Torque magnitudes (N m or N) at or below this are no load: the engines' rounding where the
+/// exact load is zero (2.7e-15 N m on `free-offset-6dof`'s joint 6).
+const NO_LOAD: f64 = 1e-9;
+
 /// The static gravity load of one joint.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct JointLoad {
@@ -122,9 +126,11 @@ fn check_length(model: &Model, index: usize, q: &[f64]) -> Result<(), EngineErro
 
 impl JointLoad {
     /// Keeps `torque` (N m or N) of sample `index` when its magnitude is the largest so far (the
-    /// first sample on a tie).
+    /// first sample on a tie) and above [`NO_LOAD`]: a joint gravity does not load (its axis
+    /// vertical, or the links beyond it balanced on it) peaks at 0 in sample 0, not at whichever
+    /// sample's rounding came out largest.
     fn record(&mut self, torque: f64, index: usize) {
-        if torque.abs() > self.peak_torque {
+        if torque.abs() > self.peak_torque.max(NO_LOAD) {
             self.peak_torque = torque.abs();
             self.sample = index;
         }
@@ -156,4 +162,33 @@ fn unloaded(model: &Model) -> Vec<JointLoad> {
             over: false,
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::JointLoad;
+
+    fn load() -> JointLoad {
+        JointLoad {
+            joint: "joint6".into(),
+            peak_torque: 0.0,
+            sample: 0,
+            rated: None,
+            over: false,
+        }
+    }
+
+    #[test]
+    fn rounding_is_no_load_and_a_real_torque_is_the_peak() {
+        let mut joint = load();
+        // MuJoCo's rounding on a joint gravity does not load, as on free-offset-6dof's joint 6.
+        for (index, torque) in [(3, 2.7e-15), (148, -2.66e-15), (7, 1e-12)] {
+            joint.record(torque, index);
+        }
+        assert_eq!((joint.peak_torque, joint.sample), (0.0, 0));
+        joint.record(-0.4, 9);
+        joint.record(0.3, 10);
+        joint.record(0.4, 11);
+        assert_eq!((joint.peak_torque, joint.sample), (0.4, 9), "the largest, the first on a tie");
+    }
 }
