@@ -19,8 +19,8 @@ const CONFIGURATIONS: [&str; 5] = ["q", "chosen", "home", "from", "to"];
 /// Rounds every number of a report value by the unit its field name ends in: lengths (`_m`) to
 /// 0.1 mm, degrees to 0.01, radians and joint configurations to 1e-4 rad, times (`_s`) to 1 ms,
 /// torques and efforts to 0.01 N m, cross-check disagreements to 1e-9; everything else to 4
-/// significant digits, and to 0 below [`NOISE`]. Negative zero becomes zero; redacted keys are
-/// removed.
+/// significant digits, and to 0 below 1e-9 (`NOISE`). Negative zero becomes zero; redacted
+/// keys are removed.
 pub fn round_value(value: &mut Value, key: &str) {
     match value {
         Value::Number(number) if number.is_f64() => {
