@@ -286,10 +286,9 @@ impl SphericalWrist {
         let mut out = Vec::with_capacity(4);
         match decoupled {
             Decoupled::Shoulder(relation) => {
-                let (kept, other) = (|p: &Vector3<f64>| relation.kept(l1, p), |p: &Vector3<f64>| relation.other(l1, p));
-                for t3 in trig_roots(|t| kept(&l3.turn(t, c)), kept(target))? {
+                for t3 in trig_roots(|t| relation.kept(l1, &l3.turn(t, c)), relation.kept(l1, target))? {
                     let moved = l3.turn(t3, c);
-                    for t2 in trig_roots(|t| other(&l2.turn(t, &moved)), other(target))? {
+                    for t2 in trig_roots(|t| relation.other(l1, &l2.turn(t, &moved)), relation.other(l1, target))? {
                         let point = l2.turn(t2, &moved);
                         let t1 = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
                         out.push([t1, t2, t3]);
@@ -297,11 +296,10 @@ impl SphericalWrist {
                 }
             }
             Decoupled::Elbow(relation) => {
-                let (kept, other) = (|p: &Vector3<f64>| relation.kept(l2, p), |p: &Vector3<f64>| relation.other(l2, p));
                 // Joint 1 turned back, the target is where joints 2 and 3 must put the centre.
-                for t1 in trig_roots(|t| kept(&l1.turn(-t, target)), kept(c))? {
+                for t1 in trig_roots(|t| relation.kept(l2, &l1.turn(-t, target)), relation.kept(l2, c))? {
                     let goal = l1.turn(-t1, target);
-                    for t3 in trig_roots(|t| other(&l3.turn(t, c)), other(&goal))? {
+                    for t3 in trig_roots(|t| relation.other(l2, &l3.turn(t, c)), relation.other(l2, &goal))? {
                         let point = l3.turn(t3, c);
                         let t2 = angle_about(&l2.axis, &(point - l2.point), &(goal - l2.point), ON_AXIS)?;
                         out.push([t1, t2, t3]);
