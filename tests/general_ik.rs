@@ -168,6 +168,49 @@ fn spherical_wrist_designs() {
     }
 }
 
+/// A wrist spherical only to within rounding, as in real arms' files (MuJoCo Menagerie's Doosan
+/// M1013 turns its last frames by quaternions of 0.707035 and 0.707179, so its last axes pass
+/// 25 um apart): the wrist flip's two solutions share joint 3's angle to within rounding, so the
+/// elimination's roots come in pairs one to rounding. Each such pair is two solutions, not a
+/// double root: every pose is resolved, with as many solutions as the exactly spherical arm's
+/// closed form gives there.
+#[test]
+fn a_wrist_spherical_to_within_rounding_is_resolved() {
+    use proving_ground::ik::wrist::SphericalWrist;
+    let rows = [
+        [0.445, 0.15, -PI / 2.0],
+        [0.0, 0.7, 0.0],
+        [0.0, 0.115, -PI / 2.0],
+        [0.795, 0.0, PI / 2.0],
+        [0.0, 0.0, -PI / 2.0],
+        [0.085, 0.0, 0.0],
+    ];
+    let wrist = SphericalWrist::detect(&common::dh_design("exact", &rows)).expect("a spherical wrist");
+    for offset in [1e-9, 1e-7] {
+        let mut near = rows;
+        near[4][0] = offset;
+        let model = common::dh_design(&format!("wrist-off-by-{offset}"), &near);
+        let solver = General6R::new(&model).expect("the elimination holds");
+        let (total, unresolved) = check_poses(&model.name, &model, 3, |goal| {
+            let found = solver.solve(goal);
+            (found.configurations, found.resolved)
+        });
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let exact: usize = (0..40)
+            .map(|_| {
+                let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+                wrist.solve(&model.tool_pose(&q)).configurations.len()
+            })
+            .sum();
+        println!(
+            "{}: {total} solutions ({exact} exactly spherical), {unresolved} poses unresolved",
+            model.name
+        );
+        assert_eq!(unresolved, 0, "{}: poses left unresolved", model.name);
+        assert_eq!(total, exact, "{}: not the spherical wrist's count", model.name);
+    }
+}
+
 /// A dense multi-start numeric search (2000 starts within the limits) finds no solution the
 /// all-solutions method missed, on random general arms, the shipped free design, the
 /// spherical-wrist designs and catalog arms of the other methods.

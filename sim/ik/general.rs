@@ -113,6 +113,18 @@ const PART_CHECKS: Checks = Checks {
 };
 /// Ratio of smallest to largest singular value below which a matrix counts as singular.
 const SINGULAR: f64 = 1e-10;
+/// Ratio of the second smallest to the largest singular value at or below which a root's
+/// matrix has two null vectors (two solutions share joint 3's angle): a double root's second
+/// is of the matrix's own size, two roots one to rounding (1e-7) leave it about that small.
+const SHARED_NULL: f64 = 1e-5;
+/// Pose error (as [`CANDIDATE`]) within which a configuration at a shared root is one of its
+/// solutions, polished by Newton steps to within [`CANDIDATE`]: the null vectors of a matrix
+/// with two are only as precise as the two roots are one (measured: 5e-6 on a wrist spherical
+/// to 25 um, a pair 8e-8 apart).
+const SHARED_MISS: f64 = 1e-4;
+/// Joint difference (rad) beyond which the two configurations at a shared root are distinct:
+/// far beyond what their polish moves them, so each polishes to its own.
+const SHARED_DISTINCT: f64 = 1e-2;
 
 /// The first joints (0-based) of the three consecutive joints an elimination keeps, in the
 /// order tried: 2 is Raghavan and Roth's own (joints 3 to 5 kept, joint 6's line carried, joints
@@ -1051,8 +1063,29 @@ impl Elimination {
         let Some((offset3, roots, [c, b, a])) = self.roots(&system) else {
             return out;
         };
-        out.resolved = !nearly_repeated(&roots);
-        for x3 in roots {
+        out.resolved = true;
+        let partners = repeated_partners(&roots);
+        // Second roots of pairs resolved with their first.
+        let mut paired = vec![false; roots.len()];
+        for (i, &x3) in roots.iter().enumerate() {
+            match partners[i] {
+                Partner::Alone => {}
+                Partner::Second if paired[i] => continue,
+                Partner::Second => {}
+                Partner::First(j) => {
+                    // Two roots one to rounding: two solutions that share joint 3's angle (a
+                    // wrist that is spherical to within the rounding of the arm's file flips
+                    // about it) or a double root (a fold), told apart by the matrix's null space.
+                    let shared = 0.5 * (x3 + roots[j]);
+                    if let Some(pair) = self.sharing_pair(&system, [&c, &b, &a], offset3, shared, rotation, translation) {
+                        out.configurations.extend(pair);
+                        paired[j] = true;
+                        continue;
+                    }
+                    out.resolved = false;
+                }
+                Partner::Many => out.resolved = false,
+            }
             let t3 = offset3 + 2.0 * x3.atan();
             let matrix = c + b * x3 + a * (x3 * x3);
             // The null vector by inverse iteration (one LU); where its configuration misses the
@@ -1065,14 +1098,91 @@ impl Elimination {
                     let (smallest, _) = svd.singular_values.argmin();
                     let v_t = svd.v_t?;
                     let null: [f64; 12] = std::array::from_fn(|i| v_t[(smallest, i)]);
+                    // Ill-conditioned: two roots nearly one (a wrist spherical to within
+                    // microns), whose null vectors mix.
                     self.configuration(&system, &null, t3, rotation)
+                        .map(|q| self.chain.newton(q, rotation, translation))
                 });
             match found {
                 Some(q) => out.configurations.push(q),
                 None => out.resolved = false,
             }
         }
+        // Two roots that gave one solution leave the other unlisted.
+        let configurations = &out.configurations;
+        let repeated = configurations.iter().enumerate().any(|(i, a)| {
+            configurations[i + 1..]
+                .iter()
+                .any(|b| a.iter().zip(b).all(|(x, y)| super::wrap_angle(x - y).abs() <= SHARED_DISTINCT))
+        });
+        if repeated {
+            out.resolved = false;
+        }
         out
+    }
+
+    /// The two configurations at a root `x3` of the determinant shared by two solutions: its
+    /// matrix has two null vectors, and the two combinations of them that are monomial vectors
+    /// of joints 4 and 5 (the largest of the 2 x 2 minors that vanish on one, a quadratic in
+    /// the combination) give them, each verified against the pose and the two distinct. `None`
+    /// where the null space is one vector (a double root: the pose is on a fold) or the pair
+    /// does not verify.
+    fn sharing_pair(
+        &self,
+        system: &System,
+        [c, b, a]: [&Matrix12; 3],
+        offset3: f64,
+        x3: f64,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+    ) -> Option<[[f64; 6]; 2]> {
+        let matrix = c + b * x3 + a * (x3 * x3);
+        let svd = matrix.svd(false, true);
+        let v_t = svd.v_t?;
+        let values = &svd.singular_values;
+        let mut order: [usize; 12] = std::array::from_fn(|i| i);
+        order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
+        if !(values[order[1]] <= SHARED_NULL * values[order[11]]) {
+            return None;
+        }
+        let null = |k: usize| -> [f64; 12] { std::array::from_fn(|i| v_t[(order[k], i)]) };
+        let (p, r) = (null(0), null(1));
+        let (form, _) = monomial_minors(&p, &r)
+            .into_iter()
+            .map(|form| {
+                let size = form.iter().map(|f| f.abs()).sum::<f64>();
+                (form, size)
+            })
+            .max_by(|x, y| x.1.total_cmp(&y.1))?;
+        let [quadratic, linear, constant] = form;
+        // The combination `cos p + sin r` as a ratio, about the larger end coefficient.
+        let flipped = quadratic.abs() < constant.abs();
+        let (lead, last) = if flipped { (constant, quadratic) } else { (quadratic, constant) };
+        let discriminant = linear * linear - 4.0 * lead * last;
+        if !(lead != 0.0 && discriminant >= 0.0) {
+            return None;
+        }
+        let root = discriminant.sqrt();
+        let t3 = offset3 + 2.0 * x3.atan();
+        let mut pair = [[0.0; 6]; 2];
+        for (slot, sign) in pair.iter_mut().zip([-1.0, 1.0]) {
+            let ratio = (-linear + sign * root) / (2.0 * lead);
+            let (weight_p, weight_r) = if flipped { (1.0, ratio) } else { (ratio, 1.0) };
+            let combined: [f64; 12] = std::array::from_fn(|i| weight_p * p[i] + weight_r * r[i]);
+            let q = self.configuration(system, &combined, t3, rotation)?;
+            if !(self.chain.misses(&q, rotation, translation) < SHARED_MISS) {
+                return None;
+            }
+            *slot = self.chain.newton(q, rotation, translation);
+            if !(self.chain.misses(slot, rotation, translation) < CANDIDATE) {
+                return None;
+            }
+        }
+        let distinct = pair[0]
+            .iter()
+            .zip(&pair[1])
+            .any(|(x, y)| super::wrap_angle(x - y).abs() > SHARED_DISTINCT);
+        distinct.then_some(pair)
     }
 
     /// The offset of joint 3's tangent used and the near-real roots of `system`'s determinant;
@@ -1300,11 +1410,59 @@ fn angle_distance(a: &(f64, f64), b: &(f64, f64)) -> f64 {
 
 /// Whether two roots are one within rounding: two solutions sharing joint 3's angle (the null
 /// vector would mix them) or a double root.
-fn nearly_repeated(roots: &[f64]) -> bool {
-    roots
-        .iter()
-        .enumerate()
-        .any(|(i, a)| roots[i + 1..].iter().any(|b| (a - b).abs() <= 1e-7 * (1.0 + a.abs())))
+fn nearly_repeated(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-7 * (1.0 + a.abs())
+}
+
+/// A root's place among the roots one to rounding ([`nearly_repeated`]) of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Partner {
+    /// No other root is one with it.
+    Alone,
+    /// The first of a pair; the index of the second.
+    First(usize),
+    /// The second of a pair.
+    Second,
+    /// One of three or more.
+    Many,
+}
+
+/// Each root's [`Partner`].
+fn repeated_partners(roots: &[f64]) -> Vec<Partner> {
+    let mut partners = vec![Partner::Alone; roots.len()];
+    for (i, &a) in roots.iter().enumerate() {
+        let others: Vec<usize> = (0..roots.len()).filter(|&j| j != i && nearly_repeated(a, roots[j])).collect();
+        partners[i] = match others.as_slice() {
+            [] => Partner::Alone,
+            [j] if *j > i && (0..roots.len()).all(|k| k == i || k == *j || !nearly_repeated(roots[*j], roots[k])) => Partner::First(*j),
+            [j] if *j < i && (0..roots.len()).all(|k| k == i || k == *j || !nearly_repeated(roots[*j], roots[k])) => Partner::Second,
+            _ => Partner::Many,
+        };
+    }
+    partners
+}
+
+/// The quadratic forms `[cos^2, cos sin, sin^2]` that the 2 x 2 minors of the monomial grid
+/// (`x4^a x5^b` at `a * 3 + b`) take on the combinations `cos p + sin r`: all vanish on a
+/// monomial vector.
+fn monomial_minors(p: &[f64; 12], r: &[f64; 12]) -> Vec<[f64; 3]> {
+    let mut forms = Vec::with_capacity(18);
+    for a0 in 0..4 {
+        for a1 in a0 + 1..4 {
+            for b0 in 0..3 {
+                for b1 in b0 + 1..3 {
+                    // v[a0 b0] v[a1 b1] - v[a0 b1] v[a1 b0]
+                    let (i, j, k, l) = (a0 * 3 + b0, a1 * 3 + b1, a0 * 3 + b1, a1 * 3 + b0);
+                    forms.push([
+                        p[i] * p[j] - p[k] * p[l],
+                        p[i] * r[j] + r[i] * p[j] - p[k] * r[l] - r[k] * p[l],
+                        r[i] * r[j] - r[k] * r[l],
+                    ]);
+                }
+            }
+        }
+    }
+    forms
 }
 
 /// The null vector of a matrix singular to rounding, by two steps of inverse iteration (one LU);

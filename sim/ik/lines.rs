@@ -79,6 +79,42 @@ impl Chain {
         }
     }
 
+    /// `q` after Newton steps toward the pose (`rotation`, `translation`): the Jacobian by
+    /// central differences, five steps at most, each kept only where it lowers the miss.
+    pub(crate) fn newton(&self, mut q: [f64; 6], rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> [f64; 6] {
+        const STEP: f64 = 1e-6;
+        let error = |q: &[f64; 6]| -> nalgebra::Vector6<f64> {
+            let (r, t) = self.forward(q);
+            let turn = rotation * r.transpose();
+            let about = 0.5
+                * Vector3::new(
+                    turn[(2, 1)] - turn[(1, 2)],
+                    turn[(0, 2)] - turn[(2, 0)],
+                    turn[(1, 0)] - turn[(0, 1)],
+                );
+            let position = translation - t;
+            nalgebra::Vector6::new(position.x, position.y, position.z, about.x, about.y, about.z)
+        };
+        for _ in 0..5 {
+            let e = error(&q);
+            let jacobian = nalgebra::Matrix6::from_fn(|row, column| {
+                let (mut ahead, mut behind) = (q, q);
+                ahead[column] += STEP;
+                behind[column] -= STEP;
+                (error(&behind)[row] - error(&ahead)[row]) / (2.0 * STEP)
+            });
+            let Some(step) = jacobian.lu().solve(&e) else {
+                break;
+            };
+            let next: [f64; 6] = std::array::from_fn(|i| q[i] + step[i]);
+            if !(self.misses(&next, rotation, translation) < self.misses(&q, rotation, translation)) {
+                break;
+            }
+            q = next;
+        }
+        q
+    }
+
     /// Joint `joint`'s angle (0-based) given the other five in `q` and the goal rotation.
     pub(crate) fn angle_of(&self, joint: usize, q: &[f64; 6], goal: &Matrix3<f64>) -> f64 {
         let mut before = Matrix3::identity();
