@@ -1142,7 +1142,9 @@ impl Elimination {
         let values = &svd.singular_values;
         let mut order: [usize; 12] = std::array::from_fn(|i| i);
         order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
-        if !(values[order[1]] <= SHARED_NULL * values[order[11]]) {
+        // False for NaN too.
+        let two_null = values[order[1]] <= SHARED_NULL * values[order[11]];
+        if !two_null {
             return None;
         }
         let null = |k: usize| -> [f64; 12] { std::array::from_fn(|i| v_t[(order[k], i)]) };
@@ -1170,11 +1172,12 @@ impl Elimination {
             let (weight_p, weight_r) = if flipped { (1.0, ratio) } else { (ratio, 1.0) };
             let combined: [f64; 12] = std::array::from_fn(|i| weight_p * p[i] + weight_r * r[i]);
             let q = self.configuration(system, &combined, t3, rotation)?;
-            if !(self.chain.misses(&q, rotation, translation) < SHARED_MISS) {
+            // A miss is never NaN (infinite instead).
+            if self.chain.misses(&q, rotation, translation) >= SHARED_MISS {
                 return None;
             }
             *slot = self.chain.newton(q, rotation, translation);
-            if !(self.chain.misses(slot, rotation, translation) < CANDIDATE) {
+            if self.chain.misses(slot, rotation, translation) >= CANDIDATE {
                 return None;
             }
         }

@@ -107,7 +107,8 @@ impl Chain {
                 break;
             };
             let next: [f64; 6] = std::array::from_fn(|i| q[i] + step[i]);
-            if !(self.misses(&next, rotation, translation) < self.misses(&q, rotation, translation)) {
+            // A miss is never NaN (infinite instead).
+            if self.misses(&next, rotation, translation) >= self.misses(&q, rotation, translation) {
                 break;
             }
             q = next;
