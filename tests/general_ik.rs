@@ -170,14 +170,15 @@ fn spherical_wrist_designs() {
 
 /// A wrist spherical only to within rounding, as in real arms' files (MuJoCo Menagerie's Doosan
 /// M1013 turns its last frames by quaternions of 0.707035 and 0.707179, so its last axes pass
-/// 25 um apart): the wrist flip's two solutions share joint 3's angle to within rounding, so the
-/// elimination's roots come in pairs one to rounding. Each such pair is two solutions, not a
-/// double root: every pose is resolved, with as many solutions as the exactly spherical arm's
-/// closed form gives there.
+/// 25 um apart): the wrist flip's two solutions share joints 1 to 3 to within microns, so the
+/// elimination's roots come in pairs a rounding's split apart at some poses. Such a pair is two
+/// solutions, not a double root: of 2 000 random poses at most 1 % stay unresolved (68 did
+/// before the pairs were resolved), no resolved pose lists fewer solutions than the exactly
+/// spherical arm's closed form, and every one listed reaches its pose.
 #[test]
 fn a_wrist_spherical_to_within_rounding_is_resolved() {
     use proving_ground::ik::wrist::SphericalWrist;
-    let rows = [
+    let mut rows = [
         [0.445, 0.15, -PI / 2.0],
         [0.0, 0.7, 0.0],
         [0.0, 0.115, -PI / 2.0],
@@ -186,29 +187,32 @@ fn a_wrist_spherical_to_within_rounding_is_resolved() {
         [0.085, 0.0, 0.0],
     ];
     let wrist = SphericalWrist::detect(&common::dh_design("exact", &rows)).expect("a spherical wrist");
-    for offset in [1e-9, 1e-7] {
-        let mut near = rows;
-        near[4][0] = offset;
-        let model = common::dh_design(&format!("wrist-off-by-{offset}"), &near);
-        let solver = General6R::new(&model).expect("the elimination holds");
-        let (total, unresolved) = check_poses(&model.name, &model, 3, |goal| {
-            let found = solver.solve(goal);
-            (found.configurations, found.resolved)
-        });
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let exact: usize = (0..40)
-            .map(|_| {
-                let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
-                wrist.solve(&model.tool_pose(&q)).configurations.len()
-            })
-            .sum();
-        println!(
-            "{}: {total} solutions ({exact} exactly spherical), {unresolved} poses unresolved",
-            model.name
+    rows[4][0] = 2.5e-5;
+    let model = common::dh_design("wrist-25-um-off", &rows);
+    let solver = General6R::new(&model).expect("the elimination holds");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let (mut unresolved, mut listed, mut spherical) = (0, 0, 0);
+    for _ in 0..2000 {
+        let q: [f64; 6] = std::array::from_fn(|_| rng.random_range(-PI..PI));
+        let goal = model.tool_pose(&q);
+        let found = solver.solve(&goal);
+        if !found.resolved {
+            unresolved += 1;
+            continue;
+        }
+        let exact = wrist.solve(&goal).configurations.len();
+        assert!(
+            found.configurations.len() >= exact,
+            "{} solutions, the spherical arm has {exact}",
+            found.configurations.len()
         );
-        assert_eq!(unresolved, 0, "{}: poses left unresolved", model.name);
-        assert_eq!(total, exact, "{}: not the spherical wrist's count", model.name);
+        let worst = found.configurations.iter().map(|c| fk_error(&model, c, &goal)).fold(0.0, f64::max);
+        assert!(worst < 1e-5, "a solution misses the pose by {worst}");
+        listed += found.configurations.len();
+        spherical += exact;
     }
+    println!("{unresolved} of 2000 poses unresolved; {listed} solutions listed ({spherical} exactly spherical)");
+    assert!(unresolved <= 20, "{unresolved} of 2000 poses unresolved");
 }
 
 /// A dense multi-start numeric search (2000 starts within the limits) finds no solution the

@@ -117,14 +117,17 @@ const SINGULAR: f64 = 1e-10;
 /// matrix has two null vectors (two solutions share joint 3's angle): a double root's second
 /// is of the matrix's own size, two roots one to rounding (1e-7) leave it about that small.
 const SHARED_NULL: f64 = 1e-5;
-/// Pose error (as [`CANDIDATE`]) within which a configuration at a shared root is one of its
-/// solutions, polished by Newton steps to within [`CANDIDATE`]: the null vectors of a matrix
-/// with two are only as precise as the two roots are one (measured: 5e-6 on a wrist spherical
-/// to 25 um, a pair 8e-8 apart).
-const SHARED_MISS: f64 = 1e-4;
-/// Joint difference (rad) beyond which the two configurations at a shared root are distinct:
-/// far beyond what their polish moves them, so each polishes to its own.
-const SHARED_DISTINCT: f64 = 1e-2;
+/// Pose error (as [`CANDIDATE`]) within which a configuration at a shared root is polished by
+/// Newton steps, to within [`CANDIDATE`] or no pair: the null vectors of a matrix with two are
+/// only as precise as the two roots are one (measured on a wrist spherical to 25 um: 5e-6 for
+/// a pair 8e-8 apart, 1.5e-4 for one 1e-7 apart).
+const SHARED_MISS: f64 = 1e-2;
+/// The 2 x 2 minors, the largest first, whose combinations a shared root's pair is sought in.
+const SHARED_FORMS: usize = 6;
+/// Joint difference (rad) within which two configurations are one solution: what the pipeline
+/// merges as copies (`IkOptions::distinct_tolerance`'s default), so two roots never stand for
+/// one listed solution.
+const SHARED_DISTINCT: f64 = 1e-3;
 
 /// The first joints (0-based) of the three consecutive joints an elimination keeps, in the
 /// order tried: 2 is Raghavan and Roth's own (joints 3 to 5 kept, joint 6's line carried, joints
@@ -950,8 +953,10 @@ impl Elimination {
     }
 
     /// Whether the elimination holds for this chain at generic poses: the eliminated products
-    /// independent, the determinant not identically zero, and each root resolved into one
-    /// configuration that reaches the pose, the probe's own among them. Special geometry can
+    /// independent, the determinant not identically zero, no two roots one to rounding (a
+    /// spherical wrist's flip shares joints 1 to 3: an elimination keeping joints 4 to 6 splits
+    /// the pair), and each root resolved into one configuration that reaches the pose, the
+    /// probe's own among them. Special geometry can
     /// pass the first two and still fail the last (the null vector leaves a kept joint free, as
     /// where the carried line meets the last kept axis); the probes catch it.
     fn regular(&self) -> bool {
@@ -964,10 +969,10 @@ impl Elimination {
             if sigma.min() <= SINGULAR * sigma.max() {
                 return false;
             }
-            let found = self.solve(&rotation, &translation);
+            let (found, shared) = self.solve_sharing(&rotation, &translation);
             let reaches = |q: &[f64; 6]| self.chain.misses(q, &rotation, &translation) < CANDIDATE;
             let own = |q: &[f64; 6]| q.iter().zip(probe).all(|(a, b)| super::wrap_angle(a - b).abs() < 1e-6);
-            found.resolved && found.configurations.iter().all(reaches) && found.configurations.iter().any(own)
+            !shared && found.resolved && found.configurations.iter().all(reaches) && found.configurations.iter().any(own)
         })
     }
 
@@ -1056,17 +1061,28 @@ impl Elimination {
 
     /// Every configuration of the chain at pose (`rotation`, `translation`).
     fn solve(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> GeneralSolutions {
+        self.solve_sharing(rotation, translation).0
+    }
+
+    /// [`Self::solve`], and whether two roots were one to rounding (two solutions sharing joint
+    /// 3's angle, or a double root): an elimination whose roots pair up so at generic poses is
+    /// a poor choice where another exists ([`Self::regular`]).
+    fn solve_sharing(&self, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> (GeneralSolutions, bool) {
         let mut out = GeneralSolutions::default();
         let Some(system) = self.system(rotation, translation) else {
-            return out;
+            return (out, false);
         };
         let Some((offset3, roots, [c, b, a])) = self.roots(&system) else {
-            return out;
+            return (out, false);
         };
         out.resolved = true;
         let partners = repeated_partners(&roots);
+        let mut shared = partners.iter().any(|p| *p != Partner::Alone);
         // Second roots of pairs resolved with their first.
         let mut paired = vec![false; roots.len()];
+        // The root each configuration came from.
+        let mut sources: Vec<f64> = Vec::with_capacity(roots.len());
+        let quadratic = [&c, &b, &a];
         for (i, &x3) in roots.iter().enumerate() {
             match partners[i] {
                 Partner::Alone => {}
@@ -1076,9 +1092,10 @@ impl Elimination {
                     // Two roots one to rounding: two solutions that share joint 3's angle (a
                     // wrist that is spherical to within the rounding of the arm's file flips
                     // about it) or a double root (a fold), told apart by the matrix's null space.
-                    let shared = 0.5 * (x3 + roots[j]);
-                    if let Some(pair) = self.sharing_pair(&system, [&c, &b, &a], offset3, shared, rotation, translation) {
+                    let between = 0.5 * (x3 + roots[j]);
+                    if let Some(pair) = self.sharing_pair(&system, quadratic, offset3, between, rotation, translation) {
                         out.configurations.extend(pair);
+                        sources.extend([between, between]);
                         paired[j] = true;
                         continue;
                     }
@@ -1104,29 +1121,49 @@ impl Elimination {
                         .map(|q| self.chain.newton(q, rotation, translation))
                 });
             match found {
-                Some(q) => out.configurations.push(q),
+                Some(q) => {
+                    out.configurations.push(q);
+                    sources.push(x3);
+                }
                 None => out.resolved = false,
             }
         }
-        // Two roots that gave one solution leave the other unlisted.
-        let configurations = &out.configurations;
-        let repeated = configurations.iter().enumerate().any(|(i, a)| {
-            configurations[i + 1..]
-                .iter()
-                .any(|b| a.iter().zip(b).all(|(x, y)| super::wrap_angle(x - y).abs() <= SHARED_DISTINCT))
-        });
+        // Two roots that gave one solution: nearer than rounding's split, their matrix may still
+        // hold the pair; else the other stays unlisted.
+        let configurations = &mut out.configurations;
+        for i in 0..configurations.len() {
+            for j in i + 1..configurations.len() {
+                if !one_configuration(&configurations[i], &configurations[j]) {
+                    continue;
+                }
+                shared = true;
+                let between = 0.5 * (sources[i] + sources[j]);
+                match self.sharing_pair(&system, quadratic, offset3, between, rotation, translation) {
+                    Some([first, second]) => {
+                        configurations[i] = first;
+                        configurations[j] = second;
+                    }
+                    None => out.resolved = false,
+                }
+            }
+        }
+        // A pair that came out as a configuration already listed.
+        let repeated = configurations
+            .iter()
+            .enumerate()
+            .any(|(i, a)| configurations[i + 1..].iter().any(|b| one_configuration(a, b)));
         if repeated {
             out.resolved = false;
         }
-        out
+        (out, shared)
     }
 
     /// The two configurations at a root `x3` of the determinant shared by two solutions: its
     /// matrix has two null vectors, and the two combinations of them that are monomial vectors
-    /// of joints 4 and 5 (the largest of the 2 x 2 minors that vanish on one, a quadratic in
-    /// the combination) give them, each verified against the pose and the two distinct. `None`
-    /// where the null space is one vector (a double root: the pose is on a fold) or the pair
-    /// does not verify.
+    /// of joints 4 and 5 (where the 2 x 2 minors that vanish on one vanish: a quadratic in the
+    /// combination each, the largest [`SHARED_FORMS`] tried) give them, each Newton-polished,
+    /// verified against the pose and the two distinct. `None` where the null space is one
+    /// vector (a double root: the pose is on a fold) or no two verify.
     fn sharing_pair(
         &self,
         system: &System,
@@ -1149,43 +1186,46 @@ impl Elimination {
         }
         let null = |k: usize| -> [f64; 12] { std::array::from_fn(|i| v_t[(order[k], i)]) };
         let (p, r) = (null(0), null(1));
-        let (form, _) = monomial_minors(&p, &r)
+        let mut forms: Vec<([f64; 3], f64)> = monomial_minors(&p, &r)
             .into_iter()
-            .map(|form| {
-                let size = form.iter().map(|f| f.abs()).sum::<f64>();
-                (form, size)
-            })
-            .max_by(|x, y| x.1.total_cmp(&y.1))?;
-        let [quadratic, linear, constant] = form;
-        // The combination `cos p + sin r` as a ratio, about the larger end coefficient.
-        let flipped = quadratic.abs() < constant.abs();
-        let (lead, last) = if flipped { (constant, quadratic) } else { (quadratic, constant) };
-        let discriminant = linear * linear - 4.0 * lead * last;
-        if !(lead != 0.0 && discriminant >= 0.0) {
-            return None;
-        }
-        let root = discriminant.sqrt();
+            .map(|form| (form, form.iter().map(|f| f.abs()).sum::<f64>()))
+            .collect();
+        forms.sort_by(|x, y| y.1.total_cmp(&x.1));
         let t3 = offset3 + 2.0 * x3.atan();
-        let mut pair = [[0.0; 6]; 2];
-        for (slot, sign) in pair.iter_mut().zip([-1.0, 1.0]) {
-            let ratio = (-linear + sign * root) / (2.0 * lead);
-            let (weight_p, weight_r) = if flipped { (1.0, ratio) } else { (ratio, 1.0) };
-            let combined: [f64; 12] = std::array::from_fn(|i| weight_p * p[i] + weight_r * r[i]);
-            let q = self.configuration(system, &combined, t3, rotation)?;
-            // A miss is never NaN (infinite instead).
-            if self.chain.misses(&q, rotation, translation) >= SHARED_MISS {
-                return None;
+        let mut found: Vec<[f64; 6]> = Vec::with_capacity(2);
+        // The largest minors first: one that vanishes on the whole null space (the pair shares
+        // more than joint 3's angle) or whose roots are complex to rounding gives nothing.
+        for ([quadratic, linear, constant], _) in forms.into_iter().take(SHARED_FORMS) {
+            // The combination `cos p + sin r` as a ratio, about the larger end coefficient.
+            let flipped = quadratic.abs() < constant.abs();
+            let (lead, last) = if flipped { (constant, quadratic) } else { (quadratic, constant) };
+            let discriminant = linear * linear - 4.0 * lead * last;
+            if !(lead != 0.0 && discriminant >= 0.0) {
+                continue;
             }
-            *slot = self.chain.newton(q, rotation, translation);
-            if self.chain.misses(slot, rotation, translation) >= CANDIDATE {
-                return None;
+            let root = discriminant.sqrt();
+            for sign in [-1.0, 1.0] {
+                let ratio = (-linear + sign * root) / (2.0 * lead);
+                let (weight_p, weight_r) = if flipped { (1.0, ratio) } else { (ratio, 1.0) };
+                let combined: [f64; 12] = std::array::from_fn(|i| weight_p * p[i] + weight_r * r[i]);
+                let Some(q) = self.configuration(system, &combined, t3, rotation) else {
+                    continue;
+                };
+                // A miss is never NaN (infinite instead).
+                if self.chain.misses(&q, rotation, translation) >= SHARED_MISS {
+                    continue;
+                }
+                let q = self.chain.newton(q, rotation, translation);
+                let new = !found.iter().any(|f| one_configuration(f, &q));
+                if self.chain.misses(&q, rotation, translation) < CANDIDATE && new {
+                    found.push(q);
+                }
+                if let [a, b] = found[..] {
+                    return Some([a, b]);
+                }
             }
         }
-        let distinct = pair[0]
-            .iter()
-            .zip(&pair[1])
-            .any(|(x, y)| super::wrap_angle(x - y).abs() > SHARED_DISTINCT);
-        distinct.then_some(pair)
+        None
     }
 
     /// The offset of joint 3's tangent used and the near-real roots of `system`'s determinant;
@@ -1415,6 +1455,16 @@ fn angle_distance(a: &(f64, f64), b: &(f64, f64)) -> f64 {
 /// vector would mix them) or a double root.
 fn nearly_repeated(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-7 * (1.0 + a.abs())
+}
+
+/// Whether two configurations (angles in (-pi, pi]) are one solution: no joint apart by more
+/// than [`SHARED_DISTINCT`], the way round. Every solve compares its configurations pairwise:
+/// no `fmod`, and the first joint apart ends it.
+fn one_configuration(a: &[f64; 6], b: &[f64; 6]) -> bool {
+    a.iter().zip(b).all(|(x, y)| {
+        let apart = (x - y).abs();
+        apart <= SHARED_DISTINCT || apart >= std::f64::consts::TAU - SHARED_DISTINCT
+    })
 }
 
 /// A root's place among the roots one to rounding ([`nearly_repeated`]) of it.

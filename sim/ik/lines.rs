@@ -80,7 +80,8 @@ impl Chain {
     }
 
     /// `q` after Newton steps toward the pose (`rotation`, `translation`): the Jacobian by
-    /// central differences, five steps at most, each kept only where it lowers the miss.
+    /// central differences, five steps at most, each kept only where it lowers the miss; angles
+    /// in (-pi, pi].
     pub(crate) fn newton(&self, mut q: [f64; 6], rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> [f64; 6] {
         const STEP: f64 = 1e-6;
         let error = |q: &[f64; 6]| -> nalgebra::Vector6<f64> {
@@ -113,7 +114,7 @@ impl Chain {
             }
             q = next;
         }
-        q
+        q.map(super::wrap_angle)
     }
 
     /// Joint `joint`'s angle (0-based) given the other five in `q` and the goal rotation.
