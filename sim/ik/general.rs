@@ -1454,7 +1454,7 @@ fn angle_distance(a: &(f64, f64), b: &(f64, f64)) -> f64 {
 /// Whether two roots are one within rounding: two solutions sharing joint 3's angle (the null
 /// vector would mix them) or a double root.
 fn nearly_repeated(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-7 * (1.0 + a.abs())
+    (a - b).abs() <= 1e-7 * (1.0 + a.abs().max(b.abs()))
 }
 
 /// Whether two configurations (angles in (-pi, pi]) are one solution: no joint apart by more
@@ -1482,17 +1482,27 @@ enum Partner {
 
 /// Each root's [`Partner`].
 fn repeated_partners(roots: &[f64]) -> Vec<Partner> {
-    let mut partners = vec![Partner::Alone; roots.len()];
-    for (i, &a) in roots.iter().enumerate() {
-        let others: Vec<usize> = (0..roots.len()).filter(|&j| j != i && nearly_repeated(a, roots[j])).collect();
-        partners[i] = match others.as_slice() {
-            [] => Partner::Alone,
-            [j] if *j > i && (0..roots.len()).all(|k| k == i || k == *j || !nearly_repeated(roots[*j], roots[k])) => Partner::First(*j),
-            [j] if *j < i && (0..roots.len()).all(|k| k == i || k == *j || !nearly_repeated(roots[*j], roots[k])) => Partner::Second,
+    // Per root: how many others are one with it, and the last of them.
+    let near: Vec<(usize, usize)> = roots
+        .iter()
+        .enumerate()
+        .map(|(i, &a)| {
+            roots
+                .iter()
+                .enumerate()
+                .filter(|&(j, &b)| j != i && nearly_repeated(a, b))
+                .fold((0, i), |(count, _), (j, _)| (count + 1, j))
+        })
+        .collect();
+    near.iter()
+        .enumerate()
+        .map(|(i, &(count, j))| match count {
+            0 => Partner::Alone,
+            1 if near[j].0 == 1 && j > i => Partner::First(j),
+            1 if near[j].0 == 1 => Partner::Second,
             _ => Partner::Many,
-        };
-    }
-    partners
+        })
+        .collect()
 }
 
 /// The quadratic forms `[cos^2, cos sin, sin^2]` that the 2 x 2 minors of the monomial grid
