@@ -98,12 +98,13 @@ impl Chain {
         };
         for _ in 0..5 {
             let e = error(&q);
-            let jacobian = nalgebra::Matrix6::from_fn(|row, column| {
+            let mut jacobian = nalgebra::Matrix6::zeros();
+            for column in 0..6 {
                 let (mut ahead, mut behind) = (q, q);
                 ahead[column] += STEP;
                 behind[column] -= STEP;
-                (error(&behind)[row] - error(&ahead)[row]) / (2.0 * STEP)
-            });
+                jacobian.set_column(column, &((error(&behind) - error(&ahead)) / (2.0 * STEP)));
+            }
             let Some(step) = jacobian.lu().solve(&e) else {
                 break;
             };
