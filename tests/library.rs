@@ -13,7 +13,8 @@ fn panda_srdf() -> std::path::PathBuf {
     repo().join("designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf")
 }
 
-/// The Panda with its SRDF, on a cluttered task, every goal judged `z_symmetric`, MuJoCo only.
+/// The Panda with its SRDF, on a cluttered task, every goal judged `z_symmetric`, MuJoCo only,
+/// small search and planner budgets.
 fn options() -> proving_ground::Options {
     let mut opts = proving_ground::Options {
         srdf: Some(panda_srdf()),
@@ -24,6 +25,9 @@ fn options() -> proving_ground::Options {
     };
     opts.validate.engines = "mujoco".parse::<Engines>().expect("an engine");
     opts.validate.ik.search_boxes = 2_000;
+    // A tenth of the default planner budget: the goal without a path otherwise spends minutes
+    // in the planner, and the comparison needs the option to take effect, not the search.
+    opts.validate.planner.budget = 2_000;
     opts
 }
 
@@ -40,7 +44,7 @@ fn validate_gives_the_cli_json_report_byte_for_byte() {
         .arg("--scenario")
         .arg(repo().join("scenarios/cluttered/task-00.json"))
         .args(["--tolerance", "z_symmetric", "--engines", "mujoco", "--mujoco-checks", "20"])
-        .args(["--search-boxes", "2000", "--quiet", "--json"])
+        .args(["--search-boxes", "2000", "--plan-budget", "2000", "--quiet", "--json"])
         .arg(&json)
         .output()
         .expect("runs");
@@ -59,6 +63,7 @@ fn validate_gives_the_cli_json_report_byte_for_byte() {
         "the SRDF's pairs are left out: {excluded:?}"
     );
     assert!(run.scenario.goals.iter().all(|g| g.tolerance == Tolerance::ZSymmetric));
+    assert_eq!(value["criteria"]["planner"]["budget"], 2000, "the planner's budget is the one asked for");
     assert!(report.inputs.kinematics_check.as_ref().is_some_and(|c| c.agree));
     let code = match run.outcome() {
         Outcome::Pass => 0,
