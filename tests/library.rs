@@ -63,7 +63,10 @@ fn validate_gives_the_cli_json_report_byte_for_byte() {
         "the SRDF's pairs are left out: {excluded:?}"
     );
     assert!(run.scenario.goals.iter().all(|g| g.tolerance == Tolerance::ZSymmetric));
-    assert_eq!(value["criteria"]["planner"]["budget"], 2000, "the planner's budget is the one asked for");
+    assert_eq!(
+        value["criteria"]["planner"]["budget"], 2000,
+        "the planner's budget is the one asked for"
+    );
     assert!(report.inputs.kinematics_check.as_ref().is_some_and(|c| c.agree));
     let code = match run.outcome() {
         Outcome::Pass => 0,

@@ -82,6 +82,21 @@ fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> Isometry3<f64> {
     )
 }
 
+/// `v` turned about z by the angle of sine `s` and cosine `c`.
+fn rz(s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+}
+
+/// `v` turned about x by a quarter turn.
+fn rx_half_pi(v: Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(v.x, -v.z, v.y)
+}
+
+/// `v` turned about x by a quarter turn back.
+fn rx_minus_half_pi(v: Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(v.x, v.z, -v.y)
+}
+
 /// Closest point of line `(p, u)` to line `(q, v)` (unit directions, not parallel).
 fn closest_on_first(p: &Vector3<f64>, u: &Vector3<f64>, q: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
     let w = p - q;
@@ -232,28 +247,58 @@ impl UrArm {
         if sine1.abs() > 1.0 + COSINE_SLACK {
             return out;
         }
+        // Every angle below comes with its sine and cosine from the geometry that fixed it, and
+        // the frames are turned as vectors: no `sin_cos` and no quaternion per branch (they
+        // were most of the closed form's time).
         let psi = centre.y.atan2(centre.x);
-        let lean = sine1.clamp(-1.0, 1.0).asin();
-        for theta1 in [psi + lean, psi + PI - lean] {
-            let (s1, c1) = theta1.sin_cos();
+        let (sin_psi, cos_psi) = if radius > 0.0 {
+            (centre.y / radius, centre.x / radius)
+        } else {
+            (0.0, 1.0)
+        };
+        let sin_lean = sine1.clamp(-1.0, 1.0);
+        let lean = sin_lean.asin();
+        let cos_lean = ((1.0 - sin_lean) * (1.0 + sin_lean)).sqrt();
+        let shoulders = [
+            (
+                psi + lean,
+                sin_psi * cos_lean + cos_psi * sin_lean,
+                cos_psi * cos_lean - sin_psi * sin_lean,
+            ),
+            (
+                psi + PI - lean,
+                cos_psi * sin_lean - sin_psi * cos_lean,
+                -(cos_psi * cos_lean + sin_psi * sin_lean),
+            ),
+        ];
+        let flange_rotation = rotation.matrix();
+        let flange_origin = flange.translation.vector;
+        for (theta1, s1, c1) in shoulders {
             let z1 = Vector3::new(s1, -c1, 0.0);
             let c5 = z6.dot(&z1).clamp(-1.0, 1.0);
-            let first_to_base = dh(theta1, 0.0, 0.0, FRAC_PI_2).inverse();
+            let across5 = ((1.0 - c5) * (1.0 + c5)).sqrt();
+            // A vector of the flange frame in DH frame 1 (`A1^-1`, `A1 = Rz(theta1) Rx(pi/2)`).
+            let in_first = |v: Vector3<f64>| rx_minus_half_pi(rz(-s1, c1, &v));
             for wrist in [1.0, -1.0] {
                 let theta5 = wrist * c5.acos();
-                let s5 = theta5.sin();
-                let theta6 = if s5.abs() < WRIST_SINGULAR {
+                let s5 = wrist * across5;
+                let (theta6, s6, c6) = if s5.abs() < WRIST_SINGULAR {
                     out.finite = false;
-                    0.0
+                    (0.0, 0.0, 1.0)
                 } else {
                     // z1 in frame 6: (c6 s5, -s6 s5, .).
                     let flip = s5.signum();
-                    (-z1.dot(&y6) * flip).atan2(z1.dot(&x6) * flip)
+                    let (y, x) = (-z1.dot(&y6) * flip, z1.dot(&x6) * flip);
+                    let length = (x * x + y * y).sqrt();
+                    (y.atan2(x), y / length, x / length)
                 };
-                let frame4 = flange * (dh(theta5, d5, 0.0, -FRAC_PI_2) * dh(theta6, 0.0, 0.0, 0.0)).inverse();
-                let in_first = first_to_base * frame4;
-                let (x, y) = (in_first.translation.x, in_first.translation.y);
-                let x4 = in_first.rotation * Vector3::x();
+                // Frame 6 to frame 4 is `(A5 A6)^-1`, `A5 = Rz(theta5) Tz(d5) Rx(-pi/2)`, `A6 =
+                // Rz(theta6)`: a vector of frame 4 in the flange's is `Rz(-theta6) Rx(pi/2)
+                // Rz(-theta5)` of it.
+                let to_flange = |v: Vector3<f64>| rz(-s6, c6, &rx_half_pi(rz(-s5, c5, &v)));
+                let x4 = in_first(flange_rotation * to_flange(Vector3::x()));
+                let origin4 = in_first(flange_origin - flange_rotation * to_flange(Vector3::new(0.0, 0.0, d5)));
+                let (x, y) = (origin4.x, origin4.y);
                 let sum = x4.y.atan2(x4.x);
                 let squared = x * x + y * y;
                 if squared.sqrt() < SHOULDER_SINGULAR_M {
@@ -263,9 +308,11 @@ impl UrArm {
                 if c3.abs() > 1.0 + COSINE_SLACK {
                     continue;
                 }
+                let c3 = c3.clamp(-1.0, 1.0);
+                let across3 = ((1.0 - c3) * (1.0 + c3)).sqrt();
                 for elbow in [1.0, -1.0] {
-                    let theta3 = elbow * c3.clamp(-1.0, 1.0).acos();
-                    let (s3, c3) = theta3.sin_cos();
+                    let theta3 = elbow * c3.acos();
+                    let s3 = elbow * across3;
                     let theta2 = y.atan2(x) - (a3 * s3).atan2(a2 + a3 * c3);
                     let theta4 = sum - theta2 - theta3;
                     let theta = [theta1, theta2, theta3, theta4, theta5, theta6];

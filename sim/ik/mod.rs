@@ -630,11 +630,13 @@ impl<'a> Ik<'a> {
             }
         }
         // The errors are all rounding: order by clearance (the best attempt first when none is
-        // free), else keep the branch order.
+        // free), else keep the branch order. Clearances are compared to the nanometre: a wrist
+        // flip's configurations are often equally clear (the closest pair is a link before the
+        // wrist), and which comes first must not follow the last bits of their arithmetic.
         found.sort_by(|a, b| {
             b.reached.cmp(&a.reached).then_with(|| {
-                let clearance = |s: &IkSolution| s.clearance.map_or(0.0, |c| c.exact_m);
-                clearance(b).total_cmp(&clearance(a))
+                let clearance = |s: &IkSolution| (s.clearance.map_or(0.0, |c| c.exact_m) * 1e9).round() as i64;
+                clearance(b).cmp(&clearance(a))
             })
         });
         let poses = found.len();

@@ -189,10 +189,11 @@ impl ParallelTriple {
         let u = first.axis;
         let across = |x: Vector3<f64>| x - u * u.dot(&x);
         let wanted = across(target - first.point).norm_squared();
-        let roots = trig_roots(|t| across(second.turn(t, &third.point) - first.point).norm_squared(), wanted)?;
+        let roots = trig_roots(|t| across(second.turn_by(t, &third.point) - first.point).norm_squared(), wanted)?;
         let mut out = Vec::with_capacity(2);
         for t2 in roots {
-            let moved = second.turn(t2, &third.point);
+            let moved = second.turn_by(t2, &third.point);
+            let t2 = t2.angle;
             let t1 = angle_about(&u, &(moved - first.point), &(target - first.point), ON_AXIS)?;
             let mut full = q;
             full[k] = t1;

@@ -81,9 +81,7 @@ impl AllSolutions {
         let mut found = self.solve_raw(goal, evaluations);
         let mut kept: Vec<[f64; 6]> = Vec::with_capacity(found.configurations.len());
         for q in found.configurations.drain(..) {
-            let known = kept
-                .iter()
-                .any(|k| k.iter().zip(&q).all(|(a, b)| super::wrap_angle(a - b).abs() <= SAME_RAD));
+            let known = kept.iter().any(|k| k.iter().zip(&q).all(|(a, b)| same_angle(*a, *b)));
             if !known {
                 kept.push(q);
             }
@@ -154,4 +152,17 @@ impl HeldJoint {
     pub fn pose_of_six(&self, goal: &Isometry3<f64>, angle: f64) -> Isometry3<f64> {
         goal * self.offset.inverse() * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), -angle)
     }
+}
+
+/// Whether two angles are one within [`SAME_RAD`], a whole turn apart or not: the listed
+/// angles are already in (-pi, pi], so the wrapping remainder is needed only for a difference
+/// beyond half a turn.
+fn same_angle(a: f64, b: f64) -> bool {
+    let gap = (a - b).abs();
+    let gap = if gap <= std::f64::consts::PI {
+        gap
+    } else {
+        super::wrap_angle(a - b).abs()
+    };
+    gap <= SAME_RAD
 }

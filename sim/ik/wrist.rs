@@ -14,7 +14,7 @@
 
 use super::bilinear;
 use super::cap::Cap;
-use super::lines::{angle_about, interpolate2, Arm, Chain, NODES};
+use super::lines::{interpolate2, node_turns, turn_about, Arm, Chain, Turn, NODES};
 use crate::model::Model;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
@@ -280,28 +280,28 @@ impl SphericalWrist {
 
     /// Joints 1 to 3 putting the wrist centre on `target` when the positioning decouples;
     /// `None` where a joint is free (a continuum).
-    fn decoupled_positions(&self, chain: &Chain, target: &Vector3<f64>, decoupled: Decoupled) -> Option<Vec<[f64; 3]>> {
+    fn decoupled_positions(&self, chain: &Chain, target: &Vector3<f64>, decoupled: Decoupled) -> Option<Vec<[Turn; 3]>> {
         let [l1, l2, l3, ..] = &chain.lines;
         let c = &self.centre;
         let mut out = Vec::with_capacity(4);
         match decoupled {
             Decoupled::Shoulder(relation) => {
-                for t3 in trig_roots(|t| relation.kept(l1, &l3.turn(t, c)), relation.kept(l1, target))? {
-                    let moved = l3.turn(t3, c);
-                    for t2 in trig_roots(|t| relation.other(l1, &l2.turn(t, &moved)), relation.other(l1, target))? {
-                        let point = l2.turn(t2, &moved);
-                        let t1 = angle_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
+                for t3 in trig_roots(|t| relation.kept(l1, &l3.turn_by(t, c)), relation.kept(l1, target))? {
+                    let moved = l3.turn_by(t3, c);
+                    for t2 in trig_roots(|t| relation.other(l1, &l2.turn_by(t, &moved)), relation.other(l1, target))? {
+                        let point = l2.turn_by(t2, &moved);
+                        let t1 = turn_about(&l1.axis, &(point - l1.point), &(target - l1.point), ON_AXIS)?;
                         out.push([t1, t2, t3]);
                     }
                 }
             }
             Decoupled::Elbow(relation) => {
                 // Joint 1 turned back, the target is where joints 2 and 3 must put the centre.
-                for t1 in trig_roots(|t| relation.kept(l2, &l1.turn(-t, target)), relation.kept(l2, c))? {
-                    let goal = l1.turn(-t1, target);
-                    for t3 in trig_roots(|t| relation.other(l2, &l3.turn(t, c)), relation.other(l2, &goal))? {
-                        let point = l3.turn(t3, c);
-                        let t2 = angle_about(&l2.axis, &(point - l2.point), &(goal - l2.point), ON_AXIS)?;
+                for t1 in trig_roots(|t| relation.kept(l2, &l1.turn_by(t.inverse(), target)), relation.kept(l2, c))? {
+                    let goal = l1.turn_by(t1.inverse(), target);
+                    for t3 in trig_roots(|t| relation.other(l2, &l3.turn_by(t, c)), relation.other(l2, &goal))? {
+                        let point = l3.turn_by(t3, c);
+                        let t2 = turn_about(&l2.axis, &(point - l2.point), &(goal - l2.point), ON_AXIS)?;
                         out.push([t1, t2, t3]);
                     }
                 }
@@ -339,13 +339,14 @@ impl SphericalWrist {
         target: &Vector3<f64>,
         rotation: &Matrix3<f64>,
         translation: &Vector3<f64>,
-    ) -> Option<(Vec<[f64; 3]>, bool)> {
+    ) -> Option<(Vec<[Turn; 3]>, bool)> {
         let (roots, mut resolved) = bilinear::common_roots(&self.equations(rotation, translation))?;
         let [l1, l2, l3, ..] = &chain.lines;
-        let mut positions: Vec<[f64; 3]> = Vec::with_capacity(8);
+        let mut positions: Vec<[Turn; 3]> = Vec::with_capacity(8);
         for (t2, t3) in roots {
-            let point = l2.turn(t2, &l3.turn(t3, &self.centre));
-            let Some(t1) = angle_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
+            let (t2, t3) = (Turn::of(t2), Turn::of(t3));
+            let point = l2.turn_by(t2, &l3.turn_by(t3, &self.centre));
+            let Some(t1) = turn_about(&l1.axis, &(point - l1.point), &(*target - l1.point), ON_AXIS) else {
                 // The wrist centre on axis 1: joint 1 is free.
                 resolved = false;
                 continue;
@@ -356,17 +357,24 @@ impl SphericalWrist {
     }
 
     /// The wrist joints for each position of joints 1 to 3.
-    fn finish(&self, chain: &Chain, rotation: &Matrix3<f64>, positions: Vec<[f64; 3]>, mut out: WristSolutions) -> WristSolutions {
-        let [l1, l2, l3, ..] = &chain.lines;
-        for [t1, t2, t3] in positions {
-            let before = l1.rotation(t1) * l2.rotation(t2) * l3.rotation(t3);
-            let wrist = before.transpose() * rotation * chain.home_rotation.transpose();
-            let [.., l4, l5, l6] = &chain.lines;
-            let (w4, w5, w6) = (l4.axis, l5.axis, l6.axis);
-            let goal = wrist * w6;
-            let cosine = w4.dot(&w5);
-            let normal = w4.cross(&w5);
-            let denominator = 1.0 - cosine * cosine;
+    fn finish(&self, chain: &Chain, rotation: &Matrix3<f64>, positions: Vec<[Turn; 3]>, mut out: WristSolutions) -> WristSolutions {
+        let [l1, l2, l3, l4, l5, l6] = &chain.lines;
+        let (w4, w5, w6) = (l4.axis, l5.axis, l6.axis);
+        // Only directions are turned below: axis 6 to its goal direction, and a direction
+        // across it whose image fixes joint 6 (see `lines::axis_angle_of`), each taken back
+        // through joints 3 to 1 (then 4 and 5) by vector turns, never a matrix product.
+        let home = rotation * chain.home_rotation.transpose();
+        let across6 = super::lines::across(&w6);
+        let (axis_goal, across_goal) = (home * w6, home * across6);
+        let back = |x: &Vector3<f64>, [t1, t2, t3]: &[Turn; 3]| {
+            l3.turn_direction(t3.inverse(), &l2.turn_direction(t2.inverse(), &l1.turn_direction(t1.inverse(), x)))
+        };
+        let cosine = w4.dot(&w5);
+        let normal = w4.cross(&w5);
+        let denominator = 1.0 - cosine * cosine;
+        for position in positions {
+            let [t1, t2, t3] = position;
+            let goal = back(&axis_goal, &position);
             let alpha = (goal.dot(&w4) - cosine * w6.dot(&w5)) / denominator;
             let beta = (w6.dot(&w5) - cosine * goal.dot(&w4)) / denominator;
             let squared = (1.0 - alpha * alpha - beta * beta - 2.0 * alpha * beta * cosine) / normal.norm_squared();
@@ -375,19 +383,30 @@ impl SphericalWrist {
             }
             let gamma = squared.max(0.0).sqrt();
             let signs: &[f64] = if gamma == 0.0 { &[1.0] } else { &[1.0, -1.0] };
+            let across_back = back(&across_goal, &position);
             for sign in signs {
                 let z = w4 * alpha + w5 * beta + normal * (sign * gamma);
-                let (Some(t5), Some(t4)) = (angle_about(&w5, &w6, &z, ON_AXIS), angle_about(&w4, &z, &goal, ON_AXIS)) else {
+                let (Some(t5), Some(t4)) = (turn_about(&w5, &w6, &z, ON_AXIS), turn_about(&w4, &z, &goal, ON_AXIS)) else {
                     // Axis 6 along axis 4: joints 4 and 6 turn about one line.
                     out.resolved = false;
                     continue;
                 };
-                let turned = before * l4.rotation(t4) * l5.rotation(t5);
-                let t6 = chain.last_angle_after(&turned, rotation);
-                out.configurations.push([t1, t2, t3, t4, t5, t6].map(super::wrap_angle));
+                let moved = l5.turn_direction(t5.inverse(), &l4.turn_direction(t4.inverse(), &across_back));
+                let t6 = super::lines::angle_of_moved(&w6, &across6, &moved);
+                out.configurations
+                    .push([t1.angle, t2.angle, t3.angle, t4.angle, t5.angle, t6].map(wrapped));
             }
         }
         out
+    }
+}
+
+/// `angle` in (-pi, pi]: most already are (an `atan2`'s), and those need no remainder.
+fn wrapped(angle: f64) -> f64 {
+    if angle > -std::f64::consts::PI && angle <= std::f64::consts::PI {
+        angle
+    } else {
+        super::wrap_angle(angle)
     }
 }
 
@@ -423,14 +442,14 @@ impl Pair {
     }
 }
 
-/// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`; `None` when `f` is
-/// constant and equal to it (every angle).
-pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<TrigRoots> {
-    let samples = NODES.map(&f);
+/// The angles where `f` (a combination of `{1, sin, cos}`) equals `value`, as turns (with their
+/// sines and cosines); `None` when `f` is constant and equal to it (every angle).
+pub(crate) fn trig_roots(f: impl Fn(Turn) -> f64, value: f64) -> Option<TrigRoots> {
+    let samples = node_turns().map(&f);
     let inverse = super::lines::node_inverse();
     let [a, b, c] = [0, 1, 2].map(|row| (0..3).map(|k| inverse[(row, k)] * samples[k]).sum::<f64>());
-    // b sin t + c cos t = r cos(t - phi) = value - a.
-    let r = b.hypot(c);
+    // b sin t + c cos t = r cos(t - phi) = value - a. Scaled lengths: no `hypot` needed.
+    let r = (b * b + c * c).sqrt();
     let size = a.abs().max(value.abs()).max(r).max(1e-300);
     let rest = value - a;
     if r <= 1e-12 * size {
@@ -441,38 +460,60 @@ pub(crate) fn trig_roots(f: impl Fn(f64) -> f64, value: f64) -> Option<TrigRoots
         return Some(TrigRoots::NONE);
     }
     let phi = b.atan2(c);
-    let spread = ratio.clamp(-1.0, 1.0).acos();
-    Some(if spread == 0.0 {
-        TrigRoots {
-            angles: [phi, phi],
-            len: 1,
-        }
-    } else {
-        TrigRoots {
-            angles: [phi + spread, phi - spread],
-            len: 2,
-        }
+    let (sin_phi, cos_phi) = (b / r, c / r);
+    let cos_spread = ratio.clamp(-1.0, 1.0);
+    let spread = cos_spread.acos();
+    if spread == 0.0 {
+        let turn = Turn {
+            angle: phi,
+            sin: sin_phi,
+            cos: cos_phi,
+        };
+        return Some(TrigRoots { turns: [turn; 2], len: 1 });
+    }
+    let sin_spread = (1.0 - cos_spread * cos_spread).sqrt();
+    Some(TrigRoots {
+        turns: [
+            Turn {
+                angle: phi + spread,
+                sin: sin_phi * cos_spread + cos_phi * sin_spread,
+                cos: cos_phi * cos_spread - sin_phi * sin_spread,
+            },
+            Turn {
+                angle: phi - spread,
+                sin: sin_phi * cos_spread - cos_phi * sin_spread,
+                cos: cos_phi * cos_spread + sin_phi * sin_spread,
+            },
+        ],
+        len: 2,
     })
 }
 
-/// [`trig_roots`]'s angles, none to two, without an allocation: the closed forms call it a few
+/// [`trig_roots`]'s turns, none to two, without an allocation: the closed forms call it a few
 /// times per pose.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TrigRoots {
-    angles: [f64; 2],
+    turns: [Turn; 2],
     len: usize,
 }
 
 impl TrigRoots {
-    const NONE: TrigRoots = TrigRoots { angles: [0.0; 2], len: 0 };
+    const NONE: TrigRoots = TrigRoots {
+        turns: [Turn {
+            angle: 0.0,
+            sin: 0.0,
+            cos: 1.0,
+        }; 2],
+        len: 0,
+    };
 }
 
 impl IntoIterator for TrigRoots {
-    type Item = f64;
-    type IntoIter = std::iter::Take<std::array::IntoIter<f64, 2>>;
+    type Item = Turn;
+    type IntoIter = std::iter::Take<std::array::IntoIter<Turn, 2>>;
 
     fn into_iter(self) -> Self::IntoIter {
-        self.angles.into_iter().take(self.len)
+        self.turns.into_iter().take(self.len)
     }
 }
 
