@@ -386,12 +386,7 @@ impl Arm {
 /// The angle of the turn about unit `axis` that takes `from` to `to` (their parts across the
 /// axis); `None` when either part is shorter than `shortest` (on the axis: any angle).
 pub(crate) fn angle_about(axis: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3<f64>, shortest: f64) -> Option<f64> {
-    let u = from - axis * axis.dot(from);
-    let v = to - axis * axis.dot(to);
-    if u.norm() < shortest || v.norm() < shortest {
-        return None;
-    }
-    Some(axis.dot(&u.cross(&v)).atan2(u.dot(&v)))
+    turn_about(axis, from, to, shortest).map(|turn| turn.angle)
 }
 
 /// [`angle_about`] as a [`Turn`]: the angle with its sine and cosine.
