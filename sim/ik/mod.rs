@@ -1751,6 +1751,17 @@ pub fn wrap_angle(angle: f64) -> f64 {
     }
 }
 
+/// [`wrap_angle`] without its remainder for an angle already in (-pi, pi] (an `atan2`'s, a
+/// difference of two wrapped angles within half a turn): the closed forms' hot path. The same
+/// value for those, up to the remainder's rounding.
+pub(crate) fn wrapped(angle: f64) -> f64 {
+    if angle > -std::f64::consts::PI && angle <= std::f64::consts::PI {
+        angle
+    } else {
+        wrap_angle(angle)
+    }
+}
+
 /// Why a proof within the harness's tolerance does not decide `goal`, if it does not: the goal's
 /// own (task) tolerance accepts poses further away.
 pub fn task_tolerance_gap(goal: &Goal) -> Option<String> {

@@ -154,15 +154,7 @@ impl HeldJoint {
     }
 }
 
-/// Whether two angles are one within [`SAME_RAD`], a whole turn apart or not: the listed
-/// angles are already in (-pi, pi], so the wrapping remainder is needed only for a difference
-/// beyond half a turn.
+/// Whether two angles are one within [`SAME_RAD`], a whole turn apart or not.
 fn same_angle(a: f64, b: f64) -> bool {
-    let gap = (a - b).abs();
-    let gap = if gap <= std::f64::consts::PI {
-        gap
-    } else {
-        super::wrap_angle(a - b).abs()
-    };
-    gap <= SAME_RAD
+    super::wrapped(a - b).abs() <= SAME_RAD
 }

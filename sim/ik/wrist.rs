@@ -394,19 +394,10 @@ impl SphericalWrist {
                 let moved = l5.turn_direction(t5.inverse(), &l4.turn_direction(t4.inverse(), &across_back));
                 let t6 = super::lines::angle_of_moved(&w6, &across6, &moved);
                 out.configurations
-                    .push([t1.angle, t2.angle, t3.angle, t4.angle, t5.angle, t6].map(wrapped));
+                    .push([t1.angle, t2.angle, t3.angle, t4.angle, t5.angle, t6].map(super::wrapped));
             }
         }
         out
-    }
-}
-
-/// `angle` in (-pi, pi]: most already are (an `atan2`'s), and those need no remainder.
-fn wrapped(angle: f64) -> f64 {
-    if angle > -std::f64::consts::PI && angle <= std::f64::consts::PI {
-        angle
-    } else {
-        super::wrap_angle(angle)
     }
 }
 
