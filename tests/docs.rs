@@ -112,9 +112,12 @@ fn every_example_output_in_the_docs_is_what_its_command_prints() {
         examples.iter().any(|e| e.page == "README.md" && e.lines.len() > 10),
         "the README's main example is marked"
     );
+    // Each command in its own scratch folder, so they run side by side.
+    use rayon::prelude::*;
+    let outputs: Vec<String> = examples.par_iter().map(|e| printed(&e.command)).collect();
     let mut stale = Vec::new();
-    for example in &examples {
-        let printed: Vec<String> = printed(&example.command).lines().map(masked).collect();
+    for (example, output) in examples.iter().zip(&outputs) {
+        let printed: Vec<String> = output.lines().map(masked).collect();
         // Every line of the example (`...` stands for lines left out) is printed, in order.
         let mut from = 0;
         for line in example.lines.iter().filter(|l| l.trim() != "...") {

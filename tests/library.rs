@@ -3,11 +3,12 @@
 
 mod common;
 
-use assert_cmd::Command;
+use assert_cmd::cargo::CommandCargoExt;
 use common::{panda_urdf, repo};
 use proving_ground::pipeline::Engines;
 use proving_ground::run::{report_json, Outcome, Stop};
 use proving_ground::scenario::Tolerance;
+use std::process::Command;
 
 fn panda_srdf() -> std::path::PathBuf {
     repo().join("designs/urdf/example-robot-data/robots/panda_description/srdf/panda.srdf")
@@ -46,11 +47,14 @@ fn validate_gives_the_cli_json_report_byte_for_byte() {
         .args(["--tolerance", "z_symmetric", "--engines", "mujoco", "--mujoco-checks", "20"])
         .args(["--search-boxes", "2000", "--plan-budget", "2000", "--quiet", "--json"])
         .arg(&json)
-        .output()
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
         .expect("runs");
-    let cli = std::fs::read_to_string(&json).expect("the CLI wrote the report");
-
+    // The library's run while the CLI's goes on: the two are the test's whole time.
     let run = proving_ground::validate(&panda_urdf(), &options(), &proving_ground::progress::Silent).expect("validates");
+    let output = output.wait_with_output().expect("the CLI finishes");
+    let cli = std::fs::read_to_string(&json).expect("the CLI wrote the report");
     let report = run.report.as_ref().expect("a whole run has a report");
     let library = report_json(report).expect("serialises");
     assert_eq!(library, cli, "the library's report differs from the CLI's");

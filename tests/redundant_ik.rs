@@ -98,7 +98,8 @@ fn held_joint_solutions_reach_the_pose() {
 /// stretched poses pushed 300 mm out mostly are.
 #[test]
 fn held_joint_out_of_reach_is_sound_at_the_workspace_edge() {
-    for (name, model) in [("panda", panda()), ("free-redundant-7dof", redundant_design())] {
+    // The two arms side by side: each has its own seed, and the test is the suite's longest.
+    let check = |name: &str, model: Model| {
         let held = HeldJoint::of(&model).expect("a held-joint method");
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let half_step = 2.5f64.to_radians();
@@ -144,7 +145,8 @@ fn held_joint_out_of_reach_is_sound_at_the_workspace_edge() {
         }
         println!("{name}: {pushed_proven} of 100 stretched poses pushed 300 mm out proven out of reach at 8 angles of joint 7");
         assert!(pushed_proven > 50, "{name}: only {pushed_proven} pushed poses proven out of reach");
-    }
+    };
+    rayon::join(|| check("panda", panda()), || check("free-redundant-7dof", redundant_design()));
 }
 
 /// Whether `value` (rad) or a whole-turn equivalent is within the joint's limits.
