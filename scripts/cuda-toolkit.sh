@@ -22,6 +22,10 @@ cuda_root=$("$cuda_venv/bin/python" -c 'import os, nvidia; print(os.path.join(li
 export PATH="$cuda_root/bin:$PATH" CUDA_PATH="$cuda_root" CUDA_ROOT="$cuda_root"
 # candle's kernels are compiled for this compute capability (9.0: H100, H200) unless set.
 export CUDA_COMPUTE_CAP="${CUDA_COMPUTE_CAP:-90}"
+# candle's kernels are compiled by cudaforge on half the cores unless told: one nvcc at a time
+# on a 2-core machine, some 15 minutes of candle-kernels' build there.
+CUDAFORGE_THREADS="${CUDAFORGE_THREADS:-$(nproc)}"
+export CUDAFORGE_THREADS
 
 # CUDA_LIBRARIES=1: what the linker and the loader need for a `cuda` binary. The linker wants
 # unversioned names (PyPI ships libcublas.so.13 and the like), linked under .cuda/lib. libcuda is
