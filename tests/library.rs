@@ -36,7 +36,7 @@ fn options() -> proving_ground::Options {
 fn validate_gives_the_cli_json_report_byte_for_byte() {
     let dir = tempfile::tempdir().expect("temporary folder");
     let json = dir.path().join("report.json");
-    let output = Command::cargo_bin("validate-design")
+    let child = Command::cargo_bin("validate-design")
         .expect("binary is built")
         .current_dir(repo())
         .arg(panda_urdf())
@@ -53,7 +53,7 @@ fn validate_gives_the_cli_json_report_byte_for_byte() {
         .expect("runs");
     // The library's run while the CLI's goes on: the two are the test's whole time.
     let run = proving_ground::validate(&panda_urdf(), &options(), &proving_ground::progress::Silent).expect("validates");
-    let output = output.wait_with_output().expect("the CLI finishes");
+    let output = child.wait_with_output().expect("the CLI finishes");
     let cli = std::fs::read_to_string(&json).expect("the CLI wrote the report");
     let report = run.report.as_ref().expect("a whole run has a report");
     let library = report_json(report).expect("serialises");

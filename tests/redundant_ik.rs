@@ -98,7 +98,7 @@ fn held_joint_solutions_reach_the_pose() {
 /// stretched poses pushed 300 mm out mostly are.
 #[test]
 fn held_joint_out_of_reach_is_sound_at_the_workspace_edge() {
-    // The two arms side by side: each has its own seed, and the test is the suite's longest.
+    // The two arms side by side (each has its own seed): one of the suite's longest tests.
     let check = |name: &str, model: Model| {
         let held = HeldJoint::of(&model).expect("a held-joint method");
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
