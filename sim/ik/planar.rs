@@ -119,6 +119,7 @@ fn search(model: &Model, goal: &Goal, groups: &[Vec<usize>], run_index: usize, r
     let goal_z = goal.rotation * Vector3::z();
     let mut ws = model.workspace();
     let mut q = vec![0.0; model.dof()];
+    model.forward(&q, &mut ws);
     let mut stack: Vec<([f64; DIMENSIONS], [f64; DIMENSIONS])> = vec![(
         std::array::from_fn(|k| dimensions.get(k).map_or(0.0, |d| 0.5 * (d.range[0] + d.range[1]))),
         std::array::from_fn(|k| dimensions.get(k).map_or(0.0, |d| 0.5 * (d.range[1] - d.range[0]))),
@@ -129,10 +130,16 @@ fn search(model: &Model, goal: &Goal, groups: &[Vec<usize>], run_index: usize, r
         if boxes > budget {
             return None;
         }
+        // Depth first, the next box mostly differs from the last in one angle: the links
+        // before the first joint whose angle changed stay as they are.
+        let mut changed = model.dof();
         for (d, s) in dimensions.iter().zip(&centre) {
-            q[d.joint] = *s;
+            if q[d.joint].to_bits() != s.to_bits() {
+                q[d.joint] = *s;
+                changed = changed.min(d.joint);
+            }
         }
-        model.forward(&q, &mut ws);
+        model.forward_from(&q, &mut ws, changed);
         let sum = |pick: &dyn Fn(&Dimension) -> f64| dimensions.iter().zip(&half).map(|(d, h)| pick(d) * h).sum::<f64>();
         let tilted = sum(&|d| f64::from(u8::from(d.before)));
         let turn = sum(&|_| 1.0);
