@@ -771,11 +771,11 @@ impl<'a> Ik<'a> {
                 posed = true;
             }
         }
-        // Three numbers or fewer: about a thousand boxes, before every other search. After the
-        // aim at the tolerance: a configuration found within it (a pose the planar conditions
-        // cannot rule out) leaves the search nothing to prove, and near its boundary the search
-        // splits until its budget runs out (20 000 boxes, 5 to 9 ms; the aim takes
-        // microseconds). Where the search proves the goal out of reach, the aim finds nothing.
+        // Three numbers or fewer: about a thousand boxes, before the searches below. After the
+        // aim at the tolerance: a configuration it finds within the tolerance meets the planar
+        // conditions, so the search could never finish and would split until its budget runs
+        // out (20 000 boxes, 5 to 9 ms; the aim takes microseconds). Where the search proves
+        // the goal out of reach, the aim finds nothing.
         if !posed && self.planar_proof(goal, 3, planar::PLANAR_BOXES, result) {
             return;
         }

@@ -38,10 +38,10 @@ use nalgebra::Vector3;
 use std::f64::consts::PI;
 
 /// Boxes the search may split before it gives up (each one forward kinematics), with three
-/// numbers or fewer (tried before IK's other searches, after the aim at the tolerance): a run of four parallel axes in a 6R arm
-/// takes about a thousand. Four numbers (a run of three, or two in a 5R arm) take 25 000 to
-/// 300 000 for goals well out of reach: IK tries them last, with a validation's joint-space
-/// budget, never a sweep's.
+/// numbers or fewer (tried before IK's other searches, after the aim at the tolerance): a run of
+/// four parallel axes in a 6R arm takes about a thousand. Four numbers (a run of three, or two in
+/// a 5R arm) take 25 000 to 300 000 for goals well out of reach: IK tries them last, with a
+/// validation's joint-space budget, never a sweep's.
 pub const PLANAR_BOXES: usize = 20_000;
 /// Most numbers searched over (the run's sum and the single joints' angles).
 const DIMENSIONS: usize = 4;

@@ -63,12 +63,7 @@ impl Model {
     /// # Panics
     /// When `q.len()` differs from [`Model::dof`] or `ws` was made for another model.
     pub fn forward(&self, q: &[f64], ws: &mut KinematicsWorkspace) {
-        assert_eq!(q.len(), self.dof(), "configuration length must equal the model's dof");
-        ws.link_in_world[0] = self.world_from_base;
-        for (i, &qi) in q.iter().enumerate() {
-            ws.link_in_world[i + 1] = ws.link_in_world[i] * self.joint_transform(i, qi);
-        }
-        ws.tool_in_world = ws.link_in_world[self.dof()] * self.last_from_tool;
+        self.forward_from(q, ws, 0);
     }
 
     /// [`Model::forward`] for a `q` that differs from the one `ws` holds only in joints `from`
