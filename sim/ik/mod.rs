@@ -14,6 +14,7 @@ mod coaxial;
 mod deflate;
 mod dls;
 mod eigen;
+mod enclose;
 mod error;
 pub mod general;
 mod lines;
@@ -284,6 +285,9 @@ pub struct Ik<'a> {
     collides_everywhere: Everywhere<'a>,
     /// The goal being solved is a pose the all-solutions method found no solution of.
     without_solution: bool,
+    /// The goal being solved's colliding configurations within its tolerance that sampling
+    /// found (see [`enclose`]).
+    members: Vec<enclose::Member>,
     ws: KinematicsWorkspace,
 }
 
@@ -374,6 +378,7 @@ impl<'a> Ik<'a> {
             bounds: MotionBounds::of(model),
             collides_everywhere,
             without_solution: false,
+            members: Vec::new(),
             ws: model.workspace(),
             opts,
         }
@@ -405,6 +410,7 @@ impl<'a> Ik<'a> {
         self.parts_left = self.cell_parts;
         self.reach_parts_left = parts::PARTS_PER_GOAL;
         self.misses.clear();
+        self.members.clear();
         self.without_solution = false;
         let mut result = self.solve_by_methods(goal, goal_index, first_seed);
         self.search_joint_space(goal, goal_index, &mut result);
@@ -862,6 +868,15 @@ impl<'a> Ik<'a> {
         let in_parts = self.opts.search_boxes >= search::FIRST_ORDER_BUDGET;
         if open && !posed && self.roots_stay_complex(goal, result, in_parts) {
             return;
+        }
+        if open && posed && in_parts && !self.members.is_empty() {
+            let members = std::mem::take(&mut self.members);
+            if let Some(proof) = self.enclose_tolerance(goal, &members) {
+                result.complete = true;
+                result.undecided = None;
+                result.proof = Some(format!("{}: {proof}", self.method()));
+                return;
+            }
         }
         // Four numbers at most, a validation's budget, where the searches above leave it open
         // (the searches of three or fewer again too: they may need more than their own budget).

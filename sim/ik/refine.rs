@@ -125,6 +125,19 @@ impl<'a> Checker<'a> {
         self.exact.closest.map_or(f64::INFINITY, |c| c.distance)
     }
 
+    /// Levels for [`Self::clearance_among`] that measure `pair` alone; `None` where the world
+    /// does not check it.
+    pub(crate) fn pair_levels(&self, pair: [Body; 2]) -> Option<Vec<Option<f64>>> {
+        let pairs = self.world.pairs();
+        let index = pairs.iter().position(|p| [p.a, p.b] == pair)?;
+        Some((0..pairs.len()).map(|i| (i == index).then_some(f64::INFINITY)).collect())
+    }
+
+    /// A pair's names, as [`Self::closest_pair`] gives them.
+    pub(crate) fn pair_name(&self, pair: [Body; 2]) -> String {
+        format!("{} and {}", self.world.body_name(pair[0]), self.world.body_name(pair[1]))
+    }
+
     /// The pair that was closest at the last [`Self::clearance`] query: its bodies, their
     /// witness points (world) and their names.
     pub(crate) fn closest_pair(&self) -> Option<ClosestPair> {

@@ -54,6 +54,9 @@ pub(super) struct Sampled {
     pub(super) solutions: usize,
     /// The clearest of them (m), when any.
     pub(super) clearest: Option<f64>,
+    /// The colliding ones within the tolerance, with their deepest pairs (the first
+    /// [`super::enclose::MOST_MEMBERS`]).
+    pub(super) members: Vec<super::enclose::Member>,
 }
 
 impl Sampled {
@@ -221,6 +224,7 @@ impl Ik<'_> {
             poses: 0,
             solutions: 0,
             clearest: None,
+            members: Vec::new(),
         };
         let mut starts: Vec<Start> = Vec::with_capacity(CLIMBS + 1);
         for (index, offset) in offsets(goal).take(poses) {
@@ -248,6 +252,17 @@ impl Ik<'_> {
                 };
                 if !solution.pose_reached {
                     continue;
+                }
+                let pair = self
+                    .checker
+                    .as_ref()
+                    .and_then(|checker| checker.closest_pair())
+                    .map(|pair| pair.bodies);
+                if let Some(pair) = pair.filter(|_| sampled.members.len() < super::enclose::MOST_MEMBERS) {
+                    sampled.members.push(super::enclose::Member {
+                        q: solution.q.clone(),
+                        pair,
+                    });
                 }
                 sampled.clearest = Some(sampled.clearest.map_or(clearance, |c: f64| c.max(clearance)));
                 let at = starts.partition_point(|s| s.clearance >= clearance);
@@ -385,6 +400,7 @@ impl Ik<'_> {
             return true;
         }
         let tried = sampled.describe();
+        self.members = sampled.members;
         result.undecided = Some(match result.undecided.take() {
             Some(before) => format!("{before}; {tried}"),
             None => tried,

@@ -366,7 +366,7 @@ pub trait Oracle {
 }
 
 /// An oracle of local solves alone.
-struct Solves<F: FnMut(&mut [f64]) -> bool>(F);
+pub(super) struct Solves<F: FnMut(&mut [f64]) -> bool>(pub(super) F);
 
 impl<F: FnMut(&mut [f64]) -> bool> Oracle for Solves<F> {
     fn local(&mut self, q: &mut [f64]) -> bool {
@@ -409,6 +409,22 @@ pub fn search_helped(
     helpers: &[Helper],
 ) -> Option<Search> {
     let (lower, upper) = ranges(model)?;
+    search_box(model, goal, radii, budget, oracle, helpers, lower, upper)
+}
+
+/// [`search_helped`] over the joint values from `lower` to `upper` (within the joint ranges)
+/// instead of the whole ranges: what it proves holds for that box alone.
+#[allow(clippy::too_many_arguments)] // the search's inputs, and the box it starts from
+pub(super) fn search_box(
+    model: &Model,
+    goal: &Goal,
+    radii: Radii,
+    budget: usize,
+    oracle: &mut dyn Oracle,
+    helpers: &[Helper],
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+) -> Option<Search> {
     let mut judge = Judge::new(model, goal, radii);
     judge.separating = budget >= FIRST_ORDER_BUDGET;
     for helper in helpers {
