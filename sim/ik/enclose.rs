@@ -25,6 +25,7 @@
 //! exclusion fails), so the pads grow; one too wide takes in free configurations (the enclosure
 //! fails), and then no wider pad can succeed.
 
+use super::refine::Checker;
 use super::search::{self, Radii, Search};
 use super::{Goal, Ik};
 use crate::collide::Body;
@@ -81,6 +82,21 @@ fn pair_joints(pair: [Body; 2], dof: usize) -> Vec<usize> {
         [Body::Link(link), _] | [_, Body::Link(link)] => (0..link.min(dof)).collect(),
         _ => Vec::new(),
     }
+}
+
+/// The pair a colliding configuration's box is made for, from the checker's last query: the
+/// deepest of the colliding pairs that span at most [`MOST_JOINTS`] joints (a link against the
+/// floor spans every joint before it, another link only those between), else the closest.
+pub(super) fn member_pair(checker: &Checker, dof: usize) -> Option<[Body; 2]> {
+    checker
+        .colliding_pairs()
+        .filter(|(pair, _)| (1..=MOST_JOINTS).contains(&pair_joints(*pair, dof).len()))
+        .fold(None, |best: Option<([Body; 2], f64)>, (pair, distance)| match best {
+            Some((_, deepest)) if deepest <= distance => best,
+            _ => Some((pair, distance)),
+        })
+        .map(|(pair, _)| pair)
+        .or_else(|| checker.closest_pair().map(|pair| pair.bodies))
 }
 
 /// Whether a joint's range is a whole turn (an angle and that angle plus a turn are one).

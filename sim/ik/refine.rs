@@ -133,6 +133,15 @@ impl<'a> Checker<'a> {
         Some((0..pairs.len()).map(|i| (i == index).then_some(f64::INFINITY)).collect())
     }
 
+    /// The pairs in collision at the last [`Self::clearance`] query, with their signed
+    /// distances.
+    pub(crate) fn colliding_pairs(&self) -> impl Iterator<Item = ([Body; 2], f64)> + '_ {
+        self.exact
+            .within_margin
+            .iter()
+            .map(|pair| ([pair.a.body, pair.b.body], pair.distance))
+    }
+
     /// A pair's names, as [`Self::closest_pair`] gives them.
     pub(crate) fn pair_name(&self, pair: [Body; 2]) -> String {
         format!("{} and {}", self.world.body_name(pair[0]), self.world.body_name(pair[1]))

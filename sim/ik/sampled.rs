@@ -256,8 +256,7 @@ impl Ik<'_> {
                 let pair = self
                     .checker
                     .as_ref()
-                    .and_then(|checker| checker.closest_pair())
-                    .map(|pair| pair.bodies);
+                    .and_then(|checker| super::enclose::member_pair(checker, self.model.dof()));
                 if let Some(pair) = pair.filter(|_| sampled.members.len() < super::enclose::MOST_MEMBERS) {
                     sampled.members.push(super::enclose::Member {
                         q: solution.q.clone(),
