@@ -597,8 +597,8 @@ fn roots_that_turn_real_far_from_linearly_are_no_proof() {
         // A pose within the tolerance (on its boundary, where these are likeliest) with a solution.
         let witness = (0..20_000).find_map(|_| {
             let sample = Isometry3::from_parts(
-                Translation3::from(centre.translation.vector + unit_vector(&mut rng) * 0.999e-3),
-                centre.rotation * UnitQuaternion::from_scaled_axis(unit_vector(&mut rng) * 0.999f64.to_radians()),
+                Translation3::from(centre.translation.vector + common::unit_vector(&mut rng) * 0.999e-3),
+                centre.rotation * UnitQuaternion::from_scaled_axis(common::unit_vector(&mut rng) * 0.999f64.to_radians()),
             );
             let solutions = solver.solve(&sample).configurations;
             solutions.iter().any(|q| fk_error(&model, q, &sample) < 1e-9).then_some(sample)
@@ -691,21 +691,6 @@ fn a_cycling_eigenvalue_iteration_does_not_hang_the_solver() {
     }
 }
 
-/// A unit vector drawn uniformly from the sphere.
-fn unit_vector(rng: &mut impl Rng) -> nalgebra::Vector3<f64> {
-    loop {
-        let v = nalgebra::Vector3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        let norm = v.norm();
-        if (0.1..1.0).contains(&norm) {
-            return v / norm;
-        }
-    }
-}
-
 /// The general 6R's proof that a pose without solution has none within the tolerance (every
 /// complex root of its determinant stays off the real angles), against the exact solver on
 /// the tolerance sampled. Poses are pushed past the workspace boundary along a random
@@ -755,8 +740,8 @@ fn general_out_of_reach_proofs_hold_near_the_workspace_boundary() {
             // `sin` in rotation.
             let split: f64 = rng.random_range(0.0..PI / 2.0);
             let (dp, dr) = (
-                unit_vector(&mut rng) * (split.cos() * 1e-3),
-                unit_vector(&mut rng) * split.sin().to_radians(),
+                common::unit_vector(&mut rng) * (split.cos() * 1e-3),
+                common::unit_vector(&mut rng) * split.sin().to_radians(),
             );
             let along = |s: f64| {
                 Isometry3::from_parts(
@@ -814,7 +799,7 @@ fn general_out_of_reach_proofs_hold_near_the_workspace_boundary() {
                     } else {
                         (1e-3 * rng.random::<f64>(), 1f64.to_radians() * rng.random::<f64>())
                     };
-                    let (u, w) = (unit_vector(&mut rng), unit_vector(&mut rng));
+                    let (u, w) = (common::unit_vector(&mut rng), common::unit_vector(&mut rng));
                     let sample = Isometry3::from_parts(
                         Translation3::from(centre.translation.vector + u * rp),
                         centre.rotation * UnitQuaternion::from_scaled_axis(w * ro),

@@ -8,27 +8,12 @@
 
 mod common;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::UnitQuaternion;
 use proving_ground::collide::{clear, Distances};
 use proving_ground::ik::{goal_error, solve_goals, IkOptions, REACHED_ORIENTATION_RAD, REACHED_POSITION_M};
 use proving_ground::pipeline::{collision_world, load_model, load_scenario, LoadOptions};
 use proving_ground::scenario::Scenario;
 use rand::{Rng, SeedableRng};
-
-/// A unit vector uniformly at random.
-fn direction(rng: &mut impl Rng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        let norm = v.norm();
-        if norm > 1e-3 && norm <= 1.0 {
-            return v / norm;
-        }
-    }
-}
 
 #[test]
 fn a_tolerance_enclosed_in_the_colliding_pairs_joints_holds_no_free_configuration() {
@@ -61,8 +46,8 @@ fn a_tolerance_enclosed_in_the_colliding_pairs_joints_holds_no_free_configuratio
     let mut poses = Vec::new();
     for _ in 0..150 {
         let mut near = goal.clone();
-        near.position += direction(&mut rng) * (0.98 * REACHED_POSITION_M * rng.random::<f64>().cbrt());
-        let turn = direction(&mut rng) * (0.98 * REACHED_ORIENTATION_RAD * rng.random::<f64>().cbrt());
+        near.position += common::unit_vector(&mut rng) * (0.98 * REACHED_POSITION_M * rng.random::<f64>().cbrt());
+        let turn = common::unit_vector(&mut rng) * (0.98 * REACHED_ORIENTATION_RAD * rng.random::<f64>().cbrt());
         near.rotation = UnitQuaternion::from_scaled_axis(turn) * near.rotation;
         poses.push(near);
     }

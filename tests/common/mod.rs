@@ -309,3 +309,18 @@ pub fn sphere_and_goal(centre: nalgebra::Vector3<f64>, radius: f64, tool: &nalge
         notes: Vec::new(),
     }
 }
+
+/// A unit vector drawn uniformly from the sphere.
+pub fn unit_vector(rng: &mut impl rand::Rng) -> nalgebra::Vector3<f64> {
+    loop {
+        let v = nalgebra::Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let norm = v.norm();
+        if (0.1..1.0).contains(&norm) {
+            return v / norm;
+        }
+    }
+}
