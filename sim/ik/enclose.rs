@@ -48,13 +48,15 @@ const LINK_RAD: f64 = 0.25;
 const PADS: [f64; 3] = [0.02, 0.06, 0.18];
 /// Joints a pair's box may span: beyond four the enclosure is as hard as the search it helps.
 const MOST_JOINTS: usize = 4;
-/// Pair queries (one pair, exact depth: microseconds each) for all the pads' enclosures.
-const CELL_QUERIES: usize = 40_000;
+/// Pair queries for all the pads' enclosures, per collision query a goal's searches may make
+/// (`Ik::collision_queries`: 20 000 among primitives, where a pair's exact depth
+/// takes microseconds, 40 000 pair queries here; 200 with meshes, where one takes up to 5 ms).
+const CELL_QUERIES_PER_QUERY: usize = 2;
 /// The exclusion's boxes for all pads, per box of [`super::IkOptions::search_boxes`] (a
 /// validation's 200 000: 800 000 boxes, about 1.5 s).
 const EXCLUSION_BUDGET: usize = 4;
-/// Pair queries at most for one trial of a wider box.
-const TRIAL_QUERIES: usize = 4_000;
+/// The share of the pair queries one trial of a wider box may take at most (4 000 of 40 000).
+const TRIAL_SHARE: usize = 10;
 /// The first step (rad) by which a box is widened on one side.
 const FIRST_GROWTH_RAD: f64 = 0.05;
 /// Boxes at most (clusters, each cut in two where it wraps across a whole turn's seam).
@@ -244,7 +246,7 @@ impl Ik<'_> {
         }
         let margin = self.margin();
         // One budget for all pads: a wider pad is tried with what a tighter one left.
-        let mut queries = CELL_QUERIES;
+        let mut queries = CELL_QUERIES_PER_QUERY * self.collision_queries;
         let mut left = EXCLUSION_BUDGET * self.opts.search_boxes;
         for pad in PADS {
             let mut enclosures: Vec<Enclosure> = Vec::new();
@@ -348,8 +350,9 @@ impl Ik<'_> {
     /// The cells of the widest box certified, when it grew.
     fn grow(&mut self, enclosure: &mut Enclosure, margin: f64, lower: &[f64], upper: &[f64], queries: &mut usize) -> Option<usize> {
         let mut cells = None;
+        let trial_queries = CELL_QUERIES_PER_QUERY * self.collision_queries / TRIAL_SHARE;
         let mut certified = |ik: &mut Self, enclosure: &Enclosure, queries: &mut usize| {
-            let mut trial = (*queries).min(TRIAL_QUERIES);
+            let mut trial = (*queries).min(trial_queries);
             let before = trial;
             let took = ik.certify_enclosure(enclosure, margin, &mut trial);
             *queries -= before - trial;
