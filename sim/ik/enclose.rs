@@ -107,38 +107,53 @@ fn whole_turn(lower: f64, upper: f64) -> bool {
 }
 
 /// The intervals within `[lower, upper]` that `values`, padded by `pad`, cover: one, or two
-/// where a whole turn's arc crosses the range's seam.
-fn intervals(values: &mut [f64], lower: f64, upper: f64, pad: f64) -> Vec<[f64; 2]> {
-    values.sort_by(f64::total_cmp);
-    let (Some(&first), Some(&last)) = (values.first(), values.last()) else {
-        return Vec::new();
-    };
-    if !whole_turn(lower, upper) {
-        return vec![[(first - pad).max(lower), (last + pad).min(upper)]];
-    }
-    // The arc is the circle less its largest gap between neighbouring values.
-    let mut gap = first + TAU - last;
-    let mut start = first;
-    let mut end = last;
-    for pair in values.windows(2) {
-        if pair[1] - pair[0] > gap {
-            gap = pair[1] - pair[0];
-            start = pair[1];
-            end = pair[0] + TAU;
+/// where a whole turn's arc crosses the range's seam (a whole turn's values are first taken
+/// into the range, a turn at a time). `None` for a value outside a narrower range, or not
+/// finite: no box could then hold it.
+fn intervals(values: &mut [f64], lower: f64, upper: f64, pad: f64) -> Option<Vec<[f64; 2]>> {
+    let whole = whole_turn(lower, upper);
+    for value in values.iter_mut() {
+        if !value.is_finite() {
+            return None;
+        }
+        if whole && !(lower..lower + TAU).contains(value) {
+            *value = lower + (*value - lower).rem_euclid(TAU);
+        } else if *value < lower || *value > upper {
+            return None;
         }
     }
-    let (start, end) = (start - pad, end + pad);
-    if end - start >= TAU {
-        return vec![[lower, upper]];
-    }
-    // `start` lies within a turn of the range: shift the arc so that it starts inside it.
-    let shift = ((start - lower) / TAU).floor() * TAU;
-    let (start, end) = (start - shift, end - shift);
-    if end <= upper {
-        vec![[start, end]]
+    values.sort_by(f64::total_cmp);
+    let (&first, &last) = (values.first()?, values.last()?);
+    let cut = if !whole {
+        vec![[(first - pad).max(lower), (last + pad).min(upper)]]
     } else {
-        vec![[start, upper], [lower, end - TAU]]
-    }
+        // The arc is the circle less its largest gap between neighbouring values.
+        let mut gap = first + TAU - last;
+        let mut start = first;
+        let mut end = last;
+        for pair in values.windows(2) {
+            if pair[1] - pair[0] > gap {
+                gap = pair[1] - pair[0];
+                start = pair[1];
+                end = pair[0] + TAU;
+            }
+        }
+        let (start, end) = (start - pad, end + pad);
+        if end - start >= TAU {
+            vec![[lower, upper]]
+        } else {
+            // `start` lies within a turn of the range: shift the arc so that it starts inside it.
+            let shift = ((start - lower) / TAU).floor() * TAU;
+            let (start, end) = (start - shift, end - shift);
+            if end <= upper {
+                vec![[start, end]]
+            } else {
+                vec![[start, upper], [lower, end - TAU]]
+            }
+        }
+    };
+    // Each interval within the range and not reversed, whatever the rounding did.
+    cut.iter().all(|&[a, b]| lower <= a && a <= b && b <= upper).then_some(cut)
 }
 
 /// Single-linkage clusters of `members` (indices), by the largest joint difference over
@@ -255,7 +270,7 @@ impl Ik<'_> {
                 let mut boxes: Vec<(Vec<f64>, Vec<f64>)> = vec![(lower.clone(), upper.clone())];
                 for &j in joints {
                     let mut values: Vec<f64> = cluster.iter().map(|m| m.q[j]).collect();
-                    let cut = intervals(&mut values, lower[j], upper[j], pad);
+                    let cut = intervals(&mut values, lower[j], upper[j], pad)?;
                     boxes = boxes
                         .into_iter()
                         .flat_map(|(l, u)| {
@@ -345,9 +360,8 @@ impl Ik<'_> {
     /// Widens `enclosure` joint by joint while it stays certified: to the joint's whole range,
     /// else side by side in doubling steps. The wider the boxes, the further the exclusion's
     /// parts keep from the tolerance, and the fewer boxes their searches take (`free-offset-6dof`'s
-    /// goal 7 on cluttered task 06: 863 019 boxes over 7 parts at the pad's boxes, 557 699 over 5
-    /// once widened).
-    /// The cells of the widest box certified, when it grew.
+    /// goal 7 on cluttered task 06: about 860 000 boxes over 7 parts at the pad's boxes, 553 499
+    /// over 5 once widened). The cells of the widest box certified, when it grew.
     fn grow(&mut self, enclosure: &mut Enclosure, margin: f64, lower: &[f64], upper: &[f64], queries: &mut usize) -> Option<usize> {
         let mut cells = None;
         let trial_queries = CELL_QUERIES_PER_QUERY * self.collision_queries / TRIAL_SHARE;
@@ -508,14 +522,25 @@ mod tests {
     fn an_arc_across_a_whole_turns_seam_is_cut_in_two() {
         let pi = std::f64::consts::PI;
         let mut values = vec![pi - 0.01, -pi + 0.02];
-        let cut = intervals(&mut values, -pi, pi, 0.01);
+        let cut = intervals(&mut values, -pi, pi, 0.01).expect("values within a whole turn");
         assert_eq!(cut.len(), 2);
         assert!((cut[0][0] - (pi - 0.02)).abs() < 1e-12 && cut[0][1] == pi);
         assert!(cut[1][0] == -pi && (cut[1][1] - (-pi + 0.03)).abs() < 1e-12);
         let mut inside = vec![0.1, 0.3];
-        assert_eq!(intervals(&mut inside, -pi, pi, 0.05).len(), 1);
+        assert_eq!(intervals(&mut inside, -pi, pi, 0.05).map(|c| c.len()), Some(1));
         let mut limited = vec![-2.0, 1.0];
-        assert_eq!(intervals(&mut limited, -2.0, 1.0, 0.5), vec![[-2.0, 1.0]]);
+        assert_eq!(intervals(&mut limited, -2.0, 1.0, 0.5), Some(vec![[-2.0, 1.0]]));
+        // A whole turn's value given a turn off is the same angle: 3.5 is -2.78, next to -3.0.
+        let mut turned = vec![-3.0, 3.5];
+        let cut = intervals(&mut turned, -pi, pi, 0.01).expect("values within a whole turn");
+        assert_eq!(cut.len(), 1);
+        assert!(
+            (cut[0][0] - (-3.01)).abs() < 1e-12 && (cut[0][1] - (3.5 - 2.0 * pi + 0.01)).abs() < 1e-12,
+            "{cut:?}"
+        );
+        // Outside a narrower range, or not finite: no interval.
+        assert_eq!(intervals(&mut [0.5, 1.5], -1.0, 1.0, 0.1), None);
+        assert_eq!(intervals(&mut [f64::NAN], -pi, pi, 0.1), None);
     }
 
     #[test]
