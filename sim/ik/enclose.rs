@@ -347,8 +347,20 @@ impl Ik<'_> {
                     named.push(name);
                 }
             }
+            // With a margin, "collides" is "keeps less than the margin", as the verdict counts it.
+            let (what, how) = if margin > 0.0 {
+                (
+                    format!("collides or keeps less than the {margin} m margin"),
+                    format!("keep less than the {margin} m margin throughout ({cells} cells, each centre's distance short of the margin by more than the pair can move within it)"),
+                )
+            } else {
+                (
+                    "collides".to_string(),
+                    format!("collide throughout ({cells} cells, each centre's overlap deeper than the pair can move within it)"),
+                )
+            };
             return Some(format!(
-                "every configuration within the goal's tolerance collides: no configuration within the joint limits outside {} boxes of the colliding pairs' joints comes within the tolerance (joint-space searches of {searched} boxes over {} parts, ruled out by how far the tool can move), and within those boxes {} collide throughout ({cells} cells, each centre's overlap deeper than the pair can move within it)",
+                "every configuration within the goal's tolerance {what}: no configuration within the joint limits outside {} boxes of the colliding pairs' joints comes within the tolerance (joint-space searches of {searched} boxes over {} parts, ruled out by how far the tool can move), and within those boxes {} {how}",
                 enclosures.len(),
                 pieces.len(),
                 named.join(", ")
