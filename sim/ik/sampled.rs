@@ -253,11 +253,15 @@ impl Ik<'_> {
                 if !solution.pose_reached {
                     continue;
                 }
-                let pair = self
-                    .checker
-                    .as_ref()
-                    .and_then(|checker| super::enclose::member_pair(checker, self.model.dof()));
-                if let Some(pair) = pair.filter(|_| sampled.members.len() < super::enclose::MOST_MEMBERS) {
+                // The pair is asked for only while members are still kept.
+                let pair = (sampled.members.len() < super::enclose::MOST_MEMBERS)
+                    .then(|| {
+                        self.checker
+                            .as_ref()
+                            .and_then(|checker| super::enclose::member_pair(checker, self.model.dof()))
+                    })
+                    .flatten();
+                if let Some(pair) = pair {
                     sampled.members.push(super::enclose::Member {
                         q: solution.q.clone(),
                         pair,
